@@ -1,0 +1,25 @@
+//! # strata-engine
+//!
+//! The pure algorithms of strata: anisotropic, density-controlled, stratified sampling
+//! of triangle-mesh surfaces (Quinn et al., "Generalized Anisotropic Stratified Surface
+//! Sampling"; see `DESIGN.md`). Every stage is a plain function or a small struct from
+//! plain data to plain data; there is no ECS, no GPU and no file watching here.
+//!
+//! | module | stage |
+//! | --- | --- |
+//! | [`mesh`] | `TriMesh` with adjacency; OBJ/PLY loading, writing, built-in shapes |
+//! | [`io`] | OBJ/PLY readers, PLY/CSV writers for meshes and samples |
+//! | [`field`] | per-vertex tensor fields and their sources |
+//! | [`curve`] | Hilbert curves and adaptive Hilbert cells with measures |
+//! | [`sample`] | 1D stratified sequences mapped through the cells to surface samples |
+//! | [`analysis`] | discrepancy and other quality measures |
+//! | [`rng`] | counter-based random numbers (thread-count independent) |
+
+pub mod analysis;
+pub mod curve;
+pub mod field;
+pub mod io;
+pub mod mesh;
+pub mod planar;
+pub mod rng;
+pub mod sample;
