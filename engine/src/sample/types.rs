@@ -1,0 +1,43 @@
+//! The GPU-ready sample record.
+
+/// One surface sample, laid out for direct GPU upload (`#[repr(C)]`, 64 bytes, 16-byte
+/// aligned groups). Its WGSL twin is `Sample` in `shaders/common.wgsl`.
+///
+/// Everything a splat renderer and an application need: where the sample is, how the
+/// field orients and sizes its ellipse there, and which face and barycentric point it
+/// came from (so colours, UVs or any per-vertex attribute can be interpolated).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Sample {
+    /// Position in world space.
+    pub position: [f32; 3],
+    /// The face the sample lies on.
+    pub face: u32,
+    /// Unit surface normal (interpolated vertex normals).
+    pub normal: [f32; 3],
+    /// Segment id of the face.
+    pub segment: u32,
+    /// Unit tangent along the field's major eigenvector m1 (the direction of densest
+    /// spacing); the minor axis is `normal x major_axis`.
+    pub major_axis: [f32; 3],
+    /// Rank of the sample in its stratified sequence (stable across frames for the
+    /// same count and seed).
+    pub index: u32,
+    /// Barycentric coordinates of corners 1 and 2 of `face`; corner 0 has
+    /// `1 - bary[0] - bary[1]`.
+    pub bary: [f32; 2],
+    /// Expected distance to the next sample along the major and the minor axis
+    /// (world units, for this sample count): `sqrt(M / N) / sqrt(l_k)` with `M` the
+    /// total density measure and `N` the count.
+    pub spacing: [f32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<Sample>() == 64);
+const _: () = assert!(std::mem::align_of::<Sample>() == 4);
+
+impl Sample {
+    /// The three barycentric coordinates (corner 0, 1, 2).
+    pub fn barycentric(&self) -> [f32; 3] {
+        [1.0 - self.bary[0] - self.bary[1], self.bary[0], self.bary[1]]
+    }
+}

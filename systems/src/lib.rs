@@ -1,0 +1,1 @@
+//! strata application layer (in progress).

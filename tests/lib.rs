@@ -1,0 +1,1 @@
+//! Integration tests of strata (see `tests/`); this library is empty.

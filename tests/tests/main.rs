@@ -1,0 +1,1 @@
+//! strata integration tests: one binary, one module per stage.
