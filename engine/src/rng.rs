@@ -46,7 +46,11 @@ pub struct Rng {
 impl Rng {
     /// A generator for `seed` and `stream` (use distinct streams for independent uses).
     pub fn new(seed: u64, stream: u64) -> Self {
-        Self { seed, stream, counter: 0 }
+        Self {
+            seed,
+            stream,
+            counter: 0,
+        }
     }
 
     /// Next random `u64`.
@@ -106,6 +110,9 @@ mod tests {
         for _ in 0..70_000 {
             hits[r.below(7) as usize] += 1;
         }
-        assert!(hits.iter().all(|&h| (9_000..11_000).contains(&h)), "{hits:?}");
+        assert!(
+            hits.iter().all(|&h| (9_000..11_000).contains(&h)),
+            "{hits:?}"
+        );
     }
 }

@@ -8,6 +8,9 @@ use crate::mesh::{MeshError, TriMesh};
 pub fn load(path: &Path) -> Result<TriMesh, MeshError> {
     Err(MeshError::UnknownFormat {
         path: path.to_path_buf(),
-        extension: path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default(),
+        extension: path
+            .extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default(),
     })
 }

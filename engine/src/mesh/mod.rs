@@ -10,12 +10,12 @@
 //! Once a `TriMesh` exists it is known-valid: indices are in range, coordinates are
 //! finite, every face has positive area. Later stages do not re-check.
 
-mod topology;
 mod error;
 pub mod shapes;
+mod topology;
 
-pub use error::{MeshError, MeshWarning};
 pub use crate::io::load;
+pub use error::{MeshError, MeshWarning};
 
 use glam::DVec3;
 
@@ -86,7 +86,10 @@ impl TriMesh {
         let mut triangulated = 0;
         for (face, poly) in polygons.iter().enumerate() {
             if poly.len() < 3 {
-                return Err(MeshError::TooFewCorners { face, corners: poly.len() });
+                return Err(MeshError::TooFewCorners {
+                    face,
+                    corners: poly.len(),
+                });
             }
             if poly.len() > 3 {
                 triangulated += 1;
@@ -97,7 +100,9 @@ impl TriMesh {
         }
         let mut warnings = Vec::new();
         if triangulated > 0 {
-            warnings.push(MeshWarning::TriangulatedPolygons { count: triangulated });
+            warnings.push(MeshWarning::TriangulatedPolygons {
+                count: triangulated,
+            });
         }
         topology::build(positions, triangles, warnings)
     }

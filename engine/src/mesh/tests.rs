@@ -24,7 +24,10 @@ fn tetrahedron_is_closed_sphere() {
     let c = DVec3::splat(0.25);
     for f in 0..4u32 {
         let p = m.face_positions(f);
-        assert!((p[0] - c).dot(m.face_normals()[f as usize]) > 0.0, "face {f}");
+        assert!(
+            (p[0] - c).dot(m.face_normals()[f as usize]) > 0.0,
+            "face {f}"
+        );
     }
 }
 
@@ -35,7 +38,7 @@ fn repairs_duplicates_and_degenerates() {
         DVec3::ZERO,
         DVec3::X,
         DVec3::new(1.0, 1.0, 0.0),
-        DVec3::ZERO, // duplicate of 0
+        DVec3::ZERO,               // duplicate of 0
         DVec3::new(1.0, 1.0, 0.0), // duplicate of 2
         DVec3::Y,
     ];
@@ -46,19 +49,37 @@ fn repairs_duplicates_and_degenerates() {
     assert_eq!(m.boundary_loops()[0].len(), 4);
     assert_eq!(m.euler_characteristic(), 1);
     assert_eq!(m.input_vertex_map(), &[0, 1, 2, 0, 2, 3]);
-    assert!(m.warnings().iter().any(|w| matches!(w, MeshWarning::MergedDuplicateVertices { count: 2 })));
-    assert!(m.warnings().iter().any(|w| matches!(w, MeshWarning::RemovedDegenerateFaces { count: 1, .. })));
+    assert!(
+        m.warnings()
+            .iter()
+            .any(|w| matches!(w, MeshWarning::MergedDuplicateVertices { count: 2 }))
+    );
+    assert!(
+        m.warnings()
+            .iter()
+            .any(|w| matches!(w, MeshWarning::RemovedDegenerateFaces { count: 1, .. }))
+    );
 }
 
 #[test]
 fn rejects_bad_input() {
-    assert!(matches!(TriMesh::new(vec![], vec![]), Err(MeshError::Empty { .. })));
     assert!(matches!(
-        TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 3]]),
-        Err(MeshError::IndexOutOfRange { face: 0, index: 3, .. })
+        TriMesh::new(vec![], vec![]),
+        Err(MeshError::Empty { .. })
     ));
     assert!(matches!(
-        TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::new(f64::NAN, 0.0, 0.0)], vec![[0, 1, 2]]),
+        TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 3]]),
+        Err(MeshError::IndexOutOfRange {
+            face: 0,
+            index: 3,
+            ..
+        })
+    ));
+    assert!(matches!(
+        TriMesh::new(
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(f64::NAN, 0.0, 0.0)],
+            vec![[0, 1, 2]]
+        ),
         Err(MeshError::NonFiniteVertex { vertex: 2, .. })
     ));
     // Only degenerate faces: nothing usable is left.
@@ -71,9 +92,19 @@ fn rejects_bad_input() {
 #[test]
 fn non_manifold_edge_is_reported_and_not_crossed() {
     // Three triangles sharing edge (0, 1).
-    let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::new(0.5, -1.0, 0.0)];
+    let p = vec![
+        DVec3::ZERO,
+        DVec3::X,
+        DVec3::Y,
+        DVec3::Z,
+        DVec3::new(0.5, -1.0, 0.0),
+    ];
     let m = TriMesh::new(p, vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]]).expect("valid");
-    assert!(m.warnings().iter().any(|w| matches!(w, MeshWarning::NonManifoldEdges { count: 1, .. })));
+    assert!(
+        m.warnings()
+            .iter()
+            .any(|w| matches!(w, MeshWarning::NonManifoldEdges { count: 1, .. }))
+    );
     assert!(m.face_neighbors().iter().flatten().all(|&n| n == NONE));
     assert_eq!(m.component_count(), 3);
 }

@@ -17,7 +17,12 @@ pub(super) fn build(
     let input_vertices = positions.len();
     for (vertex, p) in positions.iter().enumerate() {
         if !p.is_finite() {
-            return Err(MeshError::NonFiniteVertex { vertex, x: p.x, y: p.y, z: p.z });
+            return Err(MeshError::NonFiniteVertex {
+                vertex,
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            });
         }
     }
     for (face, t) in triangles.iter().enumerate() {
@@ -80,7 +85,9 @@ pub(super) fn build(
         });
     }
     if duplicate_count > 0 {
-        warnings.push(MeshWarning::RemovedDuplicateFaces { count: duplicate_count });
+        warnings.push(MeshWarning::RemovedDuplicateFaces {
+            count: duplicate_count,
+        });
     }
 
     // Compact: keep only referenced vertices, in input order.
@@ -103,15 +110,21 @@ pub(super) fn build(
         .filter(|&v| merged_to[v] as usize == v && new_index[v] == NONE)
         .count();
     if unreferenced > 0 {
-        warnings.push(MeshWarning::RemovedUnreferencedVertices { count: unreferenced });
+        warnings.push(MeshWarning::RemovedUnreferencedVertices {
+            count: unreferenced,
+        });
     }
-    let input_vertex_map: Vec<u32> =
-        (0..input_vertices).map(|v| new_index[merged_to[v] as usize]).collect();
+    let input_vertex_map: Vec<u32> = (0..input_vertices)
+        .map(|v| new_index[merged_to[v] as usize])
+        .collect();
     for t in &mut kept {
         *t = t.map(|v| new_index[v as usize]);
     }
     if kept.is_empty() || compact_positions.is_empty() {
-        return Err(MeshError::Empty { vertices: input_vertices, faces: kept.len() });
+        return Err(MeshError::Empty {
+            vertices: input_vertices,
+            faces: kept.len(),
+        });
     }
 
     let mut mesh = TriMesh {
@@ -305,7 +318,9 @@ fn build_components(mesh: &mut TriMesh) {
     mesh.face_component = comp;
     mesh.component_count = count as usize;
     if count > 1 {
-        mesh.warnings.push(MeshWarning::SeveralComponents { count: count as usize });
+        mesh.warnings.push(MeshWarning::SeveralComponents {
+            count: count as usize,
+        });
     }
 }
 

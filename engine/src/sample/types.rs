@@ -38,6 +38,10 @@ const _: () = assert!(std::mem::align_of::<Sample>() == 4);
 impl Sample {
     /// The three barycentric coordinates (corner 0, 1, 2).
     pub fn barycentric(&self) -> [f32; 3] {
-        [1.0 - self.bary[0] - self.bary[1], self.bary[0], self.bary[1]]
+        [
+            1.0 - self.bary[0] - self.bary[1],
+            self.bary[0],
+            self.bary[1],
+        ]
     }
 }

@@ -1,0 +1,72 @@
+//! Errors of the field stage.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong building a [`TensorField`](super::TensorField).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FieldError {
+    /// The number of tensors differs from the number of mesh vertices.
+    #[error("field has {found} values but the mesh has {expected} vertices")]
+    CountMismatch {
+        /// Mesh vertex count.
+        expected: usize,
+        /// Values given.
+        found: usize,
+    },
+    /// A tensor has a NaN or infinite entry.
+    #[error("tensor at vertex {vertex} has a non-finite entry")]
+    NonFinite {
+        /// Vertex index.
+        vertex: usize,
+    },
+    /// A tensor is not symmetric.
+    #[error("tensor at vertex {vertex} is not symmetric (largest asymmetry {asymmetry:e})")]
+    NotSymmetric {
+        /// Vertex index.
+        vertex: usize,
+        /// Largest |T_ij - T_ji|.
+        asymmetry: f64,
+    },
+    /// A tensor is not positive definite in the tangent plane.
+    #[error(
+        "tensor at vertex {vertex} is not positive definite in its tangent plane (eigenvalues {l1}, {l2})"
+    )]
+    NotPositiveDefinite {
+        /// Vertex index.
+        vertex: usize,
+        /// Largest eigenvalue in the plane.
+        l1: f64,
+        /// Smallest eigenvalue in the plane.
+        l2: f64,
+    },
+    /// A field parameter is out of its valid range.
+    #[error("field parameter `{parameter}` = {value} is invalid: {expected}")]
+    InvalidParameter {
+        /// The parameter's name as in the config.
+        parameter: &'static str,
+        /// The value given.
+        value: f64,
+        /// The valid range, in words.
+        expected: &'static str,
+    },
+    /// A field file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A field file is malformed.
+    #[error("{path}:{line}: {what}")]
+    Syntax {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        what: String,
+    },
+}
