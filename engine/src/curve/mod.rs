@@ -1,1 +1,127 @@
-//! (in progress)
+//! Hilbert curves and adaptive Hilbert cells over a parameter domain (paper section
+//! 6.1, with DESIGN.md's continuous mapping).
+//!
+//! Input: a parameterized segment scaled into the unit square (triangles in `uv` with a
+//! density per corner). Output: a [`SegmentCurve`]: the leaves of an adaptive quadtree
+//! in Hilbert order with the exact measure (integral of density) of the domain inside
+//! each, their cumulative sum, and what is needed to map a 1D curve parameter back to
+//! a point and a triangle. Build cost: O(cells x triangles per cell).
+
+mod cells;
+mod clip;
+pub mod hilbert;
+
+pub use cells::{CellKey, CurveDomain, DomainPoint, SegmentCurve, barycentric};
+pub use clip::{Poly, clip_triangle};
+
+/// Settings of the adaptive Hilbert cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
+pub struct CurveOptions {
+    /// Largest share of the segment's measure one leaf may hold; smaller values give
+    /// more cells and follow density variation more closely. Range (0, 1]; default
+    /// 2^-16 (about 65 000 cells for a uniform square).
+    pub max_cell_share: f64,
+    /// Level down to which cells crossed by the domain boundary are refined (section
+    /// 6.1's boundary refinement). Range 0..=max_level; default 12.
+    pub boundary_level: u8,
+    /// Deepest level of the quadtree. Range 1..=30; default 20.
+    pub max_level: u8,
+    /// Levels of the continuous Hilbert map resolved inside a leaf when placing a
+    /// sample. Range 1..=24; default 12.
+    pub leaf_levels: u8,
+}
+
+impl Default for CurveOptions {
+    fn default() -> Self {
+        Self {
+            max_cell_share: 1.0 / 65536.0,
+            boundary_level: 12,
+            max_level: 20,
+            leaf_levels: 12,
+        }
+    }
+}
+
+impl CurveOptions {
+    /// Checks every field's range.
+    pub fn validate(&self) -> Result<(), CurveError> {
+        let bad = |option: &'static str, value: f64, expected: &'static str| {
+            Err(CurveError::InvalidOption {
+                option,
+                value,
+                expected,
+            })
+        };
+        if !(self.max_cell_share > 0.0 && self.max_cell_share <= 1.0) {
+            return bad("max_cell_share", self.max_cell_share, "in (0, 1]");
+        }
+        if !(1..=30).contains(&self.max_level) {
+            return bad("max_level", self.max_level as f64, "in 1..=30");
+        }
+        if self.boundary_level > self.max_level {
+            return bad(
+                "boundary_level",
+                self.boundary_level as f64,
+                "at most max_level",
+            );
+        }
+        if !(1..=24).contains(&self.leaf_levels) {
+            return bad("leaf_levels", self.leaf_levels as f64, "in 1..=24");
+        }
+        Ok(())
+    }
+}
+
+/// Errors building the cells of a segment.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CurveError {
+    /// An option is out of range.
+    #[error("curve option `{option}` = {value} is invalid: expected {expected}")]
+    InvalidOption {
+        /// Option name.
+        option: &'static str,
+        /// Value given.
+        value: f64,
+        /// Valid range.
+        expected: &'static str,
+    },
+    /// The domain has no triangles or zero total measure.
+    #[error("the parameter domain has zero measure (no triangles, or zero density everywhere)")]
+    ZeroMeasure,
+    /// The number of corner-density triples differs from the number of triangles.
+    #[error("{densities} corner densities for {triangles} triangles")]
+    DensityCount {
+        /// Triangles.
+        triangles: usize,
+        /// Density triples.
+        densities: usize,
+    },
+    /// A parameter vertex lies outside the unit square (or is not finite).
+    #[error("parameter vertex {vertex} at ({u}, {v}) is outside the unit square")]
+    OutsideUnitSquare {
+        /// Vertex index.
+        vertex: usize,
+        /// u coordinate.
+        u: f64,
+        /// v coordinate.
+        v: f64,
+    },
+    /// A triangle has an out-of-range index or is not counter-clockwise in `uv`.
+    #[error("parameter triangle {triangle} is flipped, degenerate or has an invalid index")]
+    BadTriangle {
+        /// Triangle index.
+        triangle: usize,
+    },
+    /// A triangle has a negative or non-finite corner density.
+    #[error("parameter triangle {triangle} has a negative or non-finite density")]
+    BadDensity {
+        /// Triangle index.
+        triangle: usize,
+    },
+}
+
+#[cfg(test)]
+mod tests;

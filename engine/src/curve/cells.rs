@@ -1,0 +1,454 @@
+//! Adaptive Hilbert cells with exact measures over a triangulated parameter domain.
+
+use glam::DVec2;
+
+use super::clip::clip_triangle;
+use super::hilbert::State;
+use super::{CurveError, CurveOptions};
+
+/// A parameter domain in the unit square: triangles in `uv` with a density per corner.
+///
+/// The density is per unit *parameter* area, linear over each triangle; for a
+/// parameterized surface triangle it is the surface density times the ratio of the
+/// surface area to the parameter area, so that the measure of a region is the same in
+/// both spaces.
+#[derive(Clone, Copy, Debug)]
+pub struct CurveDomain<'a> {
+    /// Vertex positions in `[0, 1]^2`.
+    pub uv: &'a [DVec2],
+    /// Triangles (counter-clockwise in `uv`), indices into `uv`.
+    pub triangles: &'a [[u32; 3]],
+    /// Density at each triangle's three corners (non-negative, finite).
+    pub corner_density: &'a [[f64; 3]],
+}
+
+/// Where a leaf cell lies and how the curve runs through it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CellKey {
+    /// Cell column at its level.
+    pub x: u32,
+    /// Cell row at its level.
+    pub y: u32,
+    /// Quadtree level (the cell's side is `2^-level`).
+    pub level: u8,
+    /// Hilbert orientation of the cell.
+    pub state: State,
+    /// Whether the domain covers the whole cell.
+    pub full: bool,
+}
+
+impl CellKey {
+    /// Side length.
+    #[inline]
+    pub fn size(&self) -> f64 {
+        1.0 / (1u64 << self.level) as f64
+    }
+
+    /// Lower-left corner.
+    #[inline]
+    pub fn origin(&self) -> DVec2 {
+        DVec2::new(self.x as f64, self.y as f64) * self.size()
+    }
+}
+
+/// The adaptive Hilbert cells of one parameterized segment.
+///
+/// Leaves are stored in Hilbert order with the cumulative measure, so a 1D value in
+/// `[0, measure)` maps to a leaf by search and then to a point inside it by the
+/// continuous Hilbert map ([`SegmentCurve::locate`]).
+#[derive(Clone, Debug)]
+pub struct SegmentCurve {
+    keys: Vec<CellKey>,
+    /// `cumulative[i]` is the measure of leaves `0..i`; length `keys.len() + 1`.
+    cumulative: Vec<f64>,
+    /// Per leaf, a range into `candidates`: the triangles overlapping it.
+    candidate_offsets: Vec<u32>,
+    candidates: Vec<u32>,
+    uv: Vec<DVec2>,
+    triangles: Vec<[u32; 3]>,
+    /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
+    density_planes: Vec<[f64; 3]>,
+    options: CurveOptions,
+}
+
+/// A point of the domain: its triangle (index into the domain's triangles), parameter
+/// position and barycentric coordinates in that triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DomainPoint {
+    /// Triangle index in the domain.
+    pub triangle: u32,
+    /// Position in the unit square.
+    pub uv: DVec2,
+    /// Barycentric coordinates (non-negative, summing to 1).
+    pub bary: [f64; 3],
+}
+
+impl SegmentCurve {
+    /// Builds the adaptive cells of `domain`.
+    ///
+    /// A cell is refined while it holds more than `options.max_cell_share` of the total
+    /// measure, or while the domain boundary crosses it and it is above
+    /// `options.boundary_level`, never beyond `options.max_level`.
+    pub fn build(domain: &CurveDomain<'_>, options: &CurveOptions) -> Result<Self, CurveError> {
+        options.validate()?;
+        validate_domain(domain)?;
+        let density_planes: Vec<[f64; 3]> = domain
+            .triangles
+            .iter()
+            .zip(domain.corner_density)
+            .map(|(t, d)| density_plane(&t.map(|v| domain.uv[v as usize]), d))
+            .collect();
+        let mut curve = SegmentCurve {
+            keys: Vec::new(),
+            cumulative: vec![0.0],
+            candidate_offsets: vec![0],
+            candidates: Vec::new(),
+            uv: domain.uv.to_vec(),
+            triangles: domain.triangles.to_vec(),
+            density_planes,
+            options: *options,
+        };
+        let total: f64 = (0..curve.triangles.len())
+            .map(|t| curve.triangle_measure(t))
+            .sum();
+        if !(total > 0.0) || !total.is_finite() {
+            return Err(CurveError::ZeroMeasure);
+        }
+        curve.refine(total);
+        Ok(curve)
+    }
+
+    fn triangle_corners(&self, t: usize) -> [DVec2; 3] {
+        self.triangles[t].map(|v| self.uv[v as usize])
+    }
+
+    fn triangle_measure(&self, t: usize) -> f64 {
+        let p = self.triangle_corners(t);
+        let area = 0.5 * (p[1] - p[0]).perp_dot(p[2] - p[0]);
+        area * self.density_at(t, (p[0] + p[1] + p[2]) / 3.0)
+    }
+
+    #[inline]
+    fn density_at(&self, t: usize, p: DVec2) -> f64 {
+        let [gx, gy, h] = self.density_planes[t];
+        (gx * p.x + gy * p.y + h).max(0.0)
+    }
+
+    /// Measure and covered area of triangle `t` inside the square `[lo, lo + size]^2`.
+    #[inline]
+    fn overlap(&self, t: usize, lo: DVec2, size: f64) -> (f64, f64) {
+        let tri = self.triangle_corners(t);
+        let (a, c) = clip_triangle(&tri, lo, size).area_centroid();
+        if a <= 0.0 {
+            (0.0, 0.0)
+        } else {
+            (a * self.density_at(t, c), a)
+        }
+    }
+
+    /// Depth-first refinement in Hilbert order; leaves are appended in curve order.
+    fn refine(&mut self, total: f64) {
+        struct Node {
+            x: u32,
+            y: u32,
+            level: u8,
+            state: State,
+            list_start: usize,
+        }
+        let opts = self.options;
+        let share_limit = opts.max_cell_share * total;
+        // Candidate lists of pending nodes, stacked; a node's list is on top when popped.
+        let mut lists: Vec<u32> = (0..self.triangles.len() as u32).collect();
+        let mut stack = vec![Node {
+            x: 0,
+            y: 0,
+            level: 0,
+            state: State::ROOT,
+            list_start: 0,
+        }];
+        let mut kept: Vec<u32> = Vec::new();
+        while let Some(node) = stack.pop() {
+            let size = 1.0 / (1u64 << node.level) as f64;
+            let lo = DVec2::new(node.x as f64, node.y as f64) * size;
+            kept.clear();
+            let (mut measure, mut covered) = (0.0, 0.0);
+            for &t in &lists[node.list_start..] {
+                let (m, a) = self.overlap(t as usize, lo, size);
+                if a > 0.0 {
+                    kept.push(t);
+                    measure += m;
+                    covered += a;
+                }
+            }
+            lists.truncate(node.list_start);
+            if kept.is_empty() {
+                continue;
+            }
+            let full = covered >= size * size * (1.0 - 1e-9);
+            let refine = node.level < opts.max_level
+                && (measure > share_limit || (!full && node.level < opts.boundary_level));
+            if refine {
+                // Push children in reverse visiting order so rank 0 is popped first.
+                for rank in (0..4u8).rev() {
+                    let (qx, qy, s) = node.state.child(rank);
+                    stack.push(Node {
+                        x: 2 * node.x + qx as u32,
+                        y: 2 * node.y + qy as u32,
+                        level: node.level + 1,
+                        state: s,
+                        list_start: lists.len(),
+                    });
+                    lists.extend_from_slice(&kept);
+                }
+            } else if measure > 0.0 {
+                self.keys.push(CellKey {
+                    x: node.x,
+                    y: node.y,
+                    level: node.level,
+                    state: node.state,
+                    full,
+                });
+                let last = *self.cumulative.last().unwrap_or(&0.0);
+                self.cumulative.push(last + measure);
+                self.candidates.extend_from_slice(&kept);
+                self.candidate_offsets.push(self.candidates.len() as u32);
+            }
+        }
+    }
+
+    /// Total measure (integral of density over the domain).
+    pub fn measure(&self) -> f64 {
+        *self.cumulative.last().unwrap_or(&0.0)
+    }
+
+    /// Number of leaf cells.
+    pub fn cell_count(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// Leaf cells in Hilbert order.
+    pub fn cells(&self) -> &[CellKey] {
+        &self.keys
+    }
+
+    /// Cumulative measure: entry `i` is the measure of leaves `0..i`.
+    pub fn cumulative(&self) -> &[f64] {
+        &self.cumulative
+    }
+
+    /// The options the cells were built with.
+    pub fn options(&self) -> &CurveOptions {
+        &self.options
+    }
+
+    /// Memory held, in bytes.
+    pub fn heap_bytes(&self) -> usize {
+        self.keys.capacity() * std::mem::size_of::<CellKey>()
+            + self.cumulative.capacity() * 8
+            + (self.candidate_offsets.capacity() + self.candidates.capacity()) * 4
+            + self.uv.capacity() * 16
+            + self.triangles.capacity() * 12
+            + self.density_planes.capacity() * 24
+    }
+
+    /// Index of the leaf holding cumulative measure `m` (clamped into range).
+    pub fn leaf_at(&self, m: f64) -> usize {
+        let i = self.cumulative.partition_point(|&c| c <= m);
+        i.saturating_sub(1).min(self.keys.len() - 1)
+    }
+
+    /// Maps measure `m` in `[0, measure)` to a domain point: the leaf by binary search,
+    /// then [`point_in_leaf`](Self::point_in_leaf).
+    pub fn locate(&self, m: f64) -> DomainPoint {
+        let leaf = self.leaf_at(m);
+        let local =
+            (m - self.cumulative[leaf]) / (self.cumulative[leaf + 1] - self.cumulative[leaf]);
+        self.point_in_leaf(leaf, local)
+    }
+
+    /// Maps the fraction `t` in `[0, 1)` of leaf `leaf`'s measure to a domain point
+    /// along the continuous Hilbert curve. In a leaf the domain covers fully, density
+    /// is taken as uniform (leaves hold a bounded share of the measure); in a boundary
+    /// leaf the exact measures of sub-cells are followed down until a sub-cell is
+    /// fully covered, so every point lies in the domain.
+    pub fn point_in_leaf(&self, leaf: usize, t: f64) -> DomainPoint {
+        let key = self.keys[leaf];
+        let cands = &self.candidates
+            [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
+        let t = t.clamp(0.0, 1.0 - f64::EPSILON);
+        if key.full {
+            let (x, y) =
+                super::hilbert::point_in_node(key.state, t, self.options.leaf_levels as u32);
+            let uv = key.origin() + DVec2::new(x, y) * key.size();
+            return self.point_location(cands, uv);
+        }
+        self.descend_partial(key, cands, t)
+    }
+
+    /// Exact descent through the sub-cells of a boundary leaf.
+    fn descend_partial(&self, key: CellKey, cands: &[u32], mut t: f64) -> DomainPoint {
+        let mut lo = key.origin();
+        let mut size = key.size();
+        let mut state = key.state;
+        for _ in 0..self.options.leaf_levels {
+            let half = 0.5 * size;
+            let mut m = [0.0f64; 4];
+            let mut full = [false; 4];
+            let mut corner = [DVec2::ZERO; 4];
+            for rank in 0..4u8 {
+                let (qx, qy, _) = state.child(rank);
+                let c_lo = lo + DVec2::new(qx as f64, qy as f64) * half;
+                corner[rank as usize] = c_lo;
+                let mut covered = 0.0;
+                for &tri in cands {
+                    let (mm, a) = self.overlap(tri as usize, c_lo, half);
+                    m[rank as usize] += mm;
+                    covered += a;
+                }
+                full[rank as usize] = covered >= half * half * (1.0 - 1e-9);
+            }
+            let total: f64 = m.iter().sum();
+            if !(total > 0.0) {
+                break;
+            }
+            // Pick the child by the exact measures and rescale t into it; round-off at
+            // the end falls back to the last non-empty child.
+            let mut target = t * total;
+            let mut rank = 3;
+            for (r, &mr) in m.iter().enumerate() {
+                if mr > 0.0 && target < mr {
+                    rank = r;
+                    break;
+                }
+                target -= mr;
+            }
+            if m[rank] == 0.0 || target >= m[rank] {
+                rank = (0..4).rev().find(|&r| m[r] > 0.0).unwrap_or(0);
+                target = m[rank];
+            }
+            t = (target / m[rank]).clamp(0.0, 1.0 - f64::EPSILON);
+            let (_, _, child_state) = state.child(rank as u8);
+            lo = corner[rank];
+            size = half;
+            state = child_state;
+            if full[rank] {
+                let levels = self.options.leaf_levels as u32;
+                let (x, y) = super::hilbert::point_in_node(state, t, levels);
+                return self.point_location(cands, lo + DVec2::new(x, y) * size);
+            }
+        }
+        // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
+        // covered piece, which lies in the domain.
+        let mut best = (0.0, DVec2::ZERO);
+        for &tri in cands {
+            let (a, c) =
+                clip_triangle(&self.triangle_corners(tri as usize), lo, size).area_centroid();
+            if a > best.0 {
+                best = (a, c);
+            }
+        }
+        self.point_location(
+            cands,
+            if best.0 > 0.0 {
+                best.1
+            } else {
+                lo + DVec2::splat(0.5 * size)
+            },
+        )
+    }
+
+    /// Finds the candidate triangle containing `uv` (the most-inside one if round-off
+    /// leaves it just outside all of them) and its barycentric coordinates.
+    fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
+        let mut best = (f64::NEG_INFINITY, 0u32, [1.0, 0.0, 0.0]);
+        for &t in cands {
+            let b = barycentric(&self.triangle_corners(t as usize), uv);
+            let min = b[0].min(b[1]).min(b[2]);
+            if min >= 0.0 {
+                return DomainPoint {
+                    triangle: t,
+                    uv,
+                    bary: b,
+                };
+            }
+            if min > best.0 {
+                best = (min, t, b);
+            }
+        }
+        // Clamp onto the triangle so that the barycentric coordinates are valid.
+        let mut b = best.2.map(|x| x.max(0.0));
+        let s = b[0] + b[1] + b[2];
+        b = b.map(|x| x / s);
+        let p = self.triangle_corners(best.1 as usize);
+        let uv = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
+        DomainPoint {
+            triangle: best.1,
+            uv,
+            bary: b,
+        }
+    }
+}
+
+/// Barycentric coordinates of `p` in triangle `t`.
+#[inline]
+pub fn barycentric(t: &[DVec2; 3], p: DVec2) -> [f64; 3] {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let d = p - t[0];
+    let inv = 1.0 / e1.perp_dot(e2);
+    let b1 = d.perp_dot(e2) * inv;
+    let b2 = e1.perp_dot(d) * inv;
+    [1.0 - b1 - b2, b1, b2]
+}
+
+/// The affine density `g . p + h` that interpolates the corner densities.
+fn density_plane(p: &[DVec2; 3], d: &[f64; 3]) -> [f64; 3] {
+    let e1 = p[1] - p[0];
+    let e2 = p[2] - p[0];
+    let det = e1.perp_dot(e2);
+    let (d1, d2) = (d[1] - d[0], d[2] - d[0]);
+    // Solve [e1; e2] g = [d1; d2].
+    let gx = (d1 * e2.y - d2 * e1.y) / det;
+    let gy = (e1.x * d2 - e2.x * d1) / det;
+    [gx, gy, d[0] - gx * p[0].x - gy * p[0].y]
+}
+
+fn validate_domain(domain: &CurveDomain<'_>) -> Result<(), CurveError> {
+    if domain.triangles.is_empty() {
+        return Err(CurveError::ZeroMeasure);
+    }
+    if domain.corner_density.len() != domain.triangles.len() {
+        return Err(CurveError::DensityCount {
+            triangles: domain.triangles.len(),
+            densities: domain.corner_density.len(),
+        });
+    }
+    const SLACK: f64 = 1e-9;
+    for (vertex, p) in domain.uv.iter().enumerate() {
+        if !p.is_finite() || p.min_element() < -SLACK || p.max_element() > 1.0 + SLACK {
+            return Err(CurveError::OutsideUnitSquare {
+                vertex,
+                u: p.x,
+                v: p.y,
+            });
+        }
+    }
+    for (triangle, (t, d)) in domain
+        .triangles
+        .iter()
+        .zip(domain.corner_density)
+        .enumerate()
+    {
+        if t.iter().any(|&v| v as usize >= domain.uv.len()) {
+            return Err(CurveError::BadTriangle { triangle });
+        }
+        let p = t.map(|v| domain.uv[v as usize]);
+        if !((p[1] - p[0]).perp_dot(p[2] - p[0]) > 0.0) {
+            return Err(CurveError::BadTriangle { triangle });
+        }
+        if d.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(CurveError::BadDensity { triangle });
+        }
+    }
+    Ok(())
+}

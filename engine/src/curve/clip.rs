@@ -1,0 +1,146 @@
+//! Exact triangle-square overlap: Sutherland-Hodgman clipping of a triangle against an
+//! axis-aligned square, and the integral of a linear function over the result.
+
+use glam::DVec2;
+
+/// A convex polygon of at most 7 corners (a triangle clipped by 4 half-planes).
+#[derive(Clone, Copy, Debug)]
+pub struct Poly {
+    pts: [DVec2; 8],
+    len: usize,
+}
+
+impl Poly {
+    /// The corners.
+    pub fn points(&self) -> &[DVec2] {
+        &self.pts[..self.len]
+    }
+
+    /// Area (non-negative for counter-clockwise input) and area centroid.
+    pub fn area_centroid(&self) -> (f64, DVec2) {
+        let p = self.points();
+        if p.len() < 3 {
+            return (0.0, DVec2::ZERO);
+        }
+        let mut a2 = 0.0;
+        let mut c = DVec2::ZERO;
+        // Fan from the first corner: better conditioned than the shoelace about the origin.
+        for k in 1..p.len() - 1 {
+            let cross = (p[k] - p[0]).perp_dot(p[k + 1] - p[0]);
+            a2 += cross;
+            c += (p[0] + p[k] + p[k + 1]) * cross;
+        }
+        if a2.abs() <= 0.0 {
+            return (0.0, p[0]);
+        }
+        (0.5 * a2, c / (3.0 * a2))
+    }
+}
+
+/// Clips triangle `tri` (counter-clockwise) to the square `[lo, lo + size]^2`.
+pub fn clip_triangle(tri: &[DVec2; 3], lo: DVec2, size: f64) -> Poly {
+    let mut a = Poly {
+        pts: [DVec2::ZERO; 8],
+        len: 3,
+    };
+    a.pts[..3].copy_from_slice(tri);
+    let mut b = Poly {
+        pts: [DVec2::ZERO; 8],
+        len: 0,
+    };
+    let hi = lo + DVec2::splat(size);
+    // (axis, bound, keep the side >= bound?)
+    let planes = [
+        (0, lo.x, true),
+        (0, hi.x, false),
+        (1, lo.y, true),
+        (1, hi.y, false),
+    ];
+    for (axis, bound, keep_ge) in planes {
+        b.len = 0;
+        let n = a.len;
+        if n == 0 {
+            break;
+        }
+        for i in 0..n {
+            let p = a.pts[i];
+            let q = a.pts[(i + 1) % n];
+            let dp = if keep_ge {
+                p[axis] - bound
+            } else {
+                bound - p[axis]
+            };
+            let dq = if keep_ge {
+                q[axis] - bound
+            } else {
+                bound - q[axis]
+            };
+            if dp >= 0.0 {
+                b.pts[b.len] = p;
+                b.len += 1;
+            }
+            if (dp >= 0.0) != (dq >= 0.0) {
+                let t = dp / (dp - dq);
+                let mut x = p + (q - p) * t;
+                x[axis] = bound; // exact on the clipping line
+                b.pts[b.len] = x;
+                b.len += 1;
+            }
+        }
+        std::mem::swap(&mut a, &mut b);
+    }
+    a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri(a: (f64, f64), b: (f64, f64), c: (f64, f64)) -> [DVec2; 3] {
+        [DVec2::from(a), DVec2::from(b), DVec2::from(c)]
+    }
+
+    #[test]
+    fn inside_outside_and_half() {
+        let t = tri((0.1, 0.1), (0.9, 0.1), (0.1, 0.9));
+        let (a, c) = clip_triangle(&t, DVec2::ZERO, 1.0).area_centroid();
+        assert!((a - 0.32).abs() < 1e-15);
+        assert!((c - DVec2::new(1.1 / 3.0, 1.1 / 3.0)).length() < 1e-15);
+        let (a, _) = clip_triangle(&t, DVec2::new(2.0, 2.0), 1.0).area_centroid();
+        assert_eq!(a, 0.0);
+        // The right-angled triangle (0,0),(2,0),(0,2) clipped to the unit square is the
+        // whole square.
+        let t = tri((0.0, 0.0), (2.0, 0.0), (0.0, 2.0));
+        let (a, c) = clip_triangle(&t, DVec2::ZERO, 1.0).area_centroid();
+        assert!((a - 1.0).abs() < 1e-15 && (c - DVec2::splat(0.5)).length() < 1e-15);
+        // Clipped to [1,2]^2 it is the half-square below the diagonal x + y = 2.
+        let (a, c) = clip_triangle(&t, DVec2::ONE, 1.0).area_centroid();
+        assert_eq!(a, 0.0, "only touches a corner");
+        let (a, c2) = clip_triangle(&t, DVec2::new(0.0, 1.0), 1.0).area_centroid();
+        assert!((a - 0.5).abs() < 1e-15, "{a}");
+        assert!((c2 - DVec2::new(1.0 / 3.0, 1.0 + 1.0 / 3.0)).length() < 1e-15);
+        let _ = c;
+    }
+
+    #[test]
+    fn tiling_squares_partition_the_triangle() {
+        // The clipped areas over a grid of squares add up to the triangle's area.
+        let t = tri((0.13, 0.07), (0.91, 0.33), (0.29, 0.97));
+        let full = 0.5 * (t[1] - t[0]).perp_dot(t[2] - t[0]);
+        let n = 17;
+        let s = 1.0 / n as f64;
+        let mut sum = 0.0;
+        let mut moment = DVec2::ZERO;
+        for j in 0..n {
+            for i in 0..n {
+                let (a, c) =
+                    clip_triangle(&t, DVec2::new(i as f64 * s, j as f64 * s), s).area_centroid();
+                sum += a;
+                moment += c * a;
+            }
+        }
+        assert!((sum - full).abs() < 1e-14, "{sum} vs {full}");
+        let centroid = (t[0] + t[1] + t[2]) / 3.0;
+        assert!((moment / sum - centroid).length() < 1e-14);
+    }
+}

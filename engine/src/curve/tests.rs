@@ -1,0 +1,255 @@
+use glam::DVec2;
+
+use super::*;
+
+/// A fan-triangulated disc of `k` segments inside the unit square, with density
+/// `1 + 3 u` (linear, so cell measures are exact).
+fn disc(k: usize) -> (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>) {
+    let c = DVec2::new(0.47, 0.52);
+    let mut uv = vec![c];
+    for i in 0..k {
+        let a = std::f64::consts::TAU * i as f64 / k as f64;
+        uv.push(c + DVec2::new(a.cos(), a.sin()) * 0.4);
+    }
+    let tris: Vec<[u32; 3]> = (0..k as u32)
+        .map(|i| [0, 1 + i, 1 + (i + 1) % k as u32])
+        .collect();
+    let dens = tris
+        .iter()
+        .map(|t| t.map(|v| 1.0 + 3.0 * uv[v as usize].x))
+        .collect();
+    (uv, tris, dens)
+}
+
+fn exact_measure(uv: &[DVec2], tris: &[[u32; 3]], dens: &[[f64; 3]]) -> f64 {
+    tris.iter()
+        .zip(dens)
+        .map(|(t, d)| {
+            let p = t.map(|v| uv[v as usize]);
+            0.5 * (p[1] - p[0]).perp_dot(p[2] - p[0]) * (d[0] + d[1] + d[2]) / 3.0
+        })
+        .sum()
+}
+
+fn square() -> (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>) {
+    (
+        vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
+        vec![[0, 1, 2], [0, 2, 3]],
+        vec![[1.0; 3]; 2],
+    )
+}
+
+#[test]
+fn uniform_square_has_a_regular_grid_of_full_cells() {
+    let (uv, t, d) = square();
+    let opts = CurveOptions {
+        max_cell_share: 1.0 / 4096.0,
+        ..Default::default()
+    };
+    let c = SegmentCurve::build(
+        &CurveDomain {
+            uv: &uv,
+            triangles: &t,
+            corner_density: &d,
+        },
+        &opts,
+    )
+    .expect("valid");
+    assert_eq!(c.cell_count(), 4096);
+    assert!(c.cells().iter().all(|k| k.full && k.level == 6));
+    assert!((c.measure() - 1.0).abs() < 1e-12);
+    // Leaves come in Hilbert order: their indices at level 6 are 0, 1, 2, ...
+    for (i, k) in c.cells().iter().enumerate() {
+        assert_eq!(hilbert::xy2d(6, k.x, k.y), i as u64);
+    }
+}
+
+#[test]
+fn disc_measure_is_exact_and_leaves_are_consecutive_neighbours() {
+    let (uv, t, d) = disc(64);
+    let opts = CurveOptions {
+        max_cell_share: 1e-3,
+        boundary_level: 8,
+        ..Default::default()
+    };
+    let c = SegmentCurve::build(
+        &CurveDomain {
+            uv: &uv,
+            triangles: &t,
+            corner_density: &d,
+        },
+        &opts,
+    )
+    .expect("valid");
+    let exact = exact_measure(&uv, &t, &d);
+    assert!(
+        (c.measure() - exact).abs() < 1e-12 * exact,
+        "{} vs {exact}",
+        c.measure()
+    );
+    assert!(c.cells().iter().any(|k| !k.full), "boundary cells exist");
+    assert!(c.cells().iter().filter(|k| !k.full).all(|k| k.level >= 8));
+    let cum = c.cumulative();
+    assert!(cum.windows(2).all(|w| w[1] > w[0]));
+}
+
+#[test]
+fn adaptive_leaves_of_a_full_square_are_consecutive_neighbours() {
+    // Density varying over two orders of magnitude: leaves at many levels, none empty.
+    let (uv, t, _) = square();
+    let d: Vec<[f64; 3]> = t
+        .iter()
+        .map(|tri| tri.map(|v| 0.01 + 4.0 * uv[v as usize].length_squared()))
+        .collect();
+    let opts = CurveOptions {
+        max_cell_share: 1e-3,
+        ..Default::default()
+    };
+    let c = SegmentCurve::build(
+        &CurveDomain {
+            uv: &uv,
+            triangles: &t,
+            corner_density: &d,
+        },
+        &opts,
+    )
+    .expect("valid");
+    let levels: std::collections::BTreeSet<u8> = c.cells().iter().map(|k| k.level).collect();
+    assert!(levels.len() >= 3, "adaptive: {levels:?}");
+    let area: f64 = c.cells().iter().map(|k| k.size() * k.size()).sum();
+    assert!((area - 1.0).abs() < 1e-12, "leaves tile the square");
+    // An adaptive Hilbert curve visits leaves so that consecutive ones touch along an
+    // edge (closed squares intersect in a segment of positive length).
+    for w in c.cells().windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let (alo, ahi) = (a.origin(), a.origin() + DVec2::splat(a.size()));
+        let (blo, bhi) = (b.origin(), b.origin() + DVec2::splat(b.size()));
+        let ox = ahi.x.min(bhi.x) - alo.x.max(blo.x);
+        let oy = ahi.y.min(bhi.y) - alo.y.max(blo.y);
+        assert!(
+            ox >= -1e-15 && oy >= -1e-15 && ox.max(oy) > 1e-15,
+            "{a:?} {b:?}"
+        );
+    }
+}
+
+#[test]
+fn located_points_lie_in_the_domain_and_follow_the_measure() {
+    let (uv, t, d) = disc(48);
+    let opts = CurveOptions {
+        max_cell_share: 1e-3,
+        boundary_level: 6,
+        ..Default::default()
+    };
+    let c = SegmentCurve::build(
+        &CurveDomain {
+            uv: &uv,
+            triangles: &t,
+            corner_density: &d,
+        },
+        &opts,
+    )
+    .expect("valid");
+    let n = 20_000;
+    let mut left = 0usize;
+    for k in 0..n {
+        let m = (k as f64 + 0.5) / n as f64 * c.measure();
+        let p = c.locate(m);
+        assert!(
+            p.bary.iter().all(|&b| (-1e-12..=1.0 + 1e-12).contains(&b)),
+            "{p:?}"
+        );
+        let tri = t[p.triangle as usize].map(|v| uv[v as usize]);
+        let back = tri[0] * p.bary[0] + tri[1] * p.bary[1] + tri[2] * p.bary[2];
+        assert!((back - p.uv).length() < 1e-12);
+        left += (p.uv.x < 0.47) as usize;
+    }
+    // Exact measure of the left half of the disc (x < cx) with density 1 + 3x: area
+    // pi r^2 / 2 times the mean density there, 1 + 3 (cx - 4r / (3 pi)); for the
+    // inscribed 48-gon use the polygon itself: integrate by clipping.
+    let mut left_measure = 0.0;
+    for (tri, dd) in t.iter().zip(&d) {
+        let p = tri.map(|v| uv[v as usize]);
+        let poly = clip_triangle(&p, DVec2::new(-1.53, -1.0), 2.0);
+        let (a, cen) = poly.area_centroid();
+        let dens = barycentric(&p, cen);
+        left_measure += a * (dens[0] * dd[0] + dens[1] * dd[1] + dens[2] * dd[2]);
+    }
+    let expect = n as f64 * left_measure / c.measure();
+    assert!(
+        (left as f64 - expect).abs() <= 2.0,
+        "left {left}, expected {expect}"
+    );
+}
+
+#[test]
+fn bad_domains_are_rejected() {
+    let (uv, t, d) = square();
+    let opts = CurveOptions::default();
+    let flipped = vec![[0u32, 2, 1]];
+    assert!(matches!(
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &flipped,
+                corner_density: &d[..1]
+            },
+            &opts
+        ),
+        Err(CurveError::BadTriangle { triangle: 0 })
+    ));
+    let outside = vec![DVec2::ZERO, DVec2::new(1.5, 0.0), DVec2::ONE, DVec2::Y];
+    assert!(matches!(
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &outside,
+                triangles: &t,
+                corner_density: &d
+            },
+            &opts
+        ),
+        Err(CurveError::OutsideUnitSquare { vertex: 1, .. })
+    ));
+    let nan = vec![[f64::NAN, 1.0, 1.0], [1.0; 3]];
+    assert!(matches!(
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &t,
+                corner_density: &nan
+            },
+            &opts
+        ),
+        Err(CurveError::BadDensity { triangle: 0 })
+    ));
+    let zero = vec![[0.0; 3]; 2];
+    assert!(matches!(
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &t,
+                corner_density: &zero
+            },
+            &opts
+        ),
+        Err(CurveError::ZeroMeasure)
+    ));
+    let bad = CurveOptions {
+        max_cell_share: 0.0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &t,
+                corner_density: &d
+            },
+            &bad
+        ),
+        Err(CurveError::InvalidOption {
+            option: "max_cell_share",
+            ..
+        })
+    ));
+}

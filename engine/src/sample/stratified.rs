@@ -1,0 +1,76 @@
+//! 1D stratified values and the allocation of a sample count over segments.
+
+use crate::rng;
+
+/// Value `k` of `n` stratified values in `[0, 1)`: `(k + U) / n` with `U` uniform in
+/// `[0, 1)` drawn from `(seed, stream, k)`: the evenly spaced value of stratum `k`
+/// moved at random by up to half a stratum either way (section 6.2).
+#[inline]
+pub fn stratified_value(seed: u64, stream: u64, k: u64, n: u64) -> f64 {
+    ((k as f64 + rng::uniform(seed, stream, k)) / n as f64).min(1.0 - f64::EPSILON)
+}
+
+/// Splits `n` samples over parts with the given measures: part `i` gets
+/// `floor(n * share_i + carry)`, the carry being the remainder accumulated so far
+/// (section 6.2); round-off that would leave the total short is given to the last part
+/// with a positive measure. Calls `emit(i, count)` in order; the counts add up to `n`.
+pub fn allocate(
+    n: u64,
+    measures: impl ExactSizeIterator<Item = f64> + Clone,
+    mut emit: impl FnMut(usize, u64),
+) {
+    let total: f64 = measures.clone().sum();
+    let last_positive = measures
+        .clone()
+        .enumerate()
+        .filter(|(_, m)| *m > 0.0)
+        .map(|(i, _)| i)
+        .last();
+    let mut carry = 0.0;
+    let mut given = 0u64;
+    for (i, m) in measures.enumerate() {
+        let exact = n as f64 * (m / total) + carry;
+        let mut count = (exact.floor().max(0.0) as u64).min(n - given);
+        carry = exact - count as f64;
+        if Some(i) == last_positive {
+            count = n - given;
+        }
+        given += count;
+        emit(i, count);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_stay_in_their_strata() {
+        for n in [1u64, 2, 7, 1000] {
+            for k in 0..n {
+                let v = stratified_value(9, 0, k, n);
+                assert!(v >= k as f64 / n as f64 && v < (k + 1) as f64 / n as f64);
+            }
+        }
+        assert_ne!(stratified_value(1, 0, 3, 10), stratified_value(2, 0, 3, 10));
+    }
+
+    #[test]
+    fn allocation_adds_up_and_follows_shares() {
+        let measures = [0.1, 0.0, 2.5, 1.3, 0.7, 0.0];
+        for n in [0u64, 1, 2, 3, 10, 997, 1_000_000] {
+            let mut counts = vec![0u64; measures.len()];
+            allocate(n, measures.iter().copied(), |i, c| counts[i] = c);
+            assert_eq!(counts.iter().sum::<u64>(), n);
+            assert_eq!(counts[1] + counts[5], 0, "empty parts get nothing");
+            let total: f64 = measures.iter().sum();
+            for (c, m) in counts.iter().zip(measures) {
+                // Carried remainders keep every part within one sample of its share.
+                assert!(
+                    (*c as f64 - n as f64 * m / total).abs() <= 1.0 + 1e-9,
+                    "n {n}: {counts:?}"
+                );
+            }
+        }
+    }
+}
