@@ -1,1 +1,9 @@
-//! strata application layer (in progress).
+//! # strata-systems
+//!
+//! The application layer of strata: scene configuration files (RON), turning a scene
+//! into engine inputs, and the `strata` command-line tool. (The ECS, hot reload and GPU
+//! layers will live here too; the pure algorithms are in `strata-engine`.)
+
+pub mod cli;
+pub mod config;
+pub mod scene;

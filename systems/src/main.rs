@@ -1,2 +1,17 @@
-//! The `strata` command-line tool.
-fn main() {}
+//! The `strata` command-line tool; see `strata --help`.
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let cli = strata_systems::cli::Cli::parse();
+    match strata_systems::cli::run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One readable line: the context chain joined by ": ".
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

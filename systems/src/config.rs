@@ -1,0 +1,184 @@
+//! Scene configuration files: what to sample and how, as RON.
+//!
+//! ```ron
+//! (
+//!     mesh: Shape(Plane(size: 1.0, resolution: 64)),   // or File("../shared/meshes/spot.obj")
+//!     field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 4.0, density: 1.0),
+//!     sampling: (count: 20000, seed: 7),
+//!     curve: (max_cell_share: 0.0000152587890625),        // optional, see CurveOptions
+//! )
+//! ```
+//!
+//! Unknown fields are errors (a typo must not be silently ignored); omitted optional
+//! sections take their defaults. Relative file paths are relative to the config file.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use strata_engine::curve::CurveOptions;
+use strata_engine::field::FieldSpec;
+use strata_engine::mesh::shapes::Shape;
+
+/// A scene: a mesh, a tensor field on it, and sampling settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneConfig {
+    /// The surface to sample.
+    pub mesh: MeshSource,
+    /// The tensor field. Default: isotropic, density 1.
+    #[serde(default = "default_field")]
+    pub field: FieldSpec,
+    /// Sample count and seed.
+    #[serde(default)]
+    pub sampling: SamplingConfig,
+    /// Adaptive Hilbert cell settings.
+    #[serde(default)]
+    pub curve: CurveOptions,
+}
+
+/// Where the mesh comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum MeshSource {
+    /// An OBJ or PLY file; a relative path is relative to the config file's folder.
+    File(PathBuf),
+    /// A built-in procedural shape.
+    Shape(Shape),
+}
+
+/// How many samples to draw, and with which seed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SamplingConfig {
+    /// Number of samples per frame (any value >= 0). Default 10 000.
+    pub count: u64,
+    /// Random seed; the same seed gives the same samples. Default 1.
+    pub seed: u64,
+}
+
+impl Default for SamplingConfig {
+    fn default() -> Self {
+        Self { count: 10_000, seed: 1 }
+    }
+}
+
+fn default_field() -> FieldSpec {
+    FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 1.0, density: 1.0 }
+}
+
+/// Errors reading a scene file.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not a valid scene.
+    #[error("{path}:{line}:{column}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the error.
+        line: usize,
+        /// 1-based column of the error.
+        column: usize,
+        /// What was wrong or expected.
+        message: String,
+    },
+    /// The scene parsed but a value is out of range.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl SceneConfig {
+    /// Parses a scene from RON text; `path` is used in error messages and to resolve
+    /// relative mesh paths.
+    pub fn from_ron(text: &str, path: &Path) -> Result<Self, ConfigError> {
+        let mut scene: SceneConfig = ron::from_str(text).map_err(|e| ConfigError::Parse {
+            path: path.to_path_buf(),
+            line: e.span.start.line,
+            column: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+        scene.validate().map_err(|message| ConfigError::Invalid { path: path.to_path_buf(), message })?;
+        if let MeshSource::File(p) = &mut scene.mesh {
+            if p.is_relative() {
+                let base = path.parent().unwrap_or(Path::new("."));
+                *p = base.join(&*p);
+            }
+        }
+        Ok(scene)
+    }
+
+    /// Reads and parses a scene file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| ConfigError::Io { path: path.to_path_buf(), source })?;
+        Self::from_ron(&text, path)
+    }
+
+    /// Checks value ranges that the types cannot express.
+    pub fn validate(&self) -> Result<(), String> {
+        self.field.validate().map_err(|e| e.to_string())?;
+        self.curve.validate().map_err(|e| e.to_string())?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn minimal_scene_takes_defaults() {
+        let s = SceneConfig::from_ron("(mesh: Shape(Plane(size: 2.0, resolution: 4)))", Path::new("x.ron"))
+            .expect("valid");
+        assert_eq!(s.sampling, SamplingConfig::default());
+        assert_eq!(s.curve, CurveOptions::default());
+        assert_eq!(s.mesh, MeshSource::Shape(Shape::Plane { size: 2.0, resolution: 4 }));
+    }
+
+    #[test]
+    fn full_scene_parses() {
+        let text = r#"(
+            mesh: File("meshes/a.obj"),
+            field: Constant(direction: (1.0, 1.0, 0.0), anisotropy: 4.0, density: 2.0),
+            sampling: (count: 123, seed: 9),
+            curve: (max_cell_share: 0.001, boundary_level: 8),
+        )"#;
+        let s = SceneConfig::from_ron(text, Path::new("/cfg/scene.ron")).expect("valid");
+        assert_eq!(s.mesh, MeshSource::File(PathBuf::from("/cfg/meshes/a.obj")));
+        assert_eq!(s.sampling, SamplingConfig { count: 123, seed: 9 });
+        assert_eq!(s.curve.boundary_level, 8);
+    }
+
+    #[test]
+    fn errors_have_file_line_and_column() {
+        let text = "(\n  mesh: Shape(Plane(size: 1.0)),\n  sampling: (count: -4),\n)";
+        let e = SceneConfig::from_ron(text, Path::new("bad.ron")).expect_err("negative count");
+        let msg = e.to_string();
+        assert!(msg.starts_with("bad.ron:3:"), "{msg}");
+        let e = SceneConfig::from_ron("(mesh: Shape(Plane()), colour: 3)", Path::new("typo.ron"))
+            .expect_err("unknown field");
+        assert!(e.to_string().starts_with("typo.ron:1:") && e.to_string().contains("colour"), "{e}");
+        let e = SceneConfig::from_ron(
+            "(mesh: Shape(Plane()), field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 0.5))",
+            Path::new("range.ron"),
+        )
+        .expect_err("anisotropy < 1");
+        assert!(e.to_string().contains("anisotropy"), "{e}");
+        let e = SceneConfig::from_ron("(mesh: Shape(Plane(", Path::new("cut.ron")).expect_err("truncated");
+        assert!(e.to_string().starts_with("cut.ron:1:"), "{e}");
+        let e = SceneConfig::load(Path::new("/nonexistent/scene.ron")).expect_err("missing");
+        assert!(e.to_string().contains("/nonexistent/scene.ron"), "{e}");
+    }
+}
