@@ -1,7 +1,9 @@
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeSet, HashMap, HashSet};
 use std::f64::consts::PI;
 
 use glam::DVec3;
+use proptest::collection::vec as pvec;
+use proptest::prelude::*;
 
 use super::*;
 
@@ -595,4 +597,369 @@ fn shape_build_matches_the_generators() {
             ..
         })
     ));
+}
+
+// ---------------------------------------------------------------------------------------
+// Adjacency invariants on random small meshes.
+
+/// A triangle soup cut from a (w x h) grid with random heights: a random subset of its
+/// triangles (some flipped if asked), its vertices permuted, some vertices duplicated
+/// (and used by some corners), some faces repeated.
+#[derive(Clone, Debug)]
+struct Soup {
+    positions: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    /// No face was flipped: the soup is consistently oriented.
+    oriented: bool,
+}
+
+fn soup(flips: bool) -> impl Strategy<Value = Soup> {
+    (1u32..=4, 1u32..=4)
+        .prop_flat_map(|(w, h)| {
+            let v = ((w + 1) * (h + 1)) as usize;
+            let f = (2 * w * h) as usize;
+            (
+                Just((w, h)),
+                pvec(prop::bool::weighted(0.7), f),
+                pvec(any::<bool>(), f),
+                Just((0..v as u32).collect::<Vec<u32>>()).prop_shuffle(),
+                pvec(-1i32..=1, v),
+                pvec(0..v, 0..4),
+                pvec(any::<bool>(), 3 * f),
+                pvec((any::<prop::sample::Index>(), any::<bool>()), 0..3),
+            )
+        })
+        .prop_map(
+            move |((w, h), keep, flip, perm, heights, dups, use_dup, repeats)| {
+                let grid = |i: u32, j: u32| j * (w + 1) + i;
+                let mut positions = vec![DVec3::ZERO; perm.len()];
+                for j in 0..=h {
+                    for i in 0..=w {
+                        let g = grid(i, j) as usize;
+                        positions[perm[g] as usize] =
+                            DVec3::new(f64::from(i), f64::from(j), 0.5 * f64::from(heights[g]));
+                    }
+                }
+                let mut dup_of = vec![None; positions.len()];
+                for &g in &dups {
+                    dup_of[perm[g] as usize] = Some(positions.len() as u32);
+                    positions.push(positions[perm[g] as usize]);
+                }
+                let mut triangles = Vec::new();
+                let mut oriented = true;
+                let mut t_index = 0;
+                for j in 0..h {
+                    for i in 0..w {
+                        let (a, b, c, d) = (
+                            grid(i, j),
+                            grid(i + 1, j),
+                            grid(i + 1, j + 1),
+                            grid(i, j + 1),
+                        );
+                        for t in [[a, b, c], [a, c, d]] {
+                            let k = t_index;
+                            t_index += 1;
+                            if !keep[k] {
+                                continue;
+                            }
+                            let mut t = t.map(|g| perm[g as usize]);
+                            for (c, corner) in t.iter_mut().enumerate() {
+                                if let (true, Some(d)) =
+                                    (use_dup[3 * k + c], dup_of[*corner as usize])
+                                {
+                                    *corner = d;
+                                }
+                            }
+                            if flips && flip[k] {
+                                t.swap(1, 2);
+                                oriented = false;
+                            }
+                            triangles.push(t);
+                        }
+                    }
+                }
+                if !triangles.is_empty() {
+                    for (index, reverse) in repeats {
+                        let [a, b, c] = *index.get(&triangles);
+                        // A rotated copy keeps the orientation; a reversed one only when flipping.
+                        triangles.push(if reverse && flips {
+                            [c, b, a]
+                        } else {
+                            [b, c, a]
+                        });
+                    }
+                }
+                Soup {
+                    positions,
+                    triangles,
+                    oriented,
+                }
+            },
+        )
+}
+
+/// Bitwise key of a position (the builder merges bitwise-equal positions).
+fn position_key(p: DVec3) -> [u64; 3] {
+    p.to_array().map(f64::to_bits)
+}
+
+/// Checks every adjacency array of `m` against quantities recomputed naively here, and
+/// against the input soup `s` it was built from.
+fn assert_adjacency_invariants(m: &TriMesh, s: &Soup) {
+    let tris = m.triangles();
+    let sorted = |a: u32, b: u32| [a.min(b), a.max(b)];
+
+    // Faces: the distinct input faces (by position), with the input's orientation.
+    let rotate_min_first = |t: [[u64; 3]; 3]| {
+        let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+        [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+    };
+    let as_keys =
+        |positions: &[DVec3], t: &[u32; 3]| t.map(|v| position_key(positions[v as usize]));
+    let mut input_faces: HashMap<[[u64; 3]; 3], [[u64; 3]; 3]> = HashMap::new();
+    for t in &s.triangles {
+        let keys = as_keys(&s.positions, t);
+        let mut set = keys;
+        set.sort_unstable();
+        input_faces.entry(set).or_insert(rotate_min_first(keys));
+    }
+    assert_eq!(m.face_count(), input_faces.len(), "face count");
+    for t in tris {
+        let keys = as_keys(m.positions(), t);
+        let mut set = keys;
+        set.sort_unstable();
+        let first = input_faces.get(&set).expect("output face is an input face");
+        assert_eq!(
+            *first,
+            rotate_min_first(keys),
+            "face {t:?} changed orientation"
+        );
+    }
+
+    // Edges: each face's three edges are in edges(), at the index face_edges() gives.
+    let expected_edges: HashSet<[u32; 2]> = tris
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| sorted(t[k], t[(k + 1) % 3])))
+        .collect();
+    assert_eq!(m.edge_count(), expected_edges.len(), "edge count");
+    assert!(
+        m.edges()
+            .iter()
+            .all(|e| e[0] < e[1] && expected_edges.contains(e))
+    );
+    for (f, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let e = m.face_edges()[f][k] as usize;
+            assert_eq!(
+                m.edges()[e],
+                sorted(t[k], t[(k + 1) % 3]),
+                "face {f} edge {k}"
+            );
+        }
+    }
+
+    // edge_faces and edge_valence agree with face_edges.
+    let mut faces_of_edge = vec![Vec::new(); m.edge_count()];
+    for (f, fe) in m.face_edges().iter().enumerate() {
+        for &e in fe {
+            faces_of_edge[e as usize].push(f as u32);
+        }
+    }
+    for (e, faces) in faces_of_edge.iter().enumerate() {
+        assert_eq!(
+            m.edge_valence()[e] as usize,
+            faces.len(),
+            "edge {e} valence"
+        );
+        assert!(faces.len() <= 2, "a grid has no non-manifold edge");
+        let [f0, f1] = m.edge_faces()[e];
+        assert!(
+            faces.contains(&f0),
+            "edge {e}: first face {f0} does not use it"
+        );
+        if faces.len() == 2 {
+            assert!(
+                faces.contains(&f1) && f1 != f0,
+                "edge {e}: second face {f1}"
+            );
+        } else {
+            assert_eq!(f1, NONE, "boundary edge {e} has a second face");
+        }
+    }
+
+    // face_neighbors: across every interior edge, symmetric and through the same edge.
+    for f in 0..m.face_count() {
+        for k in 0..3 {
+            let (e, g) = (m.face_edges()[f][k], m.face_neighbors()[f][k]);
+            if m.edge_valence()[e as usize] == 2 {
+                assert!(
+                    g != NONE && g as usize != f,
+                    "face {f} edge {k}: neighbour {g}"
+                );
+                let back = (0..3).find(|&k2| m.face_edges()[g as usize][k2] == e);
+                let back = back.expect("neighbour shares the edge");
+                assert_eq!(
+                    m.face_neighbors()[g as usize][back],
+                    f as u32,
+                    "not symmetric"
+                );
+            } else {
+                assert_eq!(g, NONE, "face {f}: neighbour across a boundary edge");
+            }
+        }
+    }
+
+    // Vertex rings: faces around, neighbours (sorted, symmetric), against a naive count.
+    let mut ring: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); m.vertex_count()];
+    let mut faces_around: Vec<Vec<u32>> = vec![Vec::new(); m.vertex_count()];
+    for (f, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            ring[a as usize].insert(b);
+            ring[b as usize].insert(a);
+            faces_around[a as usize].push(f as u32);
+        }
+    }
+    for v in 0..m.vertex_count() as u32 {
+        let expected: Vec<u32> = ring[v as usize].iter().copied().collect();
+        assert_eq!(
+            m.vertex_neighbors(v),
+            expected.as_slice(),
+            "one-ring of {v}"
+        );
+        for &u in m.vertex_neighbors(v) {
+            assert!(
+                m.vertex_neighbors(u).contains(&v),
+                "one-ring not symmetric: {u} {v}"
+            );
+        }
+        let mut faces = m.vertex_faces(v).to_vec();
+        faces.sort_unstable();
+        assert_eq!(faces, faces_around[v as usize], "faces around {v}");
+    }
+
+    // Boundary loops: closed cycles partitioning the boundary edges; on an oriented
+    // mesh each step follows its face's direction.
+    assert_boundary_loops_partition_boundary_edges(m);
+    if s.oriented {
+        let directed: HashSet<(u32, u32)> = tris
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+            .collect();
+        for lp in m.boundary_loops() {
+            for i in 0..lp.len() {
+                let step = (lp[i], lp[(i + 1) % lp.len()]);
+                assert!(
+                    directed.contains(&step),
+                    "loop {lp:?} steps against its face"
+                );
+            }
+        }
+    }
+
+    // Components: the classes of faces joined across interior edges (union-find), each
+    // numbered in order of its lowest face; the face counts sum to the face count.
+    let mut parent: Vec<usize> = (0..m.face_count()).collect();
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    for faces in faces_of_edge.iter().filter(|f| f.len() == 2) {
+        let (a, b) = (
+            root(&mut parent, faces[0] as usize),
+            root(&mut parent, faces[1] as usize),
+        );
+        parent[a.max(b)] = a.min(b);
+    }
+    let mut component_of_root = HashMap::new();
+    let mut sizes = vec![0usize; m.component_count()];
+    for f in 0..m.face_count() {
+        let next = component_of_root.len() as u32;
+        let expected = *component_of_root
+            .entry(root(&mut parent, f))
+            .or_insert(next);
+        assert_eq!(m.face_components()[f], expected, "component of face {f}");
+        sizes[expected as usize] += 1;
+    }
+    assert_eq!(
+        component_of_root.len(),
+        m.component_count(),
+        "component count"
+    );
+    assert!(sizes.iter().all(|&n| n > 0));
+    assert_eq!(sizes.iter().sum::<usize>(), m.face_count());
+    let several = m
+        .warnings()
+        .iter()
+        .any(|w| matches!(w, MeshWarning::SeveralComponents { .. }));
+    assert_eq!(
+        several,
+        m.component_count() > 1,
+        "SeveralComponents warning"
+    );
+
+    // Euler characteristic, recomputed from the input alone (distinct positions, edges
+    // and faces by position).
+    let used: HashSet<[u64; 3]> = s
+        .triangles
+        .iter()
+        .flat_map(|t| as_keys(&s.positions, t))
+        .collect();
+    let edges: HashSet<[[u64; 3]; 2]> = s
+        .triangles
+        .iter()
+        .flat_map(|t| {
+            let k = as_keys(&s.positions, t);
+            (0..3).map(move |i| {
+                let (a, b) = (k[i], k[(i + 1) % 3]);
+                [a.min(b), a.max(b)]
+            })
+        })
+        .collect();
+    let euler = used.len() as i64 - edges.len() as i64 + input_faces.len() as i64;
+    assert_eq!(m.euler_characteristic(), euler, "Euler characteristic");
+    assert_eq!(m.vertex_count(), used.len(), "vertex count");
+
+    // input_vertex_map: input positions land on equal output positions; exactly the
+    // positions no face uses are dropped.
+    assert_eq!(m.input_vertex_map().len(), s.positions.len());
+    for (i, (&out, &p)) in m.input_vertex_map().iter().zip(&s.positions).enumerate() {
+        if out == NONE {
+            assert!(
+                !used.contains(&position_key(p)),
+                "input vertex {i} dropped but used"
+            );
+        } else {
+            assert_eq!(
+                position_key(m.positions()[out as usize]),
+                position_key(p),
+                "vertex {i}"
+            );
+        }
+    }
+}
+
+fn check_soup(s: &Soup) {
+    match TriMesh::new(s.positions.clone(), s.triangles.clone()) {
+        Ok(m) => assert_adjacency_invariants(&m, s),
+        Err(MeshError::Empty { .. }) => assert!(s.triangles.is_empty(), "spurious Empty"),
+        Err(e) => panic!("unexpected error {e}"),
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn adjacency_invariants_hold_on_oriented_soups(s in soup(false)) {
+        check_soup(&s);
+    }
+
+    #[test]
+    fn adjacency_invariants_hold_with_flipped_faces(s in soup(true)) {
+        check_soup(&s);
+    }
 }
