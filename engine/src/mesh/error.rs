@@ -94,6 +94,20 @@ pub enum MeshError {
         /// What is unsupported, named as in the file.
         what: String,
     },
+    /// A built-in [`shapes`](super::shapes) generator was given a parameter outside its
+    /// valid range (a non-positive or non-finite length, a resolution of 0, or one that
+    /// would need more than [`MAX_SHAPE_FACES`](super::shapes::MAX_SHAPE_FACES) faces).
+    #[error("{shape}: {parameter} = {value} is invalid; expected {expected}")]
+    InvalidShapeParameter {
+        /// The shape, as its generator is named (`"sphere"`, `"genus2"`, ...).
+        shape: &'static str,
+        /// The parameter, as named in the generator's signature.
+        parameter: &'static str,
+        /// The value given (integer parameters converted exactly).
+        value: f64,
+        /// The valid range, in words.
+        expected: &'static str,
+    },
 }
 
 /// Something that was repaired or is worth knowing about a mesh, reported as data

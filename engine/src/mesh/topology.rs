@@ -253,38 +253,60 @@ fn build_vertex_rings(mesh: &mut TriMesh) {
     mesh.vertex_neighbors = nbrs;
 }
 
-/// Boundary loops: chains of boundary half-edges (edges with exactly one face), in
-/// the direction of their face. Robust to non-manifold vertices (several outgoing
-/// boundary half-edges): each half-edge is used exactly once.
+/// Boundary loops: chains of boundary edges (edges with exactly one face). Each edge is
+/// used exactly once. A loop starts along an edge in its face's direction and, at each
+/// vertex, continues along an unused boundary edge that leaves the vertex in its own
+/// face's direction if there is one, so on a consistently oriented mesh every loop
+/// follows its faces' orientation. Otherwise (faces wound inconsistently, or a
+/// non-orientable surface such as a Möbius strip) it continues along any unused boundary
+/// edge at the vertex, so loops stay closed instead of breaking into open chains. Robust
+/// to non-manifold vertices (several loops through one vertex). Only next to
+/// non-manifold edges, where a vertex can touch an odd number of boundary edges, can a
+/// chain end away from its start.
 fn build_boundary_loops(mesh: &mut TriMesh) {
-    let mut outgoing: HashMap<u32, Vec<u32>> = HashMap::new();
-    let mut targets: Vec<(u32, u32)> = Vec::new();
+    // Each boundary edge as (from, to) in its face's direction, and the boundary edges
+    // touching each vertex, in face order (so the walk is deterministic).
+    let mut ends: Vec<(u32, u32)> = Vec::new();
+    let mut touching: HashMap<u32, Vec<u32>> = HashMap::new();
     for (f, t) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
             let e = mesh.face_edges[f][k];
             if mesh.edge_valence[e as usize] == 1 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                outgoing.entry(a).or_default().push(targets.len() as u32);
-                targets.push((a, b));
+                touching.entry(a).or_default().push(ends.len() as u32);
+                touching.entry(b).or_default().push(ends.len() as u32);
+                ends.push((a, b));
             }
         }
     }
-    let mut used = vec![false; targets.len()];
-    for start in 0..targets.len() {
+    let mut used = vec![false; ends.len()];
+    for start in 0..ends.len() {
         if used[start] {
             continue;
         }
         let mut lp = Vec::new();
-        let mut h = start;
+        let (mut h, mut from) = (start, ends[start].0);
         loop {
             used[h] = true;
-            let (a, b) = targets[h];
-            lp.push(a);
-            let next = outgoing
-                .get(&b)
-                .and_then(|hs| hs.iter().copied().find(|&n| !used[n as usize]));
+            lp.push(from);
+            let (a, b) = ends[h];
+            let to = if from == a { b } else { a };
+            let unused = || {
+                touching
+                    .get(&to)
+                    .into_iter()
+                    .flatten()
+                    .map(|&n| n as usize)
+                    .filter(|&n| !used[n])
+            };
+            let next = unused()
+                .find(|&n| ends[n].0 == to)
+                .or_else(|| unused().next());
             match next {
-                Some(n) => h = n as usize,
+                Some(n) => {
+                    h = n;
+                    from = to;
+                }
                 None => break,
             }
         }
