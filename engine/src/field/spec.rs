@@ -1,13 +1,14 @@
 //! Field sources: how a user describes a tensor field (in a config file or in code).
 //!
-//! Analytic planar test fields (paper section 7.5, after Wei and Wang 2011) and per-vertex
-//! tensors from a file ([`super::read_field_file`]) end up as a validated
-//! [`TensorField`].
+//! Analytic planar test fields (paper section 7.5, after Wei and Wang 2011), per-vertex
+//! tensors from a file ([`super::read_field_file`]) and principal curvatures
+//! ([`super::principal_curvatures`]) all end up as a validated [`TensorField`].
 
 use std::path::{Path, PathBuf};
 
 use glam::{DVec2, DVec3};
 
+use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
 use super::warp::PlanarWarp;
 use super::{FieldError, TensorField};
 use crate::mesh::TriMesh;
@@ -72,6 +73,80 @@ pub enum FieldSpec {
     File {
         /// The field file.
         path: PathBuf,
+    },
+    /// A sampling tensor from the surface's principal curvatures (Rusinkiewicz 2004,
+    /// see [`principal_curvatures`](super::principal_curvatures)), smoothed over the
+    /// mesh. Per vertex, with `k1` the principal curvature of largest magnitude (along
+    /// `d1`) and `k2` the other one, and `c` the normalization factor:
+    ///
+    /// - major direction `m1 = d1`, the direction of strongest bending: samples are
+    ///   closest along it (spacing along `m1` is `1 / anisotropy` times that along `m2`);
+    /// - `density = floor + scale * c * measure(k1, k2)`;
+    /// - `anisotropy = clamp((c |k1| + eps) / (c |k2| + eps), 1, max_anisotropy)`
+    ///   with `eps = isotropy_curvature`, so that spacing is inversely proportional to
+    ///   curvature in each principal direction, saturating on developable parts
+    ///   (`k2 = 0`) and fading to isotropic where both curvatures are small against
+    ///   `eps` (flat or nearly flat parts, whose directions are noise).
+    ///
+    /// A flat mesh gets `density = floor`, isotropic; a sphere gets a constant
+    /// isotropic tensor; a cylinder gets `max_anisotropy` with `m1` around it.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use strata_engine::{field::FieldSpec, mesh::{TriMesh, shapes}};
+    /// // A parabolic trough z = (x - 1)^2 / 2: bent along x, straight along y.
+    /// let flat = shapes::plane(2.0, 16)?;
+    /// let bent: Vec<DVec3> = flat.positions().iter()
+    ///     .map(|p| DVec3::new(p.x, p.y, 0.5 * (p.x - 1.0).powi(2)))
+    ///     .collect();
+    /// let mesh = TriMesh::new(bent, flat.triangles().to_vec())?;
+    /// let field = FieldSpec::default_curvature().build(&mesh)?;
+    /// let centre = 8 * 17 + 8; // the vertex at (1, 1)
+    /// let e = strata_engine::field::eigen_in_plane(
+    ///     &field.tensors()[centre], mesh.vertex_normals()[centre]);
+    /// assert!(e.major.x.abs() > 0.99); // densest across the bend
+    /// assert!((e.anisotropy() - 4.0).abs() < 1e-9); // max_anisotropy: k2 = 0
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    Curvature {
+        /// Which curvature measure drives the density. Default
+        /// [`CurvatureMeasure::Rms`].
+        #[cfg_attr(feature = "serde", serde(default))]
+        measure: CurvatureMeasure,
+        /// How curvatures are made comparable across meshes (the factor `c`). Default
+        /// [`CurvatureNormalization::AreaRadius`] (dimensionless, 1 on any sphere).
+        #[cfg_attr(feature = "serde", serde(default))]
+        normalization: CurvatureNormalization,
+        /// Density where the surface is flat; finite, > 0 (keeps every tensor
+        /// positive definite). Default 0.2.
+        #[cfg_attr(feature = "serde", serde(default = "curvature::default_floor"))]
+        floor: f64,
+        /// Density added per unit of normalized curvature measure; finite, >= 0.
+        /// Default 1.
+        #[cfg_attr(feature = "serde", serde(default = "one"))]
+        scale: f64,
+        /// Largest spacing ratio `sqrt(l1 / l2)`; finite, >= 1 (1 gives an isotropic
+        /// field). Default 4.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_max_anisotropy")
+        )]
+        max_anisotropy: f64,
+        /// `eps` in the anisotropy ratio, in normalized curvature units (the units of
+        /// `c * k`); finite, > 0. Curvatures well below it count as flat. Default 0.05.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_isotropy_curvature")
+        )]
+        isotropy_curvature: f64,
+        /// Iterations of neighbour averaging of the curvature tensors (each transported
+        /// into the vertex's tangent plane, weighted by Voronoi area); 0 to 1000.
+        /// Default 2.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_smoothing_iterations")
+        )]
+        smoothing_iterations: u32,
     },
 }
 
@@ -252,6 +327,50 @@ impl FieldSpec {
                 positive("density", *density)
             }
             Self::File { .. } => Ok(()),
+            Self::Curvature {
+                floor,
+                scale,
+                max_anisotropy,
+                isotropy_curvature,
+                smoothing_iterations,
+                ..
+            } => {
+                positive("floor", *floor)?;
+                if !(*scale >= 0.0) || !scale.is_finite() {
+                    return Err(invalid("scale", *scale, "a finite value >= 0"));
+                }
+                if !(*max_anisotropy >= 1.0) || !max_anisotropy.is_finite() {
+                    return Err(invalid(
+                        "max_anisotropy",
+                        *max_anisotropy,
+                        "a finite spacing ratio >= 1",
+                    ));
+                }
+                positive("isotropy_curvature", *isotropy_curvature)?;
+                if *smoothing_iterations > curvature::MAX_SMOOTHING_ITERATIONS {
+                    return Err(invalid(
+                        "smoothing_iterations",
+                        f64::from(*smoothing_iterations),
+                        "at most 1000",
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The curvature source with every setting at its default: RMS curvature,
+    /// area-radius normalization, `floor` 0.2, `scale` 1, `max_anisotropy` 4,
+    /// `isotropy_curvature` 0.05, `smoothing_iterations` 2.
+    pub fn default_curvature() -> Self {
+        Self::Curvature {
+            measure: CurvatureMeasure::default(),
+            normalization: CurvatureNormalization::default(),
+            floor: curvature::DEFAULT_FLOOR,
+            scale: 1.0,
+            max_anisotropy: curvature::DEFAULT_MAX_ANISOTROPY,
+            isotropy_curvature: curvature::DEFAULT_ISOTROPY_CURVATURE,
+            smoothing_iterations: curvature::DEFAULT_SMOOTHING_ITERATIONS,
         }
     }
 
@@ -313,6 +432,26 @@ impl FieldSpec {
             }
             Self::Warp { warp, density } => warp.build(mesh, *density),
             Self::File { path } => super::read_field_file(path, mesh),
+            Self::Curvature {
+                measure,
+                normalization,
+                floor,
+                scale,
+                max_anisotropy,
+                isotropy_curvature,
+                smoothing_iterations,
+            } => {
+                let settings = curvature::Settings {
+                    measure: *measure,
+                    normalization: *normalization,
+                    floor: *floor,
+                    scale: *scale,
+                    max_anisotropy: *max_anisotropy,
+                    isotropy_curvature: *isotropy_curvature,
+                };
+                let k = super::principal_curvatures(mesh, *smoothing_iterations);
+                curvature::sampling_field(mesh, &k, &settings)
+            }
         }
     }
 }
