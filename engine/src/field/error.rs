@@ -69,4 +69,29 @@ pub enum FieldError {
         /// What is wrong.
         what: String,
     },
+    /// A well-formed line of a field file holds a value that is not a valid tensor
+    /// (NaN, a non-positive eigenvalue, a zero direction, a tensor that is not positive
+    /// definite in the vertex's tangent plane).
+    #[error("{path}:{line}: vertex {vertex}: {what}")]
+    BadValue {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// The vertex in the mesh file's order (0-based), i.e. the data line's rank.
+        vertex: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// A vertex lies where an analytic field source is undefined (for example beyond
+    /// the horizon of a perspective map).
+    #[error("vertex {vertex} lies outside the domain of the field source: {what} (value {value})")]
+    OutsideDomain {
+        /// Mesh vertex index.
+        vertex: usize,
+        /// The offending quantity at that vertex.
+        value: f64,
+        /// What must hold, in words.
+        what: &'static str,
+    },
 }

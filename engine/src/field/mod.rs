@@ -8,15 +8,28 @@
 //! closed-form 2x2 decomposition ([`eigen_in_plane`]).
 //!
 //! Input: a mesh and a [`FieldSpec`] (or raw tensors). Output: a validated
-//! [`TensorField`]. Cost: O(V) to build and validate.
+//! [`TensorField`]. Cost: O(V) to build and validate, plus the source's own cost
+//! (a file: its length; curvature: O(F + V * valence * smoothing)).
+//!
+//! Sources: constant, planar test functions (Gaussian blob, ramp, Balzer et al.'s
+//! density; shear and perspective metrics via [`PlanarWarp`]), per-vertex tensors from
+//! a file ([`read_field_file`]) and principal curvatures ([`principal_curvatures`]).
 
+mod curvature;
 mod eigen;
 mod error;
+mod file;
 mod spec;
+mod warp;
 
+pub use curvature::{
+    CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
+};
 pub use eigen::{Eigen2, eigen_2x2, eigen_in_plane, tangent_frame};
 pub use error::FieldError;
+pub use file::{format_field_file, parse_field_file, read_field_file};
 pub use spec::{FieldSpec, PlanarDensity};
+pub use warp::PlanarWarp;
 
 use glam::{DMat3, DVec3};
 
