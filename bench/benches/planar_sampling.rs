@@ -15,11 +15,19 @@ fn fields() -> Vec<(&'static str, FieldSpec)> {
     vec![
         (
             "isotropic",
-            FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 1.0, density: 1.0 },
+            FieldSpec::Constant {
+                direction: [1.0, 0.0, 0.0],
+                anisotropy: 1.0,
+                density: 1.0,
+            },
         ),
         (
             "anisotropic-4to1",
-            FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 4.0, density: 1.0 },
+            FieldSpec::Constant {
+                direction: [1.0, 0.0, 0.0],
+                anisotropy: 4.0,
+                density: 1.0,
+            },
         ),
         (
             "gaussian",

@@ -76,7 +76,12 @@ fn sample(args: &SampleArgs) -> anyhow::Result<()> {
     scene.sampler.sample_into(seed, &mut samples);
     let sample_time = t.elapsed();
     let preprocess: f64 = scene.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
-    let cells: usize = scene.sampler.segments().iter().map(|s| s.curve.cell_count()).sum();
+    let cells: usize = scene
+        .sampler
+        .segments()
+        .iter()
+        .map(|s| s.curve.cell_count())
+        .sum();
     println!(
         "sampled {count} points (seed {seed}) on {} faces, {cells} cells: sampling {:.3} ms, preprocessing {:.3} ms ({})",
         scene.mesh.face_count(),
@@ -107,7 +112,12 @@ enum OutputKind {
 }
 
 fn output_kind(path: &Path) -> anyhow::Result<OutputKind> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
         Some("ply") => Ok(OutputKind::Ply),
         Some("csv") => Ok(OutputKind::Csv),
         _ => bail!("{}: output must end in .ply or .csv", path.display()),

@@ -57,12 +57,19 @@ pub struct SamplingConfig {
 
 impl Default for SamplingConfig {
     fn default() -> Self {
-        Self { count: 10_000, seed: 1 }
+        Self {
+            count: 10_000,
+            seed: 1,
+        }
     }
 }
 
 fn default_field() -> FieldSpec {
-    FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 1.0, density: 1.0 }
+    FieldSpec::Constant {
+        direction: [1.0, 0.0, 0.0],
+        anisotropy: 1.0,
+        density: 1.0,
+    }
 }
 
 /// Errors reading a scene file.
@@ -109,7 +116,10 @@ impl SceneConfig {
             column: e.span.start.col,
             message: e.code.to_string(),
         })?;
-        scene.validate().map_err(|message| ConfigError::Invalid { path: path.to_path_buf(), message })?;
+        scene.validate().map_err(|message| ConfigError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        })?;
         if let MeshSource::File(p) = &mut scene.mesh {
             if p.is_relative() {
                 let base = path.parent().unwrap_or(Path::new("."));
@@ -121,8 +131,10 @@ impl SceneConfig {
 
     /// Reads and parses a scene file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| ConfigError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::from_ron(&text, path)
     }
 
@@ -140,11 +152,20 @@ mod tests {
 
     #[test]
     fn minimal_scene_takes_defaults() {
-        let s = SceneConfig::from_ron("(mesh: Shape(Plane(size: 2.0, resolution: 4)))", Path::new("x.ron"))
-            .expect("valid");
+        let s = SceneConfig::from_ron(
+            "(mesh: Shape(Plane(size: 2.0, resolution: 4)))",
+            Path::new("x.ron"),
+        )
+        .expect("valid");
         assert_eq!(s.sampling, SamplingConfig::default());
         assert_eq!(s.curve, CurveOptions::default());
-        assert_eq!(s.mesh, MeshSource::Shape(Shape::Plane { size: 2.0, resolution: 4 }));
+        assert_eq!(
+            s.mesh,
+            MeshSource::Shape(Shape::Plane {
+                size: 2.0,
+                resolution: 4
+            })
+        );
     }
 
     #[test]
@@ -157,7 +178,13 @@ mod tests {
         )"#;
         let s = SceneConfig::from_ron(text, Path::new("/cfg/scene.ron")).expect("valid");
         assert_eq!(s.mesh, MeshSource::File(PathBuf::from("/cfg/meshes/a.obj")));
-        assert_eq!(s.sampling, SamplingConfig { count: 123, seed: 9 });
+        assert_eq!(
+            s.sampling,
+            SamplingConfig {
+                count: 123,
+                seed: 9
+            }
+        );
         assert_eq!(s.curve.boundary_level, 8);
     }
 
@@ -169,14 +196,18 @@ mod tests {
         assert!(msg.starts_with("bad.ron:3:"), "{msg}");
         let e = SceneConfig::from_ron("(mesh: Shape(Plane()), colour: 3)", Path::new("typo.ron"))
             .expect_err("unknown field");
-        assert!(e.to_string().starts_with("typo.ron:1:") && e.to_string().contains("colour"), "{e}");
+        assert!(
+            e.to_string().starts_with("typo.ron:1:") && e.to_string().contains("colour"),
+            "{e}"
+        );
         let e = SceneConfig::from_ron(
             "(mesh: Shape(Plane()), field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 0.5))",
             Path::new("range.ron"),
         )
         .expect_err("anisotropy < 1");
         assert!(e.to_string().contains("anisotropy"), "{e}");
-        let e = SceneConfig::from_ron("(mesh: Shape(Plane(", Path::new("cut.ron")).expect_err("truncated");
+        let e = SceneConfig::from_ron("(mesh: Shape(Plane(", Path::new("cut.ron"))
+            .expect_err("truncated");
         assert!(e.to_string().starts_with("cut.ron:1:"), "{e}");
         let e = SceneConfig::load(Path::new("/nonexistent/scene.ron")).expect_err("missing");
         assert!(e.to_string().contains("/nonexistent/scene.ron"), "{e}");

@@ -53,6 +53,11 @@ impl Scene {
         let t = Instant::now();
         let (sampler, _) = planar::sampler(mesh.clone(), field.clone(), &config.curve)?;
         stages.push(("cells", t.elapsed()));
-        Ok(Self { mesh, field, sampler, stages })
+        Ok(Self {
+            mesh,
+            field,
+            sampler,
+            stages,
+        })
     }
 }

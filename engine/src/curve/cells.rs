@@ -272,13 +272,21 @@ impl SegmentCurve {
     /// leaf the exact measures of sub-cells are followed down until a sub-cell is
     /// fully covered, so every point lies in the domain.
     pub fn point_in_leaf(&self, leaf: usize, t: f64) -> DomainPoint {
+        self.point_in_leaf_to(leaf, t, self.options.leaf_levels as u32)
+    }
+
+    /// As [`point_in_leaf`](Self::point_in_leaf), resolving only `levels` levels of the
+    /// continuous map in fully covered leaves (at most `leaf_levels`). A caller that
+    /// draws `n` samples from `c` cells needs about `log4(n / c)` levels to separate
+    /// them, and a few more to place them evenly.
+    pub fn point_in_leaf_to(&self, leaf: usize, t: f64, levels: u32) -> DomainPoint {
         let key = self.keys[leaf];
         let cands = &self.candidates
             [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
         if key.full {
-            let (x, y) =
-                super::hilbert::point_in_node(key.state, t, self.options.leaf_levels as u32);
+            let levels = levels.min(self.options.leaf_levels as u32);
+            let (x, y) = super::hilbert::point_in_node(key.state, t, levels);
             let uv = key.origin() + DVec2::new(x, y) * key.size();
             return self.point_location(cands, uv);
         }

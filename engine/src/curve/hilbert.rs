@@ -139,29 +139,55 @@ impl State {
     }
 }
 
+/// Two levels at once: for each state and 4-bit pair of ranks (first rank in the high
+/// bits), the 2-bit column and row offsets and the state after both levels.
+const TABLE2: [[(u8, u8, u8); 16]; 4] = build_table2();
+
+const fn build_table2() -> [[(u8, u8, u8); 16]; 4] {
+    let mut t = [[(0u8, 0u8, 0u8); 16]; 4];
+    let mut s = 0;
+    while s < 4 {
+        let mut r = 0;
+        while r < 16 {
+            let (x1, y1, s1) = TABLE[s][r >> 2];
+            let (x2, y2, s2) = TABLE[s1 as usize][r & 3];
+            t[s][r] = (2 * x1 + x2, 2 * y1 + y2, s2);
+            r += 1;
+        }
+        s += 1;
+    }
+    t
+}
+
 /// Continuous Hilbert map inside a node: the point at curve parameter `t` in `[0, 1)`
 /// of the node in `state`, in the node's own unit square, resolved to `levels` levels
-/// and placed at the centre of the final sub-cell (at 2^-levels of the node's size the
-/// remaining fraction no longer matters). Steigleder and McCool's generalized
-/// stratified sampling maps stratified 1D values through exactly this map.
+/// and placed at the centre of the final sub-cell (at `2^-levels` of the node's size
+/// the remaining fraction no longer matters). Steigleder and McCool's generalized
+/// stratified sampling maps stratified 1D values through exactly this map. Walks two
+/// levels per table look-up; `levels` is at most 26 (52 bits of `t`).
 #[inline]
 pub fn point_in_node(state: State, t: f64, levels: u32) -> (f64, f64) {
-    debug_assert!((0.0..=1.0).contains(&t));
-    let mut s = state;
-    let (mut x, mut y) = (0.0f64, 0.0f64);
-    let mut size = 1.0;
-    let mut t = t * 4.0;
-    for _ in 0..levels {
-        let rank = (t as u8).min(3);
-        t -= rank as f64;
-        let (qx, qy, next) = s.child(rank);
-        size *= 0.5;
-        x += qx as f64 * size;
-        y += qy as f64 * size;
-        s = next;
-        t *= 4.0;
+    debug_assert!((0.0..=1.0).contains(&t) && levels <= 26);
+    // The first 2 * levels bits of t, as an integer index along the sub-curve.
+    let bits = 2 * levels;
+    let d = ((t * (1u64 << bits) as f64) as u64).min((1u64 << bits) - 1);
+    let mut s = state.0 as usize;
+    let (mut x, mut y) = (0u64, 0u64);
+    let mut shift = bits;
+    while shift >= 4 {
+        shift -= 4;
+        let (dx, dy, next) = TABLE2[s][((d >> shift) & 15) as usize];
+        x = (x << 2) | dx as u64;
+        y = (y << 2) | dy as u64;
+        s = next as usize;
     }
-    (x + 0.5 * size, y + 0.5 * size)
+    if shift == 2 {
+        let (dx, dy, _) = TABLE[s][(d & 3) as usize];
+        x = (x << 1) | dx as u64;
+        y = (y << 1) | dy as u64;
+    }
+    let inv = 1.0 / (1u64 << levels) as f64;
+    ((x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv)
 }
 
 #[cfg(test)]
@@ -227,6 +253,23 @@ mod tests {
             for r in 0..4u8 {
                 let (qx, qy, _) = State(s).child(r);
                 assert_eq!(State(s).rank_of(qx, qy), r);
+            }
+        }
+    }
+
+    #[test]
+    fn continuous_map_matches_d2xy_at_every_depth() {
+        for levels in 1..=13u32 {
+            let n = 1u64 << (2 * levels);
+            let step = (n / 5000).max(1);
+            let mut d = 0;
+            while d < n {
+                let t = (d as f64 + 0.5) / n as f64;
+                let (x, y) = point_in_node(State::ROOT, t, levels);
+                let (cx, cy) = d2xy(levels, d);
+                let side = (1u64 << levels) as f64;
+                assert_eq!(((x * side) as u32, (y * side) as u32), (cx, cy), "levels {levels} d {d}");
+                d += step;
             }
         }
     }

@@ -2,9 +2,9 @@
 
 use std::sync::Arc;
 
-use glam::DVec3;
 use rayon::prelude::*;
 
+use super::faces::FaceRecord;
 use super::stratified::{allocate, stratified_value};
 use super::types::Sample;
 use crate::curve::{DomainPoint, SegmentCurve};
@@ -55,6 +55,7 @@ pub struct Sampler {
     mesh: Arc<TriMesh>,
     field: Arc<TensorField>,
     segments: Vec<SegmentSampling>,
+    faces: Vec<FaceRecord>,
     total_measure: f64,
 }
 
@@ -78,10 +79,12 @@ impl Sampler {
         if !(total_measure > 0.0) {
             return Err(SampleError::Empty);
         }
+        let faces = FaceRecord::build_all(&mesh, &field);
         Ok(Self {
             mesh,
             field,
             segments,
+            faces,
             total_measure,
         })
     }
@@ -160,13 +163,18 @@ impl Sampler {
                 let curve = &seg.curve;
                 let cum = curve.cumulative();
                 let measure = curve.measure();
+                // Levels of the continuous map inside a leaf: enough to separate the
+                // samples that share a leaf (log4 of their number), plus 5 (1024
+                // sub-cells per sample) to place them evenly.
+                let per_leaf = count as f64 / curve.cell_count() as f64;
+                let levels = (per_leaf.max(1.0).log2() * 0.5).ceil() as u32 + 5;
                 let mut leaf = 0usize;
                 for g in lo..hi {
                     let k = g - seg_lo;
                     let m = stratified_value(seed, seg.segment as u64, k, count) * measure;
                     leaf = advance(cum, leaf, m);
                     let local = (m - cum[leaf]) / (cum[leaf + 1] - cum[leaf]);
-                    let p = curve.point_in_leaf(leaf, local);
+                    let p = curve.point_in_leaf_to(leaf, local, levels);
                     dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
                 }
             },
@@ -175,33 +183,21 @@ impl Sampler {
 
     /// Turns a domain point of `seg` into a surface sample.
     #[inline]
-    fn make_sample(
-        &self,
-        seg: &SegmentSampling,
-        p: &DomainPoint,
-        index: u32,
-        scale: f64,
-    ) -> Sample {
+    fn make_sample(&self, seg: &SegmentSampling, p: &DomainPoint, index: u32, scale: f64) -> Sample {
         let face = seg.faces[p.triangle as usize];
-        let tri = self.mesh.triangles()[face as usize];
-        let b = p.bary;
-        let pos = |v: u32| self.mesh.positions()[v as usize];
-        let nrm = |v: u32| self.mesh.vertex_normals()[v as usize];
-        let position = pos(tri[0]) * b[0] + pos(tri[1]) * b[1] + pos(tri[2]) * b[2];
-        let normal = (nrm(tri[0]) * b[0] + nrm(tri[1]) * b[1] + nrm(tri[2]) * b[2])
-            .try_normalize()
-            .unwrap_or(self.mesh.face_normals()[face as usize]);
-        let e = self.field.face_eigen(&self.mesh, face, b);
-        let spacing = [scale / e.l1.sqrt(), scale / e.l2.sqrt()];
+        let b = p.bary.map(|x| x as f32);
+        let fp = self.faces[face as usize].at(b);
+        let scale = scale as f32;
+        let spacing = [scale / fp.l1.sqrt(), scale / fp.l2.max(f32::MIN_POSITIVE).sqrt()];
         Sample {
-            position: to_f32(position),
+            position: fp.position.to_array(),
             face,
-            normal: to_f32(normal),
+            normal: fp.normal.to_array(),
             segment: seg.segment,
-            major_axis: to_f32(e.major),
+            major_axis: fp.major.to_array(),
             index,
-            bary: [b[1] as f32, b[2] as f32],
-            spacing: spacing.map(|s| s as f32),
+            bary: [b[1], b[2]],
+            spacing,
         }
     }
 }
@@ -222,10 +218,6 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
     (leaf + rest.partition_point(|&c| c <= m)).min(last)
 }
 
-#[inline]
-fn to_f32(v: DVec3) -> [f32; 3] {
-    [v.x as f32, v.y as f32, v.z as f32]
-}
 
 #[cfg(test)]
 mod tests {
