@@ -12,14 +12,26 @@ use strata_engine::sample::Sample;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let count: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(100_000);
+    let count: usize = args
+        .next()
+        .map(|a| a.parse())
+        .transpose()?
+        .unwrap_or(100_000);
     let repeats: usize = args.next().map(|a| a.parse()).transpose()?.unwrap_or(5);
     let mesh = Arc::new(shapes::plane(1.0, 64)?);
-    let spec = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 4.0, density: 1.0 };
+    let spec = FieldSpec::Constant {
+        direction: [1.0, 0.0, 0.0],
+        anisotropy: 4.0,
+        density: 1.0,
+    };
     let field = Arc::new(spec.build(&mesh)?);
     let t = Instant::now();
     let (sampler, map) = planar::sampler(mesh.clone(), field, &CurveOptions::default())?;
-    let cells: usize = sampler.segments().iter().map(|s| s.curve.cell_count()).sum();
+    let cells: usize = sampler
+        .segments()
+        .iter()
+        .map(|s| s.curve.cell_count())
+        .sum();
     println!(
         "{} faces, {cells} cells, {} KiB, built in {:.1} ms; anisotropy {:.3}",
         mesh.face_count(),

@@ -135,9 +135,41 @@ impl SegmentCurve {
     }
 
     /// Measure and covered area of triangle `t` inside the square `[lo, lo + size]^2`.
+    ///
+    /// Two exact fast paths avoid clipping: a triangle inside the square counts whole,
+    /// and a square inside the triangle counts whole (the density is linear, so its
+    /// integral is the area times the value at the centre).
     #[inline]
     fn overlap(&self, t: usize, lo: DVec2, size: f64) -> (f64, f64) {
         let tri = self.triangle_corners(t);
+        let hi = lo + DVec2::splat(size);
+        let (tmin, tmax) = (
+            tri[0].min(tri[1]).min(tri[2]),
+            tri[0].max(tri[1]).max(tri[2]),
+        );
+        if tmax.x <= lo.x || tmax.y <= lo.y || tmin.x >= hi.x || tmin.y >= hi.y {
+            return (0.0, 0.0);
+        }
+        if tmin.x >= lo.x && tmin.y >= lo.y && tmax.x <= hi.x && tmax.y <= hi.y {
+            let area = 0.5 * (tri[1] - tri[0]).perp_dot(tri[2] - tri[0]);
+            return (
+                area * self.density_at(t, (tri[0] + tri[1] + tri[2]) / 3.0),
+                area,
+            );
+        }
+        let inside =
+            |p: DVec2| (0..3).all(|k| (tri[(k + 1) % 3] - tri[k]).perp_dot(p - tri[k]) >= 0.0);
+        if inside(lo)
+            && inside(hi)
+            && inside(DVec2::new(lo.x, hi.y))
+            && inside(DVec2::new(hi.x, lo.y))
+        {
+            let area = size * size;
+            return (
+                area * self.density_at(t, lo + DVec2::splat(0.5 * size)),
+                area,
+            );
+        }
         let (a, c) = clip_triangle(&tri, lo, size).area_centroid();
         if a <= 0.0 {
             (0.0, 0.0)

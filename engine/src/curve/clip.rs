@@ -39,15 +39,9 @@ impl Poly {
 
 /// Clips triangle `tri` (counter-clockwise) to the square `[lo, lo + size]^2`.
 pub fn clip_triangle(tri: &[DVec2; 3], lo: DVec2, size: f64) -> Poly {
-    let mut a = Poly {
-        pts: [DVec2::ZERO; 8],
-        len: 3,
-    };
-    a.pts[..3].copy_from_slice(tri);
-    let mut b = Poly {
-        pts: [DVec2::ZERO; 8],
-        len: 0,
-    };
+    let mut buf = [[DVec2::ZERO; 8]; 2];
+    buf[0][..3].copy_from_slice(tri);
+    let mut len = 3;
     let hi = lo + DVec2::splat(size);
     // (axis, bound, keep the side >= bound?)
     let planes = [
@@ -56,40 +50,47 @@ pub fn clip_triangle(tri: &[DVec2; 3], lo: DVec2, size: f64) -> Poly {
         (1, lo.y, true),
         (1, hi.y, false),
     ];
+    let mut src = 0;
     for (axis, bound, keep_ge) in planes {
-        b.len = 0;
-        let n = a.len;
-        if n == 0 {
+        if len == 0 {
             break;
         }
-        for i in 0..n {
-            let p = a.pts[i];
-            let q = a.pts[(i + 1) % n];
-            let dp = if keep_ge {
+        let (a, b) = buf.split_at_mut(1);
+        let (from, to) = if src == 0 {
+            (&a[0], &mut b[0])
+        } else {
+            (&b[0], &mut a[0])
+        };
+        let mut out = 0;
+        let signed = |p: DVec2| {
+            if keep_ge {
                 p[axis] - bound
             } else {
                 bound - p[axis]
-            };
-            let dq = if keep_ge {
-                q[axis] - bound
-            } else {
-                bound - q[axis]
-            };
-            if dp >= 0.0 {
-                b.pts[b.len] = p;
-                b.len += 1;
             }
+        };
+        let mut p = from[len - 1];
+        let mut dp = signed(p);
+        for &q in &from[..len] {
+            let dq = signed(q);
             if (dp >= 0.0) != (dq >= 0.0) {
                 let t = dp / (dp - dq);
                 let mut x = p + (q - p) * t;
                 x[axis] = bound; // exact on the clipping line
-                b.pts[b.len] = x;
-                b.len += 1;
+                to[out] = x;
+                out += 1;
             }
+            if dq >= 0.0 {
+                to[out] = q;
+                out += 1;
+            }
+            p = q;
+            dp = dq;
         }
-        std::mem::swap(&mut a, &mut b);
+        len = out;
+        src ^= 1;
     }
-    a
+    Poly { pts: buf[src], len }
 }
 
 #[cfg(test)]

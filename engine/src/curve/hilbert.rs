@@ -268,7 +268,11 @@ mod tests {
                 let (x, y) = point_in_node(State::ROOT, t, levels);
                 let (cx, cy) = d2xy(levels, d);
                 let side = (1u64 << levels) as f64;
-                assert_eq!(((x * side) as u32, (y * side) as u32), (cx, cy), "levels {levels} d {d}");
+                assert_eq!(
+                    ((x * side) as u32, (y * side) as u32),
+                    (cx, cy),
+                    "levels {levels} d {d}"
+                );
                 d += step;
             }
         }

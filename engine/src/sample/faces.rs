@@ -69,8 +69,18 @@ impl FaceRecord {
         let mean = 0.5 * (a + c);
         let r = (0.5 * (a - c)).hypot(bb);
         let (l1, l2) = (mean + r, mean - r);
-        let v = if a >= c { Vec2::new(l1 - c, bb) } else { Vec2::new(bb, l1 - a) };
+        let v = if a >= c {
+            Vec2::new(l1 - c, bb)
+        } else {
+            Vec2::new(bb, l1 - a)
+        };
         let v = v.try_normalize().unwrap_or(Vec2::X);
-        FacePoint { position, normal, major: self.e1 * v.x + self.e2 * v.y, l1, l2 }
+        FacePoint {
+            position,
+            normal,
+            major: self.e1 * v.x + self.e2 * v.y,
+            l1,
+            l2,
+        }
     }
 }

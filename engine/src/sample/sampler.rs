@@ -183,12 +183,21 @@ impl Sampler {
 
     /// Turns a domain point of `seg` into a surface sample.
     #[inline]
-    fn make_sample(&self, seg: &SegmentSampling, p: &DomainPoint, index: u32, scale: f64) -> Sample {
+    fn make_sample(
+        &self,
+        seg: &SegmentSampling,
+        p: &DomainPoint,
+        index: u32,
+        scale: f64,
+    ) -> Sample {
         let face = seg.faces[p.triangle as usize];
         let b = p.bary.map(|x| x as f32);
         let fp = self.faces[face as usize].at(b);
         let scale = scale as f32;
-        let spacing = [scale / fp.l1.sqrt(), scale / fp.l2.max(f32::MIN_POSITIVE).sqrt()];
+        let spacing = [
+            scale / fp.l1.sqrt(),
+            scale / fp.l2.max(f32::MIN_POSITIVE).sqrt(),
+        ];
         Sample {
             position: fp.position.to_array(),
             face,
@@ -217,7 +226,6 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
     let rest = &cum[leaf + 1..];
     (leaf + rest.partition_point(|&c| c <= m)).min(last)
 }
-
 
 #[cfg(test)]
 mod tests {
