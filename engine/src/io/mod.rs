@@ -1,7 +1,7 @@
 //! File formats: OBJ and PLY mesh readers, PLY and CSV writers for meshes and samples.
 //!
 //! Input: a path (or bytes plus a name for messages). Output: a validated
-//! [`TriMesh`]. Cost: O(file size); a
+//! [`TriMesh`], or [`Sample`]s; writers go the other way. Cost: O(file size); a
 //! whole file is read into memory once and parsed from there.
 //!
 //! - [`load`] picks the reader by extension (`.obj`, `.ply`, any case).
@@ -14,6 +14,9 @@
 //!   every scalar type; faces from `face` (`vertex_indices` or `vertex_index`) and
 //!   triangle strips from `tristrips` (`-1` restarts a strip, winding alternates); all
 //!   other elements and properties are skipped.
+//! - Writers ([`write_mesh_ply`], [`write_samples_ply`], [`write_samples_csv`]) write
+//!   to a temporary file beside the target and rename it, so a reader never sees half
+//!   a file; the `_to` variants write to any [`Write`](std::io::Write).
 //!
 //! Errors say where: the file, and the line (text), or the element and record
 //! (binary). Content that makes no valid mesh (an out-of-range or negative index, a
@@ -24,12 +27,22 @@
 
 mod obj;
 mod ply;
+mod samples;
+mod write;
 
 use std::path::Path;
 
 use glam::DVec3;
 
 use crate::mesh::{MeshError, TriMesh};
+#[cfg(doc)]
+use crate::sample::Sample;
+
+pub use samples::{SAMPLE_COLUMNS, parse_samples_ply, read_samples_ply};
+pub use write::{
+    write_mesh_ply, write_mesh_ply_to, write_samples_csv, write_samples_csv_to, write_samples_ply,
+    write_samples_ply_to,
+};
 
 /// Loads a triangle mesh from an `.obj` or `.ply` file, chosen by the extension (any
 /// case).
