@@ -20,7 +20,7 @@ use crate::mesh::{MeshError, TriMesh};
 
 /// Parses OBJ `bytes` into a mesh; `path` only names the file in errors.
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
-    let text = hide_polylines(bytes);
+    let text = prepare_text(bytes);
     // `..Default::default()` covers the fields tobj adds under its `merging` and
     // `reordering` features, should any crate in a build enable them.
     #[allow(clippy::needless_update)]
@@ -109,27 +109,38 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
     super::build_mesh(path, scan.positions, corners, &face_ends)
 }
 
-/// Turns `l` (polyline) records into comments, keeping line numbers: `tobj` reads
-/// them like faces, and a polyline of three or more points would become a triangle.
-fn hide_polylines(bytes: &[u8]) -> Cow<'_, [u8]> {
+/// Prepares the text for `tobj`, keeping every byte offset and line number: a UTF-8
+/// byte-order mark becomes spaces (else the first keyword is not recognised), and `l`
+/// (polyline) records become comments (`tobj` reads them like faces, so a polyline of
+/// three or more points would become a triangle).
+fn prepare_text(bytes: &[u8]) -> Cow<'_, [u8]> {
+    const BOM: &[u8] = b"\xEF\xBB\xBF";
     let is_polyline = |line: &[u8]| {
         let mut words = line
             .split(|b| b.is_ascii_whitespace())
             .filter(|w| !w.is_empty());
         words.next() == Some(b"l".as_slice())
     };
-    if !bytes.split(|&b| b == b'\n').any(is_polyline) {
+    let bom = bytes.starts_with(BOM);
+    if !bom && !bytes.split(|&b| b == b'\n').any(is_polyline) {
         return Cow::Borrowed(bytes);
     }
     let mut owned = bytes.to_vec();
+    if bom {
+        owned[..BOM.len()].fill(b' ');
+    }
+    let mut polylines = Vec::new();
     let mut start = 0;
-    for line in bytes.split(|&b| b == b'\n') {
+    for line in owned.split(|&b| b == b'\n') {
         if is_polyline(line)
             && let Some(k) = line.iter().position(|&b| b == b'l')
         {
-            owned[start + k] = b'#';
+            polylines.push(start + k);
         }
         start += line.len() + 1;
+    }
+    for at in polylines {
+        owned[at] = b'#';
     }
     Cow::Owned(owned)
 }

@@ -191,6 +191,12 @@ fn obj_polylines_do_not_become_faces() {
 }
 
 #[test]
+fn obj_byte_order_mark_is_ignored() {
+    let mesh = obj("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("valid");
+    assert_eq!((mesh.vertex_count(), mesh.face_count()), (3, 1));
+}
+
+#[test]
 fn obj_groups_share_vertices() {
     let text =
         "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\ng a\nf 1 3 2\nf 1 2 4\ng b\nf 2 3 4\no c\nf 1 4 3\n";
