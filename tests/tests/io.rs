@@ -1101,6 +1101,13 @@ fn writers_replace_files_atomically_and_report_bad_paths() {
     assert_eq!(text.lines().count(), 3);
     assert!(!dir.path().join("out.csv.tmp").exists());
 
+    // The writer goes through `<name>.tmp` beside the target: when that cannot be
+    // created, the write fails and the old file stays whole.
+    std::fs::create_dir(dir.path().join("out.csv.tmp")).expect("mkdir");
+    let e = io::write_samples_csv(&path, &some_samples()).expect_err("tmp path is a folder");
+    assert!(matches!(&e, MeshError::Io { .. }), "{e:?}");
+    assert_eq!(std::fs::read_to_string(&path).expect("read"), text);
+
     let missing = dir.path().join("no-such-folder").join("s.ply");
     let e = io::write_samples_ply(&missing, &some_samples()).expect_err("no folder");
     assert!(
