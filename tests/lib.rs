@@ -1,1 +1,21 @@
-//! Integration tests of strata (see `tests/`); this library is empty.
+//! Helpers shared by strata's integration tests (see `tests/`): where the test meshes
+//! live.
+
+use std::path::PathBuf;
+
+/// The folder of real test meshes (`shared/meshes` beside the project, see its
+/// README), or `None` where it is absent so that tests can skip.
+///
+/// `STRATA_MESH_DIR` overrides the default `<workspace>/../shared/meshes`.
+pub fn shared_mesh_dir() -> Option<PathBuf> {
+    let dir = match std::env::var_os("STRATA_MESH_DIR") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"),
+    };
+    dir.is_dir().then_some(dir)
+}
+
+/// The project's own small mesh corpus, `tests/data/meshes`.
+pub fn corpus_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/meshes")
+}

@@ -1,1 +1,2 @@
 //! strata integration tests: one binary, one module per stage.
+mod io;

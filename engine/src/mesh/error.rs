@@ -108,6 +108,17 @@ pub enum MeshError {
         /// The valid range, in words.
         expected: &'static str,
     },
+    /// A file was read, but its content does not make a valid mesh; `source` is the
+    /// construction error (out-of-range or negative index, non-finite vertex, empty
+    /// mesh, face with too few corners), with indices in file order.
+    #[error("{path}: {source}")]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with the content.
+        #[source]
+        source: Box<MeshError>,
+    },
 }
 
 /// Something that was repaired or is worth knowing about a mesh, reported as data

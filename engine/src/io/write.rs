@@ -1,0 +1,225 @@
+//! Writers: meshes and samples as binary little-endian PLY, samples as CSV.
+//!
+//! The path-taking writers are atomic: they write `<path>.<ext>.tmp` in the same folder
+//! through a [`BufWriter`], sync it, and rename it over `path`, so a reader sees the old
+//! file or the whole new one. The `_to` variants write to any [`Write`] (wrap unbuffered
+//! sinks in a `BufWriter`: they issue one small write per record).
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use super::SAMPLE_COLUMNS;
+use crate::mesh::{MeshError, TriMesh};
+use crate::sample::Sample;
+
+/// Writes `mesh` as binary little-endian PLY, atomically (see [`write_mesh_ply_to`]).
+///
+/// Errors: [`MeshError::Io`] naming `path` (also for a wrong number of colours).
+pub fn write_mesh_ply(
+    path: &Path,
+    mesh: &TriMesh,
+    face_colors: Option<&[[u8; 3]]>,
+) -> Result<(), MeshError> {
+    write_atomically(path, |w| write_mesh_ply_to(w, mesh, face_colors))
+}
+
+/// Writes `mesh` as binary little-endian PLY to `w`: element `vertex` with `float x y z`
+/// (positions rounded to f32), element `face` with `list uchar int vertex_indices`, and
+/// `uchar red green blue` per face when `face_colors` is given.
+///
+/// Errors: [`io::ErrorKind::InvalidInput`] if `face_colors` does not have one colour per
+/// face, or a vertex index does not fit an `int`; any error of `w`.
+pub fn write_mesh_ply_to<W: Write>(
+    mut w: W,
+    mesh: &TriMesh,
+    face_colors: Option<&[[u8; 3]]>,
+) -> io::Result<()> {
+    if let Some(colors) = face_colors
+        && colors.len() != mesh.face_count()
+    {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "{} face colours for {} faces",
+                colors.len(),
+                mesh.face_count()
+            ),
+        ));
+    }
+    if i32::try_from(mesh.vertex_count()).is_err() {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            "too many vertices for PLY `int` indices",
+        ));
+    }
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by strata\n\
+         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\n",
+        mesh.vertex_count(),
+        mesh.face_count()
+    );
+    if face_colors.is_some() {
+        header.push_str("property uchar red\nproperty uchar green\nproperty uchar blue\n");
+    }
+    header.push_str("end_header\n");
+    w.write_all(header.as_bytes())?;
+    for p in mesh.positions() {
+        let mut record = [0u8; 12];
+        for (chunk, c) in record.chunks_exact_mut(4).zip(p.as_vec3().to_array()) {
+            chunk.copy_from_slice(&c.to_le_bytes());
+        }
+        w.write_all(&record)?;
+    }
+    for (f, t) in mesh.triangles().iter().enumerate() {
+        let mut record = [0u8; 16];
+        record[0] = 3;
+        for (chunk, v) in record[1..13].chunks_exact_mut(4).zip(t) {
+            // In range: the vertex count fits an i32 (checked above).
+            chunk.copy_from_slice(&(*v as i32).to_le_bytes());
+        }
+        let len = match face_colors {
+            Some(colors) => {
+                record[13..16].copy_from_slice(&colors[f]);
+                16
+            }
+            None => 13,
+        };
+        w.write_all(&record[..len])?;
+    }
+    w.flush()
+}
+
+/// Writes samples as a binary little-endian PLY point cloud, atomically (see
+/// [`write_samples_ply_to`]). Read it back with [`read_samples_ply`](super::read_samples_ply).
+///
+/// Errors: [`MeshError::Io`] naming `path`.
+pub fn write_samples_ply(path: &Path, samples: &[Sample]) -> Result<(), MeshError> {
+    write_atomically(path, |w| write_samples_ply_to(w, samples))
+}
+
+/// Writes samples as a binary little-endian PLY point cloud to `w`: one element `vertex`
+/// with the [`SAMPLE_COLUMNS`] as properties, `float` except `face`, `segment` and
+/// `index` (`uint`); 64 bytes per sample.
+///
+/// ```
+/// use strata_engine::{io, sample::Sample};
+/// let samples = vec![Sample { position: [1.0, 2.0, 3.0], face: 7, ..Default::default() }];
+/// let mut bytes = Vec::new();
+/// io::write_samples_ply_to(&mut bytes, &samples)?;
+/// let back = io::parse_samples_ply(&bytes, "memory.ply".as_ref())?;
+/// assert_eq!(back, samples);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_samples_ply_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Result<()> {
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by strata: samples\nelement vertex {}\n",
+        samples.len()
+    );
+    for name in SAMPLE_COLUMNS {
+        let ty = if matches!(name, "face" | "segment" | "index") {
+            "uint"
+        } else {
+            "float"
+        };
+        header.push_str(&format!("property {ty} {name}\n"));
+    }
+    header.push_str("end_header\n");
+    w.write_all(header.as_bytes())?;
+    for s in samples {
+        let mut record = [0u8; 64];
+        for (chunk, word) in record.chunks_exact_mut(4).zip(sample_row(s)) {
+            chunk.copy_from_slice(&word.to_le_bytes());
+        }
+        w.write_all(&record)?;
+    }
+    w.flush()
+}
+
+/// Writes samples as CSV, atomically (see [`write_samples_csv_to`]).
+///
+/// Errors: [`MeshError::Io`] naming `path`.
+pub fn write_samples_csv(path: &Path, samples: &[Sample]) -> Result<(), MeshError> {
+    write_atomically(path, |w| write_samples_csv_to(w, samples))
+}
+
+/// Writes samples as CSV to `w`: a header row of the [`SAMPLE_COLUMNS`] (`x,y,z` first),
+/// then one row per sample; floats in Rust's shortest round-trip notation.
+pub fn write_samples_csv_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Result<()> {
+    writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?;
+    for s in samples {
+        let [x, y, z] = s.position;
+        let [nx, ny, nz] = s.normal;
+        let [mx, my, mz] = s.major_axis;
+        let [s1, s2] = s.spacing;
+        let [b1, b2] = s.bary;
+        writeln!(
+            w,
+            "{x},{y},{z},{nx},{ny},{nz},{mx},{my},{mz},{s1},{s2},{},{b1},{b2},{},{}",
+            s.face, s.segment, s.index
+        )?;
+    }
+    w.flush()
+}
+
+/// The 16 values of a sample row as 32-bit words (float bits or uint), in
+/// [`SAMPLE_COLUMNS`] order.
+fn sample_row(s: &Sample) -> [u32; 16] {
+    let f = f32::to_bits;
+    [
+        f(s.position[0]),
+        f(s.position[1]),
+        f(s.position[2]),
+        f(s.normal[0]),
+        f(s.normal[1]),
+        f(s.normal[2]),
+        f(s.major_axis[0]),
+        f(s.major_axis[1]),
+        f(s.major_axis[2]),
+        f(s.spacing[0]),
+        f(s.spacing[1]),
+        s.face,
+        f(s.bary[0]),
+        f(s.bary[1]),
+        s.segment,
+        s.index,
+    ]
+}
+
+/// `<path>.<ext>.tmp` (or `<path>.tmp` without an extension), in the same folder.
+pub(super) fn temp_path(path: &Path) -> PathBuf {
+    match path.extension() {
+        Some(ext) => {
+            let mut ext = ext.to_os_string();
+            ext.push(".tmp");
+            path.with_extension(ext)
+        }
+        None => path.with_extension("tmp"),
+    }
+}
+
+/// Runs `write` into a buffered temporary file beside `path`, then renames it over
+/// `path`. On failure the temporary file is removed and `path` is untouched.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
+) -> Result<(), MeshError> {
+    let tmp = temp_path(path);
+    let result = (|| {
+        let mut w = BufWriter::new(File::create(&tmp)?);
+        write(&mut w)?;
+        let file = w.into_inner().map_err(io::IntoInnerError::into_error)?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&tmp, path)
+    })();
+    result.map_err(|source| {
+        // Best effort: the temporary file may not exist, and the first error matters.
+        let _ = std::fs::remove_file(&tmp);
+        MeshError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
