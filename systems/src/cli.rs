@@ -45,6 +45,20 @@ pub struct SampleArgs {
     pub threads: Option<usize>,
 }
 
+/// An error and its causes in one line, joined by `": "`, leaving out causes whose
+/// text the line already holds (our error messages often quote their source).
+pub fn one_line(error: &anyhow::Error) -> String {
+    let mut line = error.to_string();
+    for cause in error.chain().skip(1) {
+        let text = cause.to_string();
+        if !line.contains(&text) {
+            line.push_str(": ");
+            line.push_str(&text);
+        }
+    }
+    line
+}
+
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {

@@ -120,12 +120,13 @@ impl SceneConfig {
             path: path.to_path_buf(),
             message,
         })?;
-        if let MeshSource::File(p) = &mut scene.mesh {
-            if p.is_relative() {
-                let base = path.parent().unwrap_or(Path::new("."));
-                *p = base.join(&*p);
-            }
+        let base = path.parent().unwrap_or(Path::new("."));
+        if let MeshSource::File(p) = &mut scene.mesh
+            && p.is_relative()
+        {
+            *p = base.join(&*p);
         }
+        scene.field.resolve_paths(base);
         Ok(scene)
     }
 

@@ -9,8 +9,7 @@ fn main() -> ExitCode {
     match strata_systems::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // One readable line: the context chain joined by ": ".
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", strata_systems::cli::one_line(&e));
             ExitCode::FAILURE
         }
     }

@@ -1,2 +1,3 @@
 //! strata integration tests: one binary, one module per stage.
 mod io;
+mod pipeline;
