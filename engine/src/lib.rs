@@ -23,3 +23,4 @@ pub mod mesh;
 pub mod planar;
 pub mod rng;
 pub mod sample;
+pub mod segment;
