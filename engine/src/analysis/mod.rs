@@ -94,3 +94,6 @@ pub fn check_unit_square(points: &[DVec2]) -> Result<(), AnalysisError> {
         }),
     }
 }
+
+#[cfg(test)]
+mod tests;
