@@ -252,6 +252,30 @@ proptest! {
     }
 }
 
+/// Sets large enough to be swept in several parallel runs of x (256 critical x each),
+/// with ties: a third of the coordinates on the grid k/64, duplicates included.
+#[test]
+fn rect_sup_in_parallel_runs_equals_brute_force() {
+    for seed in 0..3 {
+        let mut rng = Rng::new(seed, 1);
+        let mut coordinate = || {
+            if rng.below(3) == 0 {
+                rng.below(65) as f64 / 64.0
+            } else {
+                rng.next_f64()
+            }
+        };
+        let mut points: Vec<DVec2> = (0..600).map(|_| d(coordinate(), coordinate())).collect();
+        points.extend_from_within(..20);
+        let fast = star_discrepancy_sup(&points);
+        let slow = rect_brute(&points);
+        assert!(
+            (fast - slow).abs() < TOL,
+            "seed {seed}: fast {fast} brute {slow}"
+        );
+    }
+}
+
 // ---------------------------------------------------------------- random lower bounds
 
 /// No shape of the family may beat the supremum: evaluate many random shapes directly.
@@ -453,6 +477,7 @@ fn results_do_not_depend_on_thread_count() {
             .expect("thread pool");
         pool.install(|| {
             (
+                star_discrepancy_sup(&points).to_bits(),
                 star_discrepancy_l2(&points).to_bits(),
                 triangles().sup(&points).to_bits(),
             )
