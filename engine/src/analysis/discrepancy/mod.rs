@@ -13,15 +13,22 @@
 //!
 //! | measure | function | cost |
 //! | --- | --- | --- |
-//! | sup star discrepancy (origin boxes) | [`star_discrepancy_sup`] | O(N^2) |
+//! | sup star discrepancy (origin boxes) | [`star_discrepancy_sup`] | O(N^2), parallel |
 //! | L2 star discrepancy (Warnock) | [`star_discrepancy_l2`] | O(N^2), parallel |
 //! | sup over origin triangles | [`Discrepancy`] with [`ShapeFamily::OriginTriangles`] | O(N^2 log N), parallel |
 //! | sup over quarter discs | [`Discrepancy`] with [`ShapeFamily::QuarterDiscs`] | O(N log N) |
 //! | decay rate | [`loglog_slope`], [`DiscrepancyCurve`] | |
 //!
+//! Measured on 2 cores, 10^4 uniform points: boxes sup 0.06 s, L2 0.04 s, triangles
+//! 0.5 s, discs 0.2 ms.
+//!
 //! Every sup is exact: it searches all critical shapes, the ones whose boundary passes
 //! through point coordinates, and counts ties (shared coordinates, duplicate points) in
-//! both the open shape and its closure. Results do not depend on the thread count.
+//! both the open shape and its closure. One limit: for triangles, three points on one
+//! hypotenuse are recognised as collinear exactly when their coordinates have at most
+//! 26 significant bits (grids such as k/2^m); other near-collinear triples are decided
+//! in floating point, which can shift that triangle's count by one. Results do not
+//! depend on the thread count.
 
 mod curve;
 mod shapes;
