@@ -86,12 +86,15 @@ pub fn jittered_grid(n: usize, seed: u64) -> Vec<DVec2> {
 /// the pattern fills the square with `n` points.
 ///
 /// Bridson's algorithm (30 candidates per active point, non-periodic square) produces a
-/// maximal pattern for a radius `r`; its size is close to `c / r^2`. Starting from the
-/// packing estimate, the radius is refitted by `r <- r sqrt(count / n)` (up to 12 fits,
-/// then shrinking by 1% until a fit reaches `n`), keeping the pattern with the fewest
-/// points at or above `n`. Its surplus (typically a few points, under 0.5% of `n`) is
-/// removed one at a time, always the point with the closest neighbour, so the removed
-/// points leave no large hole. `n <= 1` gives uniform random points.
+/// nearly maximal pattern for a radius `r` (measured: closest pair 0.79 / sqrt(n),
+/// largest empty disc about 1.0 / sqrt(n)); its size is close to `c / r^2` but varies by
+/// about 0.4 sqrt(n) between runs. Starting from a packing estimate, the radius is
+/// refitted by `r <- r sqrt(count / n)` for a fixed number of fits (32 for n <= 1024,
+/// 8 above; then shrinking by 1% until a fit reaches `n`), keeping the pattern with the
+/// fewest points at or above `n`. Its surplus is removed one point at a time, always the
+/// point with the closest neighbour, so the removals leave no large hole. Measured
+/// surplus over 8 seeds: at most 3 points for n <= 1024 (usually none), 8 for
+/// n = 4096, 53 (0.65%) for n = 8192. `n <= 1` gives uniform random points.
 ///
 /// # Example
 /// ```
@@ -105,13 +108,14 @@ pub fn jittered_grid(n: usize, seed: u64) -> Vec<DVec2> {
 /// assert!(closest > 0.6 / (500f64).sqrt()); // random points would have ~0.01 / sqrt(n)
 /// ```
 pub fn poisson_disk(n: usize, seed: u64) -> Vec<DVec2> {
-    const FITS: u64 = 8;
     if n <= 1 {
         return uniform_random(n, seed);
     }
     // Bridson's maximal patterns cover about 49% of the square with disks of diameter r
     // (measured here for n = 8192; random sequential adsorption saturates near 0.547).
     let mut radius = (4.0 * 0.49 / (std::f64::consts::PI * n as f64)).sqrt();
+    // Small patterns are cheap and their surplus weighs more: fit them more often.
+    let fits: u64 = if n <= 1024 { 32 } else { 8 };
     // The pattern with the fewest points at or above n, and its radius.
     let mut best: Option<(Vec<DVec2>, f64)> = None;
     let mut fit = 0u64;
@@ -122,10 +126,10 @@ pub fn poisson_disk(n: usize, seed: u64) -> Vec<DVec2> {
         if count >= n && best.as_ref().is_none_or(|b| count < b.0.len()) {
             best = Some((points, radius));
         }
-        if let Some(done) = best.take_if(|b| b.0.len() == n || fit >= FITS) {
+        if let Some(done) = best.take_if(|b| b.0.len() == n || fit >= fits) {
             break done;
         }
-        radius *= if fit < FITS {
+        radius *= if fit < fits {
             (count as f64 / n as f64).sqrt()
         } else {
             0.99

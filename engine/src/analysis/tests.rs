@@ -12,12 +12,12 @@
 //! | uniform | L2, boxes | 0.495 +- 0.055 | 1/2 (E T^2 = (1/4 - 1/9) / N) | 0.40..0.60 |
 //! | jittered | sup, boxes | 0.669 +- 0.013 | 3/4 - 1/(2 ln N) = 0.67 here (N^-3/4 sqrt(log N)) | 0.62..0.72 |
 //! | jittered | L2, boxes | 0.751 +- 0.006 | 3/4 | 0.70..0.80 |
-//! | Poisson disk | sup, boxes | 0.548 +- 0.018 | 1/2 asymptotically, steeper at small N | 0.50..0.60 |
-//! | Poisson disk | L2, boxes | 0.546 +- 0.023 | as above | 0.48..0.62 |
+//! | Poisson disk | sup, boxes | 0.548 +- 0.014 | 1/2 asymptotically, steeper at small N | 0.50..0.60 |
+//! | Poisson disk | L2, boxes | 0.545 +- 0.022 | as above | 0.48..0.62 |
 //! | jittered | sup, triangles | 0.660 +- 0.011 (6 triples) | as boxes | 0.62..0.71 |
-//! | Poisson disk | sup, triangles | 0.561 +- 0.018 (6 triples) | | 0.50..0.62 |
+//! | Poisson disk | sup, triangles | 0.561 +- 0.013 (6 triples) | | 0.50..0.62 |
 //! | jittered | sup, quarter discs | 0.679 +- 0.013 | as boxes | 0.63..0.73 |
-//! | Poisson disk | sup, quarter discs | 0.563 +- 0.022 | | 0.50..0.63 |
+//! | Poisson disk | sup, quarter discs | 0.564 +- 0.015 | | 0.50..0.63 |
 //!
 //! The seeds are fixed, so the tests are deterministic; the bands say how far the
 //! slopes of a correct implementation spread, so that a change in a sampler or a
