@@ -1,3 +1,4 @@
 //! strata integration tests: one binary, one module per stage.
+mod discrepancy;
 mod io;
 mod pipeline;

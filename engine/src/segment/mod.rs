@@ -16,7 +16,6 @@
 //!    minimum spanning tree the walk may not cross;
 //! 4. cuts that make every segment a disc.
 
-
 /// A singularity of the major-direction line field inside a face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Singularity {
@@ -45,7 +44,11 @@ pub struct SegmentOptions {
 
 impl Default for SegmentOptions {
     fn default() -> Self {
-        Self { beta: std::f64::consts::FRAC_PI_4, sigma: 1.0, seed: 0 }
+        Self {
+            beta: std::f64::consts::FRAC_PI_4,
+            sigma: 1.0,
+            seed: 0,
+        }
     }
 }
 
@@ -100,7 +103,13 @@ pub enum SegmentError {
 impl SegmentOptions {
     /// Checks every field's range.
     pub fn validate(&self) -> Result<(), SegmentError> {
-        let bad = |option, value, expected| Err(SegmentError::InvalidOption { option, value, expected });
+        let bad = |option, value, expected| {
+            Err(SegmentError::InvalidOption {
+                option,
+                value,
+                expected,
+            })
+        };
         if !(self.beta > 0.0 && self.beta <= std::f64::consts::FRAC_PI_2) {
             return bad("beta", self.beta, "in (0, pi/2]");
         }
