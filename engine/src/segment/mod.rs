@@ -16,6 +16,12 @@
 //!    minimum spanning tree the walk may not cross;
 //! 4. cuts that make every segment a disc.
 
+pub mod paths;
+pub mod seeds;
+pub mod singularity;
+pub mod topology;
+pub mod walk;
+
 /// A singularity of the major-direction line field inside a face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Singularity {
