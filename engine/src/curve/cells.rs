@@ -68,6 +68,9 @@ pub struct SegmentCurve {
     triangles: Vec<[u32; 3]>,
     /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
     density_planes: Vec<[f64; 3]>,
+    /// Per triangle, barycentric coordinates 1 and 2 as affine functions of `uv`:
+    /// `b1 = m[0] u + m[1] v + m[2]`, `b2 = m[3] u + m[4] v + m[5]`.
+    bary_planes: Vec<[f64; 6]>,
     options: CurveOptions,
 }
 
@@ -105,6 +108,11 @@ impl SegmentCurve {
             candidates: Vec::new(),
             uv: domain.uv.to_vec(),
             triangles: domain.triangles.to_vec(),
+            bary_planes: domain
+                .triangles
+                .iter()
+                .map(|t| bary_plane(&t.map(|v| domain.uv[v as usize])))
+                .collect(),
             density_planes,
             options: *options,
         };
@@ -281,6 +289,7 @@ impl SegmentCurve {
             + self.uv.capacity() * 16
             + self.triangles.capacity() * 12
             + self.density_planes.capacity() * 24
+            + self.bary_planes.capacity() * 48
     }
 
     /// Index of the leaf holding cumulative measure `m` (clamped into range).
@@ -402,7 +411,10 @@ impl SegmentCurve {
     fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         let mut best = (f64::NEG_INFINITY, 0u32, [1.0, 0.0, 0.0]);
         for &t in cands {
-            let b = barycentric(&self.triangle_corners(t as usize), uv);
+            let m = &self.bary_planes[t as usize];
+            let b1 = m[0] * uv.x + m[1] * uv.y + m[2];
+            let b2 = m[3] * uv.x + m[4] * uv.y + m[5];
+            let b = [1.0 - b1 - b2, b1, b2];
             let min = b[0].min(b[1]).min(b[2]);
             if min >= 0.0 {
                 return DomainPoint {
@@ -439,6 +451,24 @@ pub fn barycentric(t: &[DVec2; 3], p: DVec2) -> [f64; 3] {
     let b1 = d.perp_dot(e2) * inv;
     let b2 = e1.perp_dot(d) * inv;
     [1.0 - b1 - b2, b1, b2]
+}
+
+/// Barycentric coordinates 1 and 2 of triangle `p` as affine functions of the point.
+fn bary_plane(p: &[DVec2; 3]) -> [f64; 6] {
+    let e1 = p[1] - p[0];
+    let e2 = p[2] - p[0];
+    let inv = 1.0 / e1.perp_dot(e2);
+    // b1 = (d x e2) / det, b2 = (e1 x d) / det with d = q - p0.
+    let (a1, c1) = (e2.y * inv, -e2.x * inv);
+    let (a2, c2) = (-e1.y * inv, e1.x * inv);
+    [
+        a1,
+        c1,
+        -(a1 * p[0].x + c1 * p[0].y),
+        a2,
+        c2,
+        -(a2 * p[0].x + c2 * p[0].y),
+    ]
 }
 
 /// The affine density `g . p + h` that interpolates the corner densities.

@@ -67,7 +67,8 @@ impl FaceRecord {
         let t = lerp(&self.tensor);
         let (a, bb, c) = (t.x, t.y, t.z);
         let mean = 0.5 * (a + c);
-        let r = (0.5 * (a - c)).hypot(bb);
+        let h = 0.5 * (a - c);
+        let r = (h * h + bb * bb).sqrt();
         let (l1, l2) = (mean + r, mean - r);
         let v = if a >= c {
             Vec2::new(l1 - c, bb)
