@@ -22,6 +22,10 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use singularity::{
+    LineFieldTransport, detect_singularities, isotropic_faces, line_field_transport,
+};
+
 /// A singularity of the major-direction line field inside a face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Singularity {
