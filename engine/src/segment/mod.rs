@@ -22,6 +22,7 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use paths::{ShortestPaths, dijkstra, field_edge_costs, singularity_tree};
 pub use singularity::{
     LineFieldTransport, detect_singularities, isotropic_faces, line_field_transport,
 };
