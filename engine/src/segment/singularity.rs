@@ -531,6 +531,34 @@ mod tests {
     }
 
     #[test]
+    fn jittered_meshes_obey_poincare_hopf() {
+        // Strong vertex jitter folds one-rings, so that projected corner angles stop
+        // summing to 2 pi and the per-vertex correction has to act.
+        for (name, base) in [
+            ("sphere", shapes::sphere(1.0, 6).expect("sphere")),
+            ("genus2", shapes::genus2(1.0, 2).expect("genus2")),
+        ] {
+            let h = base.mean_edge_length();
+            for seed in 0..5 {
+                let mut rng = Rng::new(seed, 11);
+                let mut jitter = || 0.8 * h * (rng.next_f64() - 0.5);
+                let positions: Vec<DVec3> = base
+                    .positions()
+                    .iter()
+                    .map(|p| *p + DVec3::new(jitter(), jitter(), jitter()))
+                    .collect();
+                let mesh =
+                    TriMesh::new(positions, base.triangles().to_vec()).expect("jittered mesh");
+                let chi = mesh.euler_characteristic() as f64;
+                for field in [constant_field(&mesh), random_field(&mesh, seed)] {
+                    let found = detect_singularities(&mesh, &field);
+                    assert_eq!(total_index(&found), chi, "{name} seed {seed}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn isotropic_field_gives_no_nan_and_exact_sum() {
         let mesh = shapes::sphere(1.0, 4).expect("test input is valid");
         let field = FieldSpec::Constant {

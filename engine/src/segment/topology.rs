@@ -756,6 +756,84 @@ mod tests {
         }
     }
 
+    /// Faces of each connected component of the patch cut open along `cut`.
+    fn components(mesh: &TriMesh, faces: &[u32], cut: &[bool]) -> Vec<Vec<u32>> {
+        let patch = CutPatch::new(mesh, faces, cut);
+        let mut sets = UnionFind::new(patch.faces.len());
+        for (lf, sides) in patch.across.iter().enumerate() {
+            for &lg in sides {
+                if lg != NONE {
+                    sets.union(lf as u32, lg);
+                }
+            }
+        }
+        let mut by_root = std::collections::BTreeMap::<u32, Vec<u32>>::new();
+        for lf in 0..patch.faces.len() as u32 {
+            by_root
+                .entry(sets.find(lf))
+                .or_default()
+                .push(patch.faces[lf as usize]);
+        }
+        by_root.into_values().collect()
+    }
+
+    #[test]
+    fn random_patches_with_random_seams_become_discs() {
+        use crate::rng::Rng;
+        let meshes = [
+            shapes::torus(1.0, 0.4, 10).expect("torus"),
+            shapes::genus2(1.0, 1).expect("genus2"),
+            shapes::sphere(1.0, 4).expect("sphere"),
+        ];
+        for (m, mesh) in meshes.iter().enumerate() {
+            let c = costs(mesh);
+            for seed in 0..40 {
+                let mut rng = Rng::new(seed, m as u64);
+                // Grow a patch from a random face, breadth first, to a random size.
+                let target = 1 + rng.below(mesh.face_count() as u64) as usize;
+                let mut taken = vec![false; mesh.face_count()];
+                let first = rng.below(mesh.face_count() as u64) as u32;
+                let mut queue = std::collections::VecDeque::from([first]);
+                taken[first as usize] = true;
+                let mut faces = Vec::new();
+                while let Some(f) = queue.pop_front() {
+                    faces.push(f);
+                    if faces.len() == target {
+                        break;
+                    }
+                    for g in mesh.face_neighbors()[f as usize] {
+                        if g != NONE && !taken[g as usize] && rng.next_f64() < 0.8 {
+                            taken[g as usize] = true;
+                            queue.push_back(g);
+                        }
+                    }
+                }
+                // Random seams: a few percent of the edges.
+                let cut: Vec<bool> = (0..mesh.edge_count())
+                    .map(|_| rng.next_f64() < 0.03)
+                    .collect();
+                let extra = disc_cuts(mesh, &c, &faces, &cut);
+                let mut all_cut = cut.clone();
+                for &e in &extra {
+                    assert!(!cut[e as usize]);
+                    all_cut[e as usize] = true;
+                }
+                // Every piece is a disc; and the cuts did not split a piece in two.
+                let before = components(mesh, &faces, &cut).len();
+                let pieces = components(mesh, &faces, &all_cut);
+                assert_eq!(
+                    pieces.len(),
+                    before,
+                    "mesh {m} seed {seed}: a piece fell apart"
+                );
+                for piece in &pieces {
+                    let t = patch_topology(mesh, piece, &all_cut);
+                    assert_eq!(summary(&t), (1, 1), "mesh {m} seed {seed}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn disc_cuts_are_deterministic() {
         let mesh = shapes::genus2(1.0, 1).expect("genus2");
