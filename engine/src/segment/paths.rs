@@ -45,12 +45,12 @@ pub const HALF_WEIGHT_COHERENCE: f64 = 0.05;
 ///   the mean of the two vertex normals (paths may follow either family of lines);
 /// - `tau_e` in `[0, pi/2]`: the paper's `D_ij`, the angle between the major directions
 ///   at the two ends, compared through the connection of
-///   [`line_field_transport`](super::line_field_transport) (`|edge_turn| / 2`);
+///   [`line_field_transport`] (`|edge_turn| / 2`);
 /// - `w = c / (c + HALF_WEIGHT_COHERENCE)` with `c` the coherence of the mean tensor,
 ///   so that both angles fade out where the field is isotropic and the cost becomes
 ///   plain length there.
 ///
-/// O(V + E + F) (one [`line_field_transport`](super::line_field_transport)).
+/// O(V + E + F) (one [`line_field_transport`]).
 pub fn field_edge_costs(mesh: &TriMesh, field: &TensorField) -> Vec<f64> {
     let transport = line_field_transport(mesh, field);
     let pos = mesh.positions();
