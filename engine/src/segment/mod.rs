@@ -22,6 +22,12 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use paths::{ShortestPaths, dijkstra, field_edge_costs, singularity_tree};
+pub use singularity::{
+    LineFieldTransport, detect_singularities, isotropic_faces, line_field_transport,
+};
+pub use topology::{PatchTopology, disc_cuts, patch_topology};
+
 /// A singularity of the major-direction line field inside a face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Singularity {

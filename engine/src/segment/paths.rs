@@ -1,1 +1,816 @@
-//! (in progress)
+//! Field-following shortest paths over mesh edges (paper section 4.1.2): Dijkstra with
+//! an edge cost that is low along field lines, and the minimum spanning tree of the
+//! shortest paths joining a region's singularities.
+//!
+//! Input: a [`TriMesh`], a [`TensorField`] (for the costs), singular faces and a region
+//! (a face mask). Output: edge costs, shortest-path trees, and the mesh edges of a
+//! singularity tree. Cost: O(E) for the costs; O((V + E) log V) per Dijkstra (only the
+//! allowed part of the mesh is explored, but `dist`/`pred_edge` are O(V) arrays); a
+//! singularity tree is one multi-source Dijkstra plus an O(E log E) Kruskal whatever
+//! the number of singularities (Mehlhorn 1988, "A faster approximation algorithm for
+//! the Steiner problem in graphs"), plus one early-stopped Dijkstra per lone
+//! singularity.
+//!
+//! The paper's distance `D_ij` is the angle between the major eigenvectors at the two
+//! ends of an edge, times its length: it keeps paths where the field turns little, but
+//! says nothing about whether the edge runs *along* the field. [`field_edge_costs`] adds
+//! that term (see there), which is what makes the paths follow field lines, as the
+//! paper asks ("paths lying along the tensor field lines"). Everything here is
+//! sequential and deterministic: the heap breaks distance ties by the lower vertex
+//! index, relaxation ties by the lower edge index, Kruskal ties by the lower node
+//! indices, then edge index.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use super::singularity::line_field_transport;
+use crate::field::{TensorField, eigen_in_plane};
+use crate::mesh::{NONE, TriMesh};
+
+/// Cost per unit length of an edge that runs exactly along a field line through a field
+/// that does not turn: the floor that keeps every cost positive, so that among
+/// equally aligned routes the shorter one wins.
+pub const COST_FLOOR: f64 = 0.05;
+
+/// Coherence `(l1 - l2) / (l1 + l2)` at which the angle terms of [`field_edge_costs`]
+/// count half: below it the field's directions fade out of the cost (they are noise
+/// where the field is nearly isotropic).
+pub const HALF_WEIGHT_COHERENCE: f64 = 0.05;
+
+/// Field-following cost of every mesh edge, always finite and `> 0`:
+///
+/// `cost_e = |e| (COST_FLOOR + w (alpha_e + tau_e))`, with
+/// - `alpha_e` in `[0, pi/4]`: the angle between the edge and the nearest of the major
+///   and minor field lines of the mean of its two end tensors, in the plane normal to
+///   the mean of the two vertex normals (paths may follow either family of lines);
+/// - `tau_e` in `[0, pi/2]`: the paper's `D_ij`, the angle between the major directions
+///   at the two ends, compared through the connection of
+///   [`line_field_transport`] (`|edge_turn| / 2`);
+/// - `w = c / (c + HALF_WEIGHT_COHERENCE)` with `c` the coherence of the mean tensor,
+///   so that both angles fade out where the field is isotropic and the cost becomes
+///   plain length there.
+///
+/// O(V + E + F) (one [`line_field_transport`]).
+pub fn field_edge_costs(mesh: &TriMesh, field: &TensorField) -> Vec<f64> {
+    let transport = line_field_transport(mesh, field);
+    let pos = mesh.positions();
+    let normals = mesh.vertex_normals();
+    let tensors = field.tensors();
+    mesh.edges()
+        .iter()
+        .enumerate()
+        .map(|(e, &[a, b])| {
+            let (a, b) = (a as usize, b as usize);
+            let d = pos[b] - pos[a];
+            let length = d.length();
+            let mut n = normals[a] + normals[b];
+            if n.length_squared() < 1e-24 {
+                n = mesh.face_normals()[mesh.edge_faces()[e][0] as usize];
+            }
+            let n = n.normalize();
+            let eig = eigen_in_plane(&((tensors[a] + tensors[b]) * 0.5), n);
+            let along = d - n * n.dot(d);
+            let alpha = if along.length_squared() > 1e-24 * length * length {
+                let angle = super::line_angle(along.normalize(), eig.major);
+                angle.min(std::f64::consts::FRAC_PI_2 - angle)
+            } else {
+                0.0
+            };
+            let trace = eig.l1 + eig.l2;
+            let coherence = if trace > 0.0 {
+                ((eig.l1 - eig.l2) / trace).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let weight = coherence / (coherence + HALF_WEIGHT_COHERENCE);
+            let tau = 0.5 * transport.edge_turn[e].abs();
+            (length * (COST_FLOOR + weight * (alpha + tau))).max(f64::MIN_POSITIVE)
+        })
+        .collect()
+}
+
+/// A shortest-path forest from a set of sources.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShortestPaths {
+    /// Per vertex, the cost of the cheapest path from any source (`f64::INFINITY` where
+    /// unreachable; 0 at the sources).
+    pub dist: Vec<f64>,
+    /// Per vertex, the last edge of that path ([`NONE`] at sources and unreachable
+    /// vertices).
+    pub pred_edge: Vec<u32>,
+}
+
+impl ShortestPaths {
+    /// The edges of the cheapest path to `target`, in order from its source to
+    /// `target`; empty if `target` is a source or unreachable. O(path length).
+    pub fn path_edges(&self, mesh: &TriMesh, target: u32) -> Vec<u32> {
+        let mut path = Vec::new();
+        let mut v = target;
+        while self.pred_edge[v as usize] != NONE {
+            let e = self.pred_edge[v as usize];
+            path.push(e);
+            let [a, b] = mesh.edges()[e as usize];
+            v = if a == v { b } else { a };
+        }
+        path.reverse();
+        path
+    }
+}
+
+/// Vertex-to-edge incidence (CSR), each vertex's `(neighbour, edge)` pairs sorted.
+pub(crate) struct VertexEdges {
+    offsets: Vec<u32>,
+    pairs: Vec<(u32, u32)>,
+}
+
+impl VertexEdges {
+    pub(crate) fn new(mesh: &TriMesh) -> Self {
+        let mut offsets = vec![0u32; mesh.vertex_count() + 1];
+        for [a, b] in mesh.edges() {
+            offsets[*a as usize + 1] += 1;
+            offsets[*b as usize + 1] += 1;
+        }
+        for i in 0..mesh.vertex_count() {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut pairs = vec![(0u32, 0u32); 2 * mesh.edge_count()];
+        for (e, [a, b]) in mesh.edges().iter().enumerate() {
+            pairs[fill[*a as usize] as usize] = (*b, e as u32);
+            fill[*a as usize] += 1;
+            pairs[fill[*b as usize] as usize] = (*a, e as u32);
+            fill[*b as usize] += 1;
+        }
+        for v in 0..mesh.vertex_count() {
+            pairs[offsets[v] as usize..offsets[v + 1] as usize].sort_unstable();
+        }
+        Self { offsets, pairs }
+    }
+
+    fn of(&self, v: u32) -> &[(u32, u32)] {
+        &self.pairs[self.offsets[v as usize] as usize..self.offsets[v as usize + 1] as usize]
+    }
+}
+
+/// Dijkstra over `adjacency`; stops early at the first settled vertex for which `stop`
+/// holds and returns it.
+fn run_dijkstra(
+    adjacency: &VertexEdges,
+    costs: &[f64],
+    sources: &[u32],
+    allowed: &dyn Fn(u32) -> bool,
+    stop: &dyn Fn(u32) -> bool,
+) -> (ShortestPaths, Option<u32>) {
+    let v_count = adjacency.offsets.len() - 1;
+    let mut dist = vec![f64::INFINITY; v_count];
+    let mut pred_edge = vec![NONE; v_count];
+    let mut settled = vec![false; v_count];
+    // Non-negative floats order like their bit patterns.
+    let mut heap = BinaryHeap::new();
+    for &s in sources {
+        dist[s as usize] = 0.0;
+        heap.push(Reverse((0u64, s)));
+    }
+    let mut reached = None;
+    while let Some(Reverse((bits, v))) = heap.pop() {
+        if settled[v as usize] || bits != dist[v as usize].to_bits() {
+            continue;
+        }
+        settled[v as usize] = true;
+        if stop(v) {
+            reached = Some(v);
+            break;
+        }
+        for &(w, e) in adjacency.of(v) {
+            if settled[w as usize] || !allowed(e) {
+                continue;
+            }
+            let nd = dist[v as usize] + costs[e as usize];
+            let old = dist[w as usize];
+            if nd < old || (nd == old && e < pred_edge[w as usize]) {
+                dist[w as usize] = nd;
+                pred_edge[w as usize] = e;
+                if nd < old {
+                    heap.push(Reverse((nd.to_bits(), w)));
+                }
+            }
+        }
+    }
+    (ShortestPaths { dist, pred_edge }, reached)
+}
+
+/// Cheapest paths from `sources` (vertices, at distance 0) over the mesh's edges for
+/// which `allowed` holds, with non-negative edge `costs` (one per mesh edge, e.g. from
+/// [`field_edge_costs`]). Deterministic: distance ties are settled lower vertex first,
+/// and a vertex reached at equal cost by two edges keeps the lower edge.
+///
+/// ```
+/// use strata_engine::{field::FieldSpec, mesh::shapes, segment::paths};
+/// let mesh = shapes::plane(1.0, 8)?;
+/// let spec = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 };
+/// let costs = paths::field_edge_costs(&mesh, &spec.build(&mesh)?);
+/// let tree = paths::dijkstra(&mesh, &costs, &[0], &|_| true);
+/// // Along the field (the x axis, vertices 0..=8) the path is straight.
+/// assert_eq!(tree.path_edges(&mesh, 8).len(), 8);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn dijkstra(
+    mesh: &TriMesh,
+    costs: &[f64],
+    sources: &[u32],
+    allowed: &dyn Fn(u32) -> bool,
+) -> ShortestPaths {
+    assert_eq!(costs.len(), mesh.edge_count(), "one cost per mesh edge");
+    let adjacency = VertexEdges::new(mesh);
+    run_dijkstra(&adjacency, costs, sources, allowed, &|_| false).0
+}
+
+/// Smallest-root union-find with path halving.
+pub(crate) struct UnionFind(Vec<u32>);
+
+impl UnionFind {
+    pub(crate) fn new(n: usize) -> Self {
+        Self((0..n as u32).collect())
+    }
+
+    pub(crate) fn find(&mut self, mut i: u32) -> u32 {
+        while self.0[i as usize] != i {
+            self.0[i as usize] = self.0[self.0[i as usize] as usize];
+            i = self.0[i as usize];
+        }
+        i
+    }
+
+    /// Joins the sets of `a` and `b`; false if they were already one.
+    pub(crate) fn union(&mut self, a: u32, b: u32) -> bool {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra == rb {
+            return false;
+        }
+        self.0[ra.max(rb) as usize] = ra.min(rb);
+        true
+    }
+}
+
+/// The mesh edges (ascending) that join the singularities of a region along the field
+/// (paper section 4.1.2, Fig. 6).
+///
+/// - Nodes: the singular faces of `singular_faces` that lie in `region` (a mask over
+///   faces; others are ignored), each represented by its lowest-index vertex so that
+///   the paths meet and the result is connected as an edge set.
+/// - Paths use only edges with at least one adjacent face in the region.
+/// - Two or more nodes: the minimum spanning tree of the complete graph whose edges are
+///   the pairwise shortest paths (paper), computed without the `k^2` paths: one
+///   multi-source Dijkstra splits the region into the nodes' Voronoi cells, and Kruskal
+///   over the cheapest links `d(u) + c(u, v) + d(v)` between cells yields a minimum
+///   spanning tree of that complete graph (Mehlhorn 1988); its paths are returned. They
+///   run inside the cells and cannot cross, so the result is a tree (a forest if the
+///   region is disconnected); a final Kruskal pass enforces this anyway.
+/// - A node with no other node reachable (a lone singularity): the shortest path from
+///   any corner of its face to the region's boundary (edges whose two faces are not
+///   both in the region, including mesh boundary edges); empty if the face already
+///   touches it.
+/// - A lone singularity in a region without a boundary (a closed component): nothing.
+///   The singular face is removed from its segment and sampled isotropically (paper
+///   section 4.1.2), so the hole it leaves is already the boundary the path would
+///   lead to; disc cutting ([`disc_cuts`](super::topology::disc_cuts)) handles the
+///   rest of the topology.
+///
+/// Cost: one Dijkstra over the mesh, O(E log E) for the links, one early-stopped
+/// Dijkstra per lone node.
+pub fn singularity_tree(
+    mesh: &TriMesh,
+    costs: &[f64],
+    singular_faces: &[u32],
+    region: &[bool],
+) -> Vec<u32> {
+    assert_eq!(costs.len(), mesh.edge_count(), "one cost per mesh edge");
+    assert_eq!(region.len(), mesh.face_count(), "one region flag per face");
+    let in_region = |f: u32| f != NONE && region[f as usize];
+    let allowed = |e: u32| {
+        let [f0, f1] = mesh.edge_faces()[e as usize];
+        in_region(f0) || in_region(f1)
+    };
+    let mut on_boundary = vec![false; mesh.vertex_count()];
+    for (e, &[a, b]) in mesh.edges().iter().enumerate() {
+        let [f0, f1] = mesh.edge_faces()[e];
+        let interior = mesh.edge_valence()[e] == 2 && in_region(f0) && in_region(f1);
+        if allowed(e as u32) && !interior {
+            on_boundary[a as usize] = true;
+            on_boundary[b as usize] = true;
+        }
+    }
+    let mut nodes: Vec<u32> = singular_faces
+        .iter()
+        .copied()
+        .filter(|&f| in_region(f))
+        .collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let k = nodes.len();
+    if k == 0 {
+        return Vec::new();
+    }
+    let adjacency = VertexEdges::new(mesh);
+    let corners = |i: usize| mesh.triangles()[nodes[i] as usize];
+    // Each node is represented by its face's lowest vertex, so that the tree's paths
+    // meet at vertices and the tree is connected as an edge set.
+    let reps: Vec<u32> = (0..k)
+        .map(|i| corners(i).into_iter().min().unwrap_or(0))
+        .collect();
+    let mut sources = reps.clone();
+    sources.sort_unstable();
+    sources.dedup();
+
+    // Mehlhorn (1988): one multi-source Dijkstra partitions the region into the nodes'
+    // Voronoi cells; the cheapest edge between two cells, d(u) + c(u, v) + d(v), links
+    // them. A minimum spanning tree of these links is a minimum spanning tree of the
+    // complete graph of pairwise shortest paths, and its expanded paths never cross.
+    let (cells, _) = run_dijkstra(&adjacency, costs, &sources, &allowed, &|_| false);
+    let mut node_of_source = vec![NONE; mesh.vertex_count()];
+    for (i, &r) in reps.iter().enumerate().rev() {
+        node_of_source[r as usize] = i as u32;
+    }
+    let cell = nearest_source_node(mesh, &cells, &node_of_source);
+    let mut sets = UnionFind::new(k);
+    let mut degree = vec![0usize; k];
+    for (i, &r) in reps.iter().enumerate() {
+        let first = node_of_source[r as usize];
+        if first != i as u32 && sets.union(first, i as u32) {
+            degree[i] += 1;
+            degree[first as usize] += 1;
+        }
+    }
+    let mut links: Vec<(f64, u32, u32, u32)> = Vec::new();
+    for (e, &[a, b]) in mesh.edges().iter().enumerate() {
+        let (ca, cb) = (cell[a as usize], cell[b as usize]);
+        if ca != NONE && cb != NONE && ca != cb && allowed(e as u32) {
+            let w = cells.dist[a as usize] + costs[e] + cells.dist[b as usize];
+            links.push((w, ca.min(cb), ca.max(cb), e as u32));
+        }
+    }
+    links.sort_by(|x, y| {
+        x.0.total_cmp(&y.0)
+            .then((x.1, x.2, x.3).cmp(&(y.1, y.2, y.3)))
+    });
+    let mut union = Vec::new();
+    for &(_, i, j, e) in &links {
+        if sets.union(i, j) {
+            degree[i as usize] += 1;
+            degree[j as usize] += 1;
+            let [a, b] = mesh.edges()[e as usize];
+            union.push(e);
+            union.extend(cells.path_edges(mesh, a));
+            union.extend(cells.path_edges(mesh, b));
+        }
+    }
+    // Path ends that must stay: the singular faces' corners and the boundary ends of
+    // lone paths.
+    let mut terminal: Vec<u32> = (0..k).flat_map(corners).collect();
+    for i in (0..k).filter(|&i| degree[i] == 0) {
+        let (tree, reached) = run_dijkstra(&adjacency, costs, &corners(i), &allowed, &|v| {
+            on_boundary[v as usize]
+        });
+        if let Some(v) = reached {
+            union.extend(tree.path_edges(mesh, v));
+            terminal.push(v);
+        }
+    }
+    union.sort_unstable();
+    union.dedup();
+    terminal.sort_unstable();
+    terminal.dedup();
+    forest_of(mesh, costs, &union, &terminal)
+}
+
+/// Per vertex, the node whose source its shortest path starts from (`NONE` where
+/// unreached), found by following `pred_edge` (memoised, so O(V) in all).
+fn nearest_source_node(mesh: &TriMesh, tree: &ShortestPaths, node_of_source: &[u32]) -> Vec<u32> {
+    let mut cell = vec![NONE; tree.dist.len()];
+    let mut chain = Vec::new();
+    for v in 0..tree.dist.len() as u32 {
+        if !tree.dist[v as usize].is_finite() || cell[v as usize] != NONE {
+            continue;
+        }
+        let mut u = v;
+        while cell[u as usize] == NONE && tree.pred_edge[u as usize] != NONE {
+            chain.push(u);
+            let [a, b] = mesh.edges()[tree.pred_edge[u as usize] as usize];
+            u = if a == u { b } else { a };
+        }
+        let label = if cell[u as usize] != NONE {
+            cell[u as usize]
+        } else {
+            node_of_source[u as usize]
+        };
+        cell[u as usize] = label;
+        for w in chain.drain(..) {
+            cell[w as usize] = label;
+        }
+    }
+    cell
+}
+
+/// Makes a union of paths a forest: a minimum spanning forest of it (Kruskal by cost,
+/// then edge index; shortest paths from different sources can cross and close a
+/// cycle, which would cut a piece off the region), then leaves that are not
+/// `terminal` (sorted) pruned away. Ascending edge order.
+fn forest_of(mesh: &TriMesh, costs: &[f64], edges: &[u32], terminal: &[u32]) -> Vec<u32> {
+    let mut order = edges.to_vec();
+    order.sort_by(|&x, &y| {
+        costs[x as usize]
+            .total_cmp(&costs[y as usize])
+            .then(x.cmp(&y))
+    });
+    let mut verts: Vec<u32> = edges
+        .iter()
+        .flat_map(|&e| mesh.edges()[e as usize])
+        .collect();
+    verts.sort_unstable();
+    verts.dedup();
+    let local = |v: u32| verts.binary_search(&v).unwrap_or(0) as u32;
+    let mut sets = UnionFind::new(verts.len());
+    let mut kept: Vec<u32> = order
+        .into_iter()
+        .filter(|&e| {
+            let [a, b] = mesh.edges()[e as usize];
+            sets.union(local(a), local(b))
+        })
+        .collect();
+    kept.sort_unstable();
+    // Prune non-terminal leaves until none is left.
+    let mut degree = vec![0u32; verts.len()];
+    for &e in &kept {
+        for v in mesh.edges()[e as usize] {
+            degree[local(v) as usize] += 1;
+        }
+    }
+    let mut alive = vec![true; kept.len()];
+    loop {
+        let mut changed = false;
+        for (i, &e) in kept.iter().enumerate() {
+            if !alive[i] {
+                continue;
+            }
+            let [a, b] = mesh.edges()[e as usize];
+            let leaf =
+                |v: u32| degree[local(v) as usize] == 1 && terminal.binary_search(&v).is_err();
+            if leaf(a) || leaf(b) {
+                alive[i] = false;
+                degree[local(a) as usize] -= 1;
+                degree[local(b) as usize] -= 1;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    kept.into_iter()
+        .zip(alive)
+        .filter(|&(_, keep)| keep)
+        .map(|(e, _)| e)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::field::FieldSpec;
+    use crate::mesh::shapes;
+    use crate::segment::singularity::{detect_singularities, shared_mesh};
+
+    /// Unit direction of edge `e` from its first to its second vertex.
+    fn edge_direction(mesh: &TriMesh, e: u32) -> DVec3 {
+        let [a, b] = mesh.edges()[e as usize];
+        (mesh.positions()[b as usize] - mesh.positions()[a as usize]).normalize()
+    }
+
+    fn constant(mesh: &TriMesh, direction: [f64; 3]) -> TensorField {
+        FieldSpec::Constant {
+            direction,
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(mesh)
+        .expect("valid field")
+    }
+
+    /// Checks that `edges` (in order) form a chain from `start`; returns its end.
+    fn chain_end(mesh: &TriMesh, edges: &[u32], start: u32) -> u32 {
+        let mut v = start;
+        for &e in edges {
+            let [a, b] = mesh.edges()[e as usize];
+            assert!(
+                a == v || b == v,
+                "edge {e} does not continue the chain at {v}"
+            );
+            v = if a == v { b } else { a };
+        }
+        v
+    }
+
+    /// Whether an edge set is a tree (connected, acyclic); returns its vertices.
+    fn tree_vertices(mesh: &TriMesh, edges: &[u32]) -> Vec<u32> {
+        let mut verts: Vec<u32> = edges
+            .iter()
+            .flat_map(|&e| mesh.edges()[e as usize])
+            .collect();
+        verts.sort_unstable();
+        verts.dedup();
+        let mut sets = UnionFind::new(mesh.vertex_count());
+        for &e in edges {
+            let [a, b] = mesh.edges()[e as usize];
+            assert!(sets.union(a, b), "cycle through edge {e}");
+        }
+        let roots: std::collections::BTreeSet<u32> = verts.iter().map(|&v| sets.find(v)).collect();
+        assert!(roots.len() <= 1, "tree is disconnected");
+        verts
+    }
+
+    #[test]
+    fn costs_are_positive_and_lowest_along_the_field() {
+        let mesh = shapes::plane(1.0, 8).expect("plane");
+        let costs = field_edge_costs(&mesh, &constant(&mesh, [1.0, 0.0, 0.0]));
+        let h = 1.0 / 8.0;
+        for (e, &c) in costs.iter().enumerate() {
+            assert!(c > 0.0 && c.is_finite());
+            let d = edge_direction(&mesh, e as u32);
+            if d.x.abs() > 0.99 || d.y.abs() > 0.99 {
+                assert!((c - h * COST_FLOOR).abs() < 1e-12, "axis edge {e}: {c}");
+            } else {
+                assert!(c > 10.0 * h * COST_FLOOR, "diagonal edge {e}: {c}");
+            }
+        }
+        for (name, mesh) in [
+            ("sphere", shapes::sphere(1.0, 5).expect("sphere")),
+            ("genus2", shapes::genus2(1.0, 1).expect("genus2")),
+        ] {
+            let costs = field_edge_costs(&mesh, &constant(&mesh, [1.0, 0.3, 0.2]));
+            assert!(costs.iter().all(|c| *c > 0.0 && c.is_finite()), "{name}");
+        }
+    }
+
+    #[test]
+    fn paths_follow_the_field_lines() {
+        let n = 8;
+        let mesh = shapes::plane(1.0, n).expect("plane");
+        let idx = |i: u32, j: u32| j * (n + 1) + i;
+        // Along the grid's diagonals: the path is the diagonal chain.
+        let costs = field_edge_costs(&mesh, &constant(&mesh, [1.0, 1.0, 0.0]));
+        let tree = dijkstra(&mesh, &costs, &[idx(0, 0)], &|_| true);
+        let path = tree.path_edges(&mesh, idx(n, n));
+        assert_eq!(path.len(), n as usize);
+        assert_eq!(chain_end(&mesh, &path, idx(0, 0)), idx(n, n));
+        // Along x: from (0, 2) to (8, 6) only axis-aligned (major and minor) edges.
+        let costs = field_edge_costs(&mesh, &constant(&mesh, [1.0, 0.0, 0.0]));
+        let tree = dijkstra(&mesh, &costs, &[idx(0, 2)], &|_| true);
+        let path = tree.path_edges(&mesh, idx(8, 6));
+        assert_eq!(path.len(), 12);
+        for &e in &path {
+            let d = edge_direction(&mesh, e);
+            assert!(d.x.abs() > 0.99 || d.y.abs() > 0.99);
+        }
+    }
+
+    #[test]
+    fn dijkstra_matches_bellman_ford_and_respects_allowed() {
+        let mesh = shapes::torus(1.0, 0.4, 8).expect("torus");
+        let costs = field_edge_costs(&mesh, &constant(&mesh, [1.0, 0.3, 0.2]));
+        let allowed = |e: u32| e % 7 != 3;
+        let sources = [5, 17];
+        let tree = dijkstra(&mesh, &costs, &sources, &allowed);
+        let mut reference = vec![f64::INFINITY; mesh.vertex_count()];
+        for &s in &sources {
+            reference[s as usize] = 0.0;
+        }
+        for _ in 0..mesh.vertex_count() {
+            for (e, &[a, b]) in mesh.edges().iter().enumerate() {
+                if !allowed(e as u32) {
+                    continue;
+                }
+                let (a, b) = (a as usize, b as usize);
+                let c = costs[e];
+                reference[b] = reference[b].min(reference[a] + c);
+                reference[a] = reference[a].min(reference[b] + c);
+            }
+        }
+        for v in 0..mesh.vertex_count() as u32 {
+            assert!((tree.dist[v as usize] - reference[v as usize]).abs() < 1e-9);
+            let path = tree.path_edges(&mesh, v);
+            assert!(path.iter().all(|&e| allowed(e)));
+            let sum: f64 = path.iter().map(|&e| costs[e as usize]).sum();
+            assert!((sum - tree.dist[v as usize]).abs() < 1e-9);
+            let start = if path.is_empty() {
+                v
+            } else {
+                let [a, b] = mesh.edges()[path[0] as usize];
+                if sources.contains(&a) { a } else { b }
+            };
+            assert!(sources.contains(&start));
+            assert_eq!(chain_end(&mesh, &path, start), v);
+        }
+        // Nothing allowed: only the sources are reached.
+        let tree = dijkstra(&mesh, &costs, &[0], &|_| false);
+        assert_eq!(tree.dist.iter().filter(|d| d.is_finite()).count(), 1);
+        assert!(tree.path_edges(&mesh, 1).is_empty());
+        assert_eq!(tree, dijkstra(&mesh, &costs, &[0], &|_| false));
+    }
+
+    /// A planar field with `+-1/2` singularities at the given points.
+    fn planar_singular_field(mesh: &TriMesh, points: &[(f64, f64, f64)]) -> TensorField {
+        let dirs: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .map(|p| {
+                let t: f64 = points
+                    .iter()
+                    .map(|&(x, y, s)| 0.5 * s * (p.y - y).atan2(p.x - x))
+                    .sum();
+                DVec3::new(t.cos(), t.sin(), 0.0)
+            })
+            .collect();
+        TensorField::from_frames(mesh, &dirs, &vec![[4.0, 1.0]; mesh.vertex_count()])
+            .expect("valid field")
+    }
+
+    #[test]
+    fn tree_joins_all_singularities_of_a_region() {
+        let mesh = shapes::plane(1.0, 20).expect("plane");
+        let field = planar_singular_field(
+            &mesh,
+            &[(0.23, 0.31, 1.0), (0.71, 0.37, 1.0), (0.52, 0.74, -1.0)],
+        );
+        let singular: Vec<u32> = detect_singularities(&mesh, &field)
+            .iter()
+            .map(|s| s.face)
+            .collect();
+        assert_eq!(singular.len(), 3);
+        let costs = field_edge_costs(&mesh, &field);
+        let region = vec![true; mesh.face_count()];
+        let tree = singularity_tree(&mesh, &costs, &singular, &region);
+        let verts = tree_vertices(&mesh, &tree);
+        for &f in &singular {
+            let t = mesh.triangles()[f as usize];
+            assert!(t.iter().any(|v| verts.binary_search(v).is_ok()), "face {f}");
+        }
+        // Deterministic, and independent of the order the faces are given in.
+        let reversed: Vec<u32> = singular.iter().rev().copied().collect();
+        assert_eq!(tree, singularity_tree(&mesh, &costs, &reversed, &region));
+    }
+
+    #[test]
+    fn lone_singularity_goes_to_the_region_boundary() {
+        let n = 20;
+        let mesh = shapes::plane(1.0, n).expect("plane");
+        let field = planar_singular_field(&mesh, &[(0.23, 0.46, 1.0)]);
+        let singular: Vec<u32> = detect_singularities(&mesh, &field)
+            .iter()
+            .map(|s| s.face)
+            .collect();
+        let costs = field_edge_costs(&mesh, &field);
+        // Region: the left half (x < 0.5) of the plane.
+        let region: Vec<bool> = (0..mesh.face_count() as u32)
+            .map(|f| mesh.face_positions(f).iter().all(|p| p.x <= 0.5 + 1e-12))
+            .collect();
+        let path = singularity_tree(&mesh, &costs, &singular, &region);
+        assert!(!path.is_empty());
+        tree_vertices(&mesh, &path);
+        let mut degree = std::collections::BTreeMap::<u32, u32>::new();
+        for &e in &path {
+            for v in mesh.edges()[e as usize] {
+                *degree.entry(v).or_default() += 1;
+            }
+            let [f0, f1] = mesh.edge_faces()[e as usize];
+            assert!(region[f0 as usize] || (f1 != NONE && region[f1 as usize]));
+        }
+        let ends: Vec<u32> = degree
+            .iter()
+            .filter(|&(_, d)| *d == 1)
+            .map(|(v, _)| *v)
+            .collect();
+        assert_eq!(ends.len(), 2);
+        let t = mesh.triangles()[singular[0] as usize];
+        let on_face = |v: &u32| t.contains(v);
+        let far = ends.iter().find(|v| !on_face(v)).expect("a far end");
+        let p = mesh.positions()[*far as usize];
+        assert!(
+            (p.x - 0.5).abs() < 1e-12
+                || p.x.abs() < 1e-12
+                || p.y.abs() < 1e-12
+                || p.y > 1.0 - 1e-12,
+            "path ends inside the region at {p}"
+        );
+        assert!(ends.iter().any(on_face));
+        // Outside the region the singularity is ignored.
+        let other: Vec<bool> = region.iter().map(|r| !r).collect();
+        assert!(singularity_tree(&mesh, &costs, &singular, &other).is_empty());
+    }
+
+    /// Cost of the brute-force minimum spanning tree over pairwise shortest paths
+    /// between the nodes' representative vertices (the paper's construction).
+    fn brute_force_mst_cost(mesh: &TriMesh, costs: &[f64], faces: &[u32], region: &[bool]) -> f64 {
+        let allowed = |e: u32| {
+            let [f0, f1] = mesh.edge_faces()[e as usize];
+            region[f0 as usize] || (f1 != NONE && region[f1 as usize])
+        };
+        let reps: Vec<u32> = faces
+            .iter()
+            .map(|&f| {
+                *mesh.triangles()[f as usize]
+                    .iter()
+                    .min()
+                    .expect("3 corners")
+            })
+            .collect();
+        let mut pairs = Vec::new();
+        for i in 0..reps.len() {
+            let tree = dijkstra(mesh, costs, &[reps[i]], &allowed);
+            for (j, r) in reps.iter().enumerate().skip(i + 1) {
+                pairs.push((tree.dist[*r as usize], i as u32, j as u32));
+            }
+        }
+        pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut sets = UnionFind::new(reps.len());
+        pairs
+            .iter()
+            .filter(|p| p.0.is_finite() && sets.union(p.1, p.2))
+            .map(|p| p.0)
+            .sum()
+    }
+
+    #[test]
+    fn tree_is_as_cheap_as_the_paper_s_pairwise_mst() {
+        let mesh = shapes::plane(1.0, 24).expect("plane");
+        let field = planar_singular_field(
+            &mesh,
+            &[
+                (0.13, 0.21, 1.0),
+                (0.81, 0.27, 1.0),
+                (0.52, 0.84, -1.0),
+                (0.33, 0.62, -1.0),
+                (0.68, 0.53, 1.0),
+            ],
+        );
+        let singular: Vec<u32> = detect_singularities(&mesh, &field)
+            .iter()
+            .map(|s| s.face)
+            .collect();
+        assert_eq!(singular.len(), 5);
+        let costs = field_edge_costs(&mesh, &field);
+        let region = vec![true; mesh.face_count()];
+        let tree = singularity_tree(&mesh, &costs, &singular, &region);
+        let cost: f64 = tree.iter().map(|&e| costs[e as usize]).sum();
+        let mst = brute_force_mst_cost(&mesh, &costs, &singular, &region);
+        println!("tree cost {cost}, pairwise MST {mst}");
+        // Shared stretches can only make the union cheaper than the MST's sum.
+        assert!(cost <= mst + 1e-9 && cost >= 0.5 * mst, "{cost} vs {mst}");
+    }
+
+    #[test]
+    fn lone_singularity_on_a_closed_region_gives_nothing() {
+        let mesh = shapes::sphere(1.0, 4).expect("sphere");
+        let field = constant(&mesh, [1.0, 0.3, 0.2]);
+        let costs = field_edge_costs(&mesh, &field);
+        let region = vec![true; mesh.face_count()];
+        assert!(singularity_tree(&mesh, &costs, &[7], &region).is_empty());
+        let two = singularity_tree(&mesh, &costs, &[7, 300], &region);
+        assert!(!two.is_empty());
+        tree_vertices(&mesh, &two);
+    }
+
+    #[test]
+    fn trees_on_shared_meshes() {
+        let Some(mesh) = shared_mesh("spot.obj") else {
+            return;
+        };
+        let field = FieldSpec::default_curvature()
+            .build(&mesh)
+            .expect("curvature field");
+        let singular: Vec<u32> = detect_singularities(&mesh, &field)
+            .iter()
+            .map(|s| s.face)
+            .collect();
+        let costs = field_edge_costs(&mesh, &field);
+        let region = vec![true; mesh.face_count()];
+        let start = std::time::Instant::now();
+        let tree = singularity_tree(&mesh, &costs, &singular, &region);
+        println!(
+            "spot curvature field: {} singularities, tree of {} edges in {:.1} ms",
+            singular.len(),
+            tree.len(),
+            start.elapsed().as_secs_f64() * 1e3
+        );
+        let verts = tree_vertices(&mesh, &tree);
+        for &f in &singular {
+            let t = mesh.triangles()[f as usize];
+            assert!(t.iter().any(|v| verts.binary_search(v).is_ok()), "face {f}");
+        }
+        let cost: f64 = tree.iter().map(|&e| costs[e as usize]).sum();
+        let mst = brute_force_mst_cost(&mesh, &costs, &singular, &region);
+        println!("spot: tree cost {cost}, pairwise MST {mst}");
+        assert!(cost <= mst + 1e-9 && cost >= 0.5 * mst, "{cost} vs {mst}");
+    }
+}
