@@ -22,6 +22,9 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use seeds::{FaceField, face_frames, place_seeds};
+pub use walk::{WalkSystem, connected_parts, random_walk, walk_weights};
+
 /// A singularity of the major-direction line field inside a face.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Singularity {
@@ -97,6 +100,13 @@ pub enum SegmentError {
         value: f64,
         /// Valid range.
         expected: &'static str,
+    },
+    /// A face of the random walk's mask lies in a part (faces joined by edges of
+    /// positive weight) that holds no seed: its walk could reach no seed.
+    #[error("face {face} lies in a part of the mask that holds no seed")]
+    Unseeded {
+        /// The lowest such face.
+        face: u32,
     },
     /// The sparse solver failed (the walk's system was singular).
     #[error("random-walk solve failed: {what}")]
