@@ -22,7 +22,7 @@
 //! O(F RHS_BLOCK) per thread plus the factor. Measured on the Stanford bunny (69k
 //! faces, 2 cores, `engine/examples/segment_walk.rs`): assembly and factorization
 //! 85 ms (AMD ordering about half of it), solves 0.75 ms per seed (1.3 ms of CPU per
-//! right-hand side in blocks of 16): 200 ms for the 252 seeds of `beta = pi/4`, 510 ms
+//! right-hand side in blocks of 16): 200 ms for the 248 seeds of `beta = pi/4`, 510 ms
 //! for the 665 of `beta = pi/8`.
 //!
 //! References: Grady, "Random walks for image segmentation", IEEE PAMI 28(11), 2006;
