@@ -154,8 +154,8 @@ pub(crate) fn for_each_walk_neighbor(
 /// **Deviation: tiny regions.** A seed whose region stays below [`MIN_REGION_FACES`]
 /// faces is withdrawn (except the first of a component): its faces may join a later
 /// region but never seed one, and faces that no region takes are left to the walk. On
-/// the Stanford bunny with a projected constant field this cuts 773 seeds (`beta = pi/4`), two thirds
-/// of them with regions of 1 to 3 faces, to 248.
+/// the Stanford bunny with a projected constant field and `beta = pi/4` this cuts 773
+/// seeds, two thirds of them with regions of 1 to 3 faces, to 248.
 ///
 /// **Deviation: centred seeds.** The seed returned for a region is not the face where
 /// its growth started (which lies on the border of the previous region) but the face
