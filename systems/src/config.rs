@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use strata_engine::curve::CurveOptions;
 use strata_engine::field::FieldSpec;
 use strata_engine::mesh::shapes::Shape;
+use strata_engine::segment::SegmentOptions;
 
 /// A scene: a mesh, a tensor field on it, and sampling settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -34,6 +35,9 @@ pub struct SceneConfig {
     /// Adaptive Hilbert cell settings.
     #[serde(default)]
     pub curve: CurveOptions,
+    /// Segmentation settings (beta, sigma, seed).
+    #[serde(default)]
+    pub segment: SegmentOptions,
 }
 
 /// Where the mesh comes from.
@@ -143,6 +147,7 @@ impl SceneConfig {
     pub fn validate(&self) -> Result<(), String> {
         self.field.validate().map_err(|e| e.to_string())?;
         self.curve.validate().map_err(|e| e.to_string())?;
+        self.segment.validate().map_err(|e| e.to_string())?;
         Ok(())
     }
 }

@@ -42,10 +42,7 @@ impl Scene {
     pub fn build(config: &SceneConfig) -> Result<Self, SceneError> {
         let mut stages = Vec::new();
         let t = Instant::now();
-        let mesh = Arc::new(match &config.mesh {
-            MeshSource::File(path) => strata_engine::io::load(path)?,
-            MeshSource::Shape(shape) => shape.build()?,
-        });
+        let mesh = Arc::new(load_mesh(config)?);
         stages.push(("mesh", t.elapsed()));
         let t = Instant::now();
         let field = Arc::new(config.field.build(&mesh)?);
@@ -59,5 +56,13 @@ impl Scene {
             sampler,
             stages,
         })
+    }
+}
+
+/// Loads or builds the scene's mesh.
+pub fn load_mesh(config: &SceneConfig) -> Result<TriMesh, MeshError> {
+    match &config.mesh {
+        MeshSource::File(path) => strata_engine::io::load(path),
+        MeshSource::Shape(shape) => shape.build(),
     }
 }

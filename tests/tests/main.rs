@@ -2,3 +2,4 @@
 mod discrepancy;
 mod io;
 mod pipeline;
+mod segment;

@@ -17,16 +17,21 @@
 //! 4. cuts that make every segment a disc.
 
 pub mod paths;
+mod pipeline;
 pub mod seeds;
 pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use pipeline::segment;
+
 pub use paths::{ShortestPaths, dijkstra, field_edge_costs, singularity_tree};
+pub use seeds::{FaceField, face_frames, place_seeds};
 pub use singularity::{
     LineFieldTransport, detect_singularities, isotropic_faces, line_field_transport,
 };
 pub use topology::{PatchTopology, disc_cuts, patch_topology};
+pub use walk::{WalkSystem, connected_parts, random_walk, walk_weights};
 
 /// A singularity of the major-direction line field inside a face.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,7 +49,8 @@ pub struct Singularity {
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct SegmentOptions {
     /// Largest turn of the major direction (radians, as a line-field angle in
-    /// [0, pi/2]) from one ring to the next before a new seed is placed. Range
+    /// [0, pi/2]) from the reference direction of the region being grown before a new
+    /// seed is placed. Range
     /// (0, pi/2]; default pi/4 (section 4).
     pub beta: f64,
     /// Scale of the random walk's edge weights `|e| exp(-d*/sigma)`. Range (0, inf);
@@ -103,6 +109,13 @@ pub enum SegmentError {
         value: f64,
         /// Valid range.
         expected: &'static str,
+    },
+    /// A face of the random walk's mask lies in a part (faces joined by edges of
+    /// positive weight) that holds no seed: its walk could reach no seed.
+    #[error("face {face} lies in a part of the mask that holds no seed")]
+    Unseeded {
+        /// The lowest such face.
+        face: u32,
     },
     /// The sparse solver failed (the walk's system was singular).
     #[error("random-walk solve failed: {what}")]

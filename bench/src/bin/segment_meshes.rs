@@ -1,0 +1,84 @@
+//! Segmentation time per shared mesh, for a projected constant-direction field and a
+//! curvature field, with segment and singularity counts, as a Markdown table:
+//! `cargo run --release -p strata-bench --bin segment_meshes [-- repeats]`.
+//!
+//! Reads the meshes from `STRATA_MESH_DIR` or `../shared/meshes`; each row is the
+//! median of `repeats` runs (default 3) of `segment::segment` alone (loading the mesh
+//! and building the field are excluded and shown apart).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use strata_engine::field::FieldSpec;
+use strata_engine::segment::{SegmentOptions, segment};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let repeats: usize = std::env::args()
+        .nth(1)
+        .map(|a| a.parse())
+        .transpose()?
+        .unwrap_or(3);
+    let dir = std::env::var_os("STRATA_MESH_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"));
+    if !dir.is_dir() {
+        return Err(format!(
+            "{}: mesh folder not found (set STRATA_MESH_DIR)",
+            dir.display()
+        )
+        .into());
+    }
+    let fields = [
+        (
+            "constant 3:1",
+            FieldSpec::Constant {
+                direction: [1.0, 0.3, 0.2],
+                anisotropy: 3.0,
+                density: 1.0,
+            },
+        ),
+        ("curvature", FieldSpec::default_curvature()),
+    ];
+    println!(
+        "| mesh | faces | field | field build (ms) | segmentation median (ms) | segments | singularities | index sum | Euler char. | cut edges |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    for name in [
+        "stanford-bunny",
+        "rocker-arm",
+        "fandisk",
+        "homer",
+        "spot",
+        "cow",
+        "two-torus",
+        "wing",
+    ] {
+        let mesh = strata_engine::io::load(&dir.join(format!("{name}.obj")))?;
+        for (label, spec) in &fields {
+            let t = Instant::now();
+            let field = spec.build(&mesh)?;
+            let field_ms = t.elapsed().as_secs_f64() * 1e3;
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..repeats {
+                let t = Instant::now();
+                let seg = segment(&mesh, &field, &SegmentOptions::default())?;
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+                last = Some(seg);
+            }
+            times.sort_by(f64::total_cmp);
+            let seg = last.ok_or("no run")?;
+            let index_sum: f64 = seg.singularities.iter().map(|s| s.index).sum();
+            println!(
+                "| {name} | {} | {label} | {field_ms:.1} | {:.1} | {} | {} | {index_sum} | {} | {} |",
+                mesh.face_count(),
+                times[times.len() / 2],
+                seg.segments.len(),
+                seg.singularities.len(),
+                mesh.euler_characteristic(),
+                seg.cut_edges.len(),
+            );
+        }
+    }
+    Ok(())
+}
