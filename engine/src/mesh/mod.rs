@@ -46,6 +46,8 @@ pub struct TriMesh {
     /// CSR of vertices adjacent to each vertex (sorted).
     pub(crate) vertex_neighbor_offsets: Vec<u32>,
     pub(crate) vertex_neighbors: Vec<u32>,
+    /// Per entry of `vertex_neighbors`, the edge joining the two vertices.
+    pub(crate) vertex_neighbor_edges: Vec<u32>,
     pub(crate) boundary_loops: Vec<Vec<u32>>,
     pub(crate) face_component: Vec<u32>,
     pub(crate) component_count: usize,
@@ -177,6 +179,14 @@ impl TriMesh {
         let r = self.vertex_neighbor_offsets[v as usize] as usize
             ..self.vertex_neighbor_offsets[v as usize + 1] as usize;
         &self.vertex_neighbors[r]
+    }
+
+    /// The edges around vertex `v`, in the order of [`vertex_neighbors`](Self::vertex_neighbors):
+    /// entry `i` joins `v` and `vertex_neighbors(v)[i]`.
+    pub fn vertex_edges(&self, v: u32) -> &[u32] {
+        let r = self.vertex_neighbor_offsets[v as usize] as usize
+            ..self.vertex_neighbor_offsets[v as usize + 1] as usize;
+        &self.vertex_neighbor_edges[r]
     }
 
     /// Boundary loops as vertex sequences, each following its faces' orientation.

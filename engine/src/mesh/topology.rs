@@ -139,6 +139,7 @@ pub(super) fn build(
         vertex_faces: Vec::new(),
         vertex_neighbor_offsets: Vec::new(),
         vertex_neighbors: Vec::new(),
+        vertex_neighbor_edges: Vec::new(),
         boundary_loops: Vec::new(),
         face_component: Vec::new(),
         component_count: 0,
@@ -239,16 +240,19 @@ fn build_vertex_rings(mesh: &mut TriMesh) {
         ncounts[i + 1] += ncounts[i];
     }
     let mut fill = ncounts.clone();
-    let mut nbrs = vec![0u32; 2 * mesh.edges.len()];
-    for [a, b] in &mesh.edges {
-        nbrs[fill[*a as usize] as usize] = *b;
+    // (neighbour, edge) pairs, sorted by neighbour within each vertex.
+    let mut pairs = vec![(0u32, 0u32); 2 * mesh.edges.len()];
+    for (e, [a, b]) in mesh.edges.iter().enumerate() {
+        pairs[fill[*a as usize] as usize] = (*b, e as u32);
         fill[*a as usize] += 1;
-        nbrs[fill[*b as usize] as usize] = *a;
+        pairs[fill[*b as usize] as usize] = (*a, e as u32);
         fill[*b as usize] += 1;
     }
     for v in 0..v_count {
-        nbrs[ncounts[v] as usize..ncounts[v + 1] as usize].sort_unstable();
+        pairs[ncounts[v] as usize..ncounts[v + 1] as usize].sort_unstable();
     }
+    let nbrs: Vec<u32> = pairs.iter().map(|p| p.0).collect();
+    mesh.vertex_neighbor_edges = pairs.iter().map(|p| p.1).collect();
     mesh.vertex_neighbor_offsets = ncounts;
     mesh.vertex_neighbors = nbrs;
 }

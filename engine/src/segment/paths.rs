@@ -117,51 +117,36 @@ impl ShortestPaths {
     }
 }
 
-/// Vertex-to-edge incidence (CSR), each vertex's `(neighbour, edge)` pairs sorted.
-pub(crate) struct VertexEdges {
-    offsets: Vec<u32>,
-    pairs: Vec<(u32, u32)>,
+/// Vertex-to-edge incidence: each vertex's `(neighbour, edge)` pairs sorted by
+/// neighbour, read from the mesh's own one-ring tables (built once with the mesh).
+pub(crate) struct VertexEdges<'a> {
+    mesh: &'a TriMesh,
 }
 
-impl VertexEdges {
-    pub(crate) fn new(mesh: &TriMesh) -> Self {
-        let mut offsets = vec![0u32; mesh.vertex_count() + 1];
-        for [a, b] in mesh.edges() {
-            offsets[*a as usize + 1] += 1;
-            offsets[*b as usize + 1] += 1;
-        }
-        for i in 0..mesh.vertex_count() {
-            offsets[i + 1] += offsets[i];
-        }
-        let mut fill = offsets.clone();
-        let mut pairs = vec![(0u32, 0u32); 2 * mesh.edge_count()];
-        for (e, [a, b]) in mesh.edges().iter().enumerate() {
-            pairs[fill[*a as usize] as usize] = (*b, e as u32);
-            fill[*a as usize] += 1;
-            pairs[fill[*b as usize] as usize] = (*a, e as u32);
-            fill[*b as usize] += 1;
-        }
-        for v in 0..mesh.vertex_count() {
-            pairs[offsets[v] as usize..offsets[v + 1] as usize].sort_unstable();
-        }
-        Self { offsets, pairs }
+impl<'a> VertexEdges<'a> {
+    pub(crate) fn new(mesh: &'a TriMesh) -> Self {
+        Self { mesh }
     }
 
-    fn of(&self, v: u32) -> &[(u32, u32)] {
-        &self.pairs[self.offsets[v as usize] as usize..self.offsets[v as usize + 1] as usize]
+    fn of(&self, v: u32) -> impl Iterator<Item = (u32, u32)> + 'a {
+        let mesh = self.mesh;
+        mesh.vertex_neighbors(v)
+            .iter()
+            .copied()
+            .zip(mesh.vertex_edges(v).iter().copied())
     }
 }
 
 /// Dijkstra over `adjacency`; stops early at the first settled vertex for which `stop`
 /// holds and returns it.
 fn run_dijkstra(
-    adjacency: &VertexEdges,
+    adjacency: &VertexEdges<'_>,
     costs: &[f64],
     sources: &[u32],
     allowed: &dyn Fn(u32) -> bool,
     stop: &dyn Fn(u32) -> bool,
 ) -> (ShortestPaths, Option<u32>) {
-    let v_count = adjacency.offsets.len() - 1;
+    let v_count = adjacency.mesh.vertex_count();
     let mut dist = vec![f64::INFINITY; v_count];
     let mut pred_edge = vec![NONE; v_count];
     let mut settled = vec![false; v_count];
@@ -181,7 +166,7 @@ fn run_dijkstra(
             reached = Some(v);
             break;
         }
-        for &(w, e) in adjacency.of(v) {
+        for (w, e) in adjacency.of(v) {
             if settled[w as usize] || !allowed(e) {
                 continue;
             }
