@@ -10,6 +10,7 @@
 //! | [`mesh`] | `TriMesh` with adjacency; OBJ/PLY loading, writing, built-in shapes |
 //! | [`io`] | OBJ/PLY readers, PLY/CSV writers for meshes and samples |
 //! | [`field`] | per-vertex tensor fields and their sources |
+//! | [`param`] | field-aligned parameterization of one segment, with its validity |
 //! | [`curve`] | Hilbert curves and adaptive Hilbert cells with measures |
 //! | [`sample`] | 1D stratified sequences mapped through the cells to surface samples |
 //! | [`analysis`] | discrepancy and other quality measures |
@@ -20,6 +21,7 @@ pub mod curve;
 pub mod field;
 pub mod io;
 pub mod mesh;
+pub mod param;
 pub mod planar;
 pub mod rng;
 pub mod sample;
