@@ -10,8 +10,11 @@
 //! | [`mesh`] | `TriMesh` with adjacency; OBJ/PLY loading, writing, built-in shapes |
 //! | [`io`] | OBJ/PLY readers, PLY/CSV writers for meshes and samples |
 //! | [`field`] | per-vertex tensor fields and their sources |
+//! | [`segment`] | field-driven segmentation into singularity-free discs |
 //! | [`param`] | field-aligned parameterization of one segment, with its validity |
 //! | [`curve`] | Hilbert curves and adaptive Hilbert cells with measures |
+//! | [`surface`] | segmentation + parameterization (with splitting) + cells, for a whole surface |
+//! | [`planar`] | the same for flat domains, by one linear map |
 //! | [`sample`] | 1D stratified sequences mapped through the cells to surface samples |
 //! | [`analysis`] | discrepancy and other quality measures |
 //! | [`rng`] | counter-based random numbers (thread-count independent) |
@@ -26,3 +29,4 @@ pub mod planar;
 pub mod rng;
 pub mod sample;
 pub mod segment;
+pub mod surface;

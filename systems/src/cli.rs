@@ -127,6 +127,12 @@ fn sample(args: &SampleArgs) -> anyhow::Result<()> {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    if let Some(s) = &scene.surface {
+        println!(
+            "surface: {} singularities; {} segments after segmentation, {} after {} splits of invalid ones ({} with the isotropic fallback)",
+            s.singularities, s.segments_before_split, s.segments, s.splits, s.isotropic_segments
+        );
+    }
     if let (Some(path), Some(kind)) = (&args.out, out_kind) {
         match kind {
             OutputKind::Ply => strata_engine::io::write_samples_ply(path, &samples),

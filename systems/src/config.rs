@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use strata_engine::curve::CurveOptions;
 use strata_engine::field::FieldSpec;
 use strata_engine::mesh::shapes::Shape;
+use strata_engine::param::ParamOptions;
 use strata_engine::segment::SegmentOptions;
 
 /// A scene: a mesh, a tensor field on it, and sampling settings.
@@ -38,6 +39,9 @@ pub struct SceneConfig {
     /// Segmentation settings (beta, sigma, seed).
     #[serde(default)]
     pub segment: SegmentOptions,
+    /// Parameterization settings (gamma, isotropy threshold).
+    #[serde(default)]
+    pub param: ParamOptions,
 }
 
 /// Where the mesh comes from.
@@ -148,6 +152,7 @@ impl SceneConfig {
         self.field.validate().map_err(|e| e.to_string())?;
         self.curve.validate().map_err(|e| e.to_string())?;
         self.segment.validate().map_err(|e| e.to_string())?;
+        self.param.validate().map_err(|e| e.to_string())?;
         Ok(())
     }
 }

@@ -7,6 +7,7 @@ use strata_engine::field::{FieldError, TensorField};
 use strata_engine::mesh::{MeshError, TriMesh};
 use strata_engine::planar::{self, PlanarError};
 use strata_engine::sample::Sampler;
+use strata_engine::surface::{Preprocessed, SurfaceError, SurfaceOptions};
 
 use crate::config::{MeshSource, SceneConfig};
 
@@ -21,6 +22,24 @@ pub struct Scene {
     pub sampler: Sampler,
     /// Wall time of each preprocessing stage, in order.
     pub stages: Vec<(&'static str, Duration)>,
+    /// The surface preprocessing (segments, parameterizations), for curved meshes;
+    /// `None` for flat meshes, which use one linear map.
+    pub surface: Option<SurfaceSummary>,
+}
+
+/// What the surface preprocessing produced.
+#[derive(Debug, Clone)]
+pub struct SurfaceSummary {
+    /// Segments after segmentation.
+    pub segments_before_split: usize,
+    /// Final segments.
+    pub segments: usize,
+    /// Splits of invalid segments.
+    pub splits: usize,
+    /// Segments with the isotropic fallback.
+    pub isotropic_segments: usize,
+    /// Singularities found.
+    pub singularities: usize,
 }
 
 /// Errors building a scene, by stage.
@@ -32,9 +51,12 @@ pub enum SceneError {
     /// Building the field failed.
     #[error("field: {0}")]
     Field(#[from] FieldError),
-    /// Preprocessing for sampling failed.
+    /// Preprocessing a flat domain failed.
     #[error("sampling: {0}")]
     Planar(#[from] PlanarError),
+    /// Preprocessing a surface failed.
+    #[error("{0}")]
+    Surface(#[from] SurfaceError),
 }
 
 impl Scene {
@@ -48,14 +70,45 @@ impl Scene {
         let field = Arc::new(config.field.build(&mesh)?);
         stages.push(("field", t.elapsed()));
         let t = Instant::now();
-        let (sampler, _) = planar::sampler(mesh.clone(), field.clone(), &config.curve)?;
-        stages.push(("cells", t.elapsed()));
-        Ok(Self {
-            mesh,
-            field,
-            sampler,
-            stages,
-        })
+        // Flat meshes: one linear map (exact for constant-frame fields); surfaces: the
+        // full pipeline.
+        match planar::sampler(mesh.clone(), field.clone(), &config.curve) {
+            Ok((sampler, _)) => {
+                stages.push(("cells", t.elapsed()));
+                Ok(Self {
+                    mesh,
+                    field,
+                    sampler,
+                    stages,
+                    surface: None,
+                })
+            }
+            Err(PlanarError::NotPlanar { .. }) => {
+                let options = SurfaceOptions {
+                    segment: config.segment,
+                    param: config.param,
+                    curve: config.curve,
+                    ..Default::default()
+                };
+                let pre = Preprocessed::build(mesh.clone(), field.clone(), &options)?;
+                stages.extend(pre.stages.iter().copied());
+                let surface = SurfaceSummary {
+                    segments_before_split: pre.report.segments_before_split,
+                    segments: pre.report.segments,
+                    splits: pre.report.splits,
+                    isotropic_segments: pre.report.isotropic_segments,
+                    singularities: pre.segmentation.singularities.len(),
+                };
+                Ok(Self {
+                    mesh,
+                    field,
+                    sampler: pre.sampler,
+                    stages,
+                    surface: Some(surface),
+                })
+            }
+            Err(e) => Err(e.into()),
+        }
     }
 }
 

@@ -3,3 +3,4 @@ mod discrepancy;
 mod io;
 mod pipeline;
 mod segment;
+mod surface;

@@ -1,0 +1,407 @@
+//! Preprocessing a curved surface for sampling: segmentation, parameterization with
+//! splitting of invalid segments, and adaptive Hilbert cells per segment.
+//!
+//! Input: a mesh, a field and [`SurfaceOptions`]. Output: [`Preprocessed`], holding the
+//! final segments, their parameterizations and a [`Sampler`] that draws any count.
+//!
+//! Splitting (paper section 5.2): a segment whose parameterization is invalid (flipped
+//! or overlapping, or the mapped field off the u axis by more than `gamma` on average),
+//! or that cannot be parameterized, is split in two by the random walk restricted to
+//! it, seeded at its two most different directions, and both halves are parameterized
+//! again. Below `min_segment_faces` a segment is parameterized with an isotropic field
+//! (flagged `isotropic_fallback`; it is sampled with the right density but without
+//! anisotropy), and if even that fails, each of its triangles becomes a segment of its
+//! own, which is always valid. So preprocessing always covers every face.
+//!
+//! Cost: the segmentation, then one sparse factorization per parameterized segment
+//! (segments in parallel with rayon), then the cells.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::curve::{CurveDomain, CurveError, CurveOptions, SegmentCurve};
+use crate::field::{FieldError, TensorField};
+use crate::mesh::{NONE, TriMesh};
+use crate::param::{ParamError, ParamOptions, SegmentParam, parameterize_all};
+use crate::sample::{SampleError, Sampler, SegmentSampling};
+use crate::segment::{
+    SegmentError, SegmentOptions, Segmentation, connected_parts, face_frames, random_walk, segment,
+    walk_weights,
+};
+
+/// Settings of the whole preprocessing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
+pub struct SurfaceOptions {
+    /// Segmentation settings.
+    pub segment: SegmentOptions,
+    /// Parameterization settings (gamma, isotropy threshold).
+    pub param: ParamOptions,
+    /// Cell settings. `max_cell_share` is a share of the whole surface's measure here,
+    /// so the number of cells does not grow with the number of segments.
+    pub curve: CurveOptions,
+    /// Segments with fewer faces are not split further (isotropic fallback instead).
+    /// Range >= 1; default 16.
+    pub min_segment_faces: usize,
+}
+
+impl Default for SurfaceOptions {
+    fn default() -> Self {
+        Self {
+            segment: SegmentOptions::default(),
+            param: ParamOptions::default(),
+            curve: CurveOptions::default(),
+            min_segment_faces: 16,
+        }
+    }
+}
+
+/// Errors of the surface preprocessing.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SurfaceError {
+    /// Segmentation failed.
+    #[error("segmentation: {0}")]
+    Segment(#[from] SegmentError),
+    /// A parameterization failed in a way splitting cannot fix.
+    #[error("parameterization: {0}")]
+    Param(#[from] ParamError),
+    /// The isotropic fallback field could not be built.
+    #[error("isotropic fallback field: {0}")]
+    Field(#[from] FieldError),
+    /// Cells could not be built for a segment.
+    #[error("cells of segment {segment}: {source}")]
+    Curve {
+        /// Segment id.
+        segment: usize,
+        /// The cause.
+        #[source]
+        source: CurveError,
+    },
+    /// The sampler could not be built.
+    #[error("sampler: {0}")]
+    Sample(#[from] SampleError),
+    /// `min_segment_faces` is 0.
+    #[error("min_segment_faces must be at least 1")]
+    InvalidMinSegmentFaces,
+}
+
+/// Counts describing what the preprocessing did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceReport {
+    /// Segments after segmentation, before splitting.
+    pub segments_before_split: usize,
+    /// Final segments.
+    pub segments: usize,
+    /// Segments split because their parameterization was invalid.
+    pub splits: usize,
+    /// Final segments parameterized with the isotropic fallback.
+    pub isotropic_segments: usize,
+    /// Faces that ended as single-triangle segments (last resort).
+    pub single_face_segments: usize,
+    /// Total cells over all segments.
+    pub cells: usize,
+}
+
+/// A surface ready to sample.
+#[derive(Debug)]
+pub struct Preprocessed {
+    /// The segmentation (before splitting).
+    pub segmentation: Segmentation,
+    /// The final segments' parameterizations; segment `i` of the samples is `params[i]`.
+    pub params: Vec<SegmentParam>,
+    /// The per-frame sampler.
+    pub sampler: Sampler,
+    /// What happened.
+    pub report: SurfaceReport,
+    /// Wall time per stage, in order.
+    pub stages: Vec<(&'static str, Duration)>,
+}
+
+impl Preprocessed {
+    /// Runs segmentation, parameterization (with splitting) and cell construction.
+    pub fn build(
+        mesh: Arc<TriMesh>,
+        field: Arc<TensorField>,
+        options: &SurfaceOptions,
+    ) -> Result<Self, SurfaceError> {
+        if options.min_segment_faces == 0 {
+            return Err(SurfaceError::InvalidMinSegmentFaces);
+        }
+        options
+            .curve
+            .validate()
+            .map_err(|source| SurfaceError::Curve { segment: 0, source })?;
+        options.param.validate()?;
+        let mut stages = Vec::new();
+        let t = Instant::now();
+        let segmentation = segment(&mesh, &field, &options.segment)?;
+        stages.push(("segmentation", t.elapsed()));
+
+        let t = Instant::now();
+        let (params, mut report) =
+            parameterize_with_splitting(&mesh, &field, &segmentation, options)?;
+        report.segments_before_split = segmentation.segments.len();
+        report.segments = params.len();
+        stages.push(("parameterization", t.elapsed()));
+
+        let t = Instant::now();
+        let segments = build_cells(&mesh, &field, &params, &options.curve)?;
+        report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
+        stages.push(("cells", t.elapsed()));
+        let sampler = Sampler::new(mesh, field, segments)?;
+        Ok(Self {
+            segmentation,
+            params,
+            sampler,
+            report,
+            stages,
+        })
+    }
+}
+
+/// Parameterizes every segment, splitting invalid ones (see the module docs).
+fn parameterize_with_splitting(
+    mesh: &TriMesh,
+    field: &TensorField,
+    segmentation: &Segmentation,
+    options: &SurfaceOptions,
+) -> Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError> {
+    let mut cut = vec![false; mesh.edge_count()];
+    for &e in &segmentation.cut_edges {
+        cut[e as usize] = true;
+    }
+    let frames = face_frames(mesh, field);
+    let weights = walk_weights(mesh, &frames, options.segment.sigma, &cut);
+    let mut report = SurfaceReport::default();
+    let mut accepted: Vec<SegmentParam> = Vec::new();
+    let mut pending: Vec<Vec<u32>> = segmentation
+        .segments
+        .iter()
+        .map(|s| s.faces.clone())
+        .collect();
+    let mut small: Vec<Vec<u32>> = Vec::new();
+    while !pending.is_empty() {
+        let results = parameterize_all(mesh, field, &pending, &cut, &options.param);
+        let mut next = Vec::new();
+        for (faces, result) in pending.into_iter().zip(results) {
+            match result {
+                Ok(p) if p.report.valid => accepted.push(p),
+                _ if faces.len() < options.min_segment_faces.max(2) => small.push(faces),
+                _ => {
+                    report.splits += 1;
+                    next.extend(split_in_two(mesh, &frames, &weights, &cut, &faces)?);
+                }
+            }
+        }
+        pending = next;
+    }
+    if !small.is_empty() {
+        // Isotropic fallback: the same density, no anisotropy.
+        let iso = isotropic_copy(mesh, field)?;
+        let results = parameterize_all(mesh, &iso, &small, &cut, &options.param);
+        for (faces, result) in small.into_iter().zip(results) {
+            match result {
+                Ok(mut p) if p.report.flipped == 0 && !p.report.overlaps => {
+                    p.report.isotropic_fallback = true;
+                    report.isotropic_segments += 1;
+                    accepted.push(p);
+                }
+                _ => {
+                    for f in faces {
+                        let p = crate::param::parameterize(mesh, &iso, &[f], &cut, &options.param)?;
+                        report.single_face_segments += 1;
+                        accepted.push(p);
+                    }
+                }
+            }
+        }
+    }
+    // Deterministic order: by lowest mesh face.
+    accepted.sort_by_key(|p| p.faces.iter().copied().min().unwrap_or(u32::MAX));
+    Ok((accepted, report))
+}
+
+/// Splits a segment in two by the random walk seeded at its two most different face
+/// directions (as lines); returns the connected parts.
+fn split_in_two(
+    mesh: &TriMesh,
+    frames: &crate::segment::FaceField,
+    weights: &[f64],
+    cut: &[bool],
+    faces: &[u32],
+) -> Result<Vec<Vec<u32>>, SurfaceError> {
+    // The face whose direction is farthest from the segment's mean line direction
+    // (mean of m m^T), then the face farthest from that one.
+    let mut mean = glam::DMat3::ZERO;
+    for &f in faces {
+        let m = frames.major[f as usize];
+        mean += crate::field::outer(m, m);
+    }
+    let axis = principal_axis(mean);
+    let farthest = |from: DVec3| {
+        faces
+            .iter()
+            .copied()
+            .min_by(|&a, &b| {
+                let da = frames.major[a as usize].dot(from).abs();
+                let db = frames.major[b as usize].dot(from).abs();
+                da.total_cmp(&db).then(a.cmp(&b))
+            })
+            .unwrap_or(faces[0])
+    };
+    let a = farthest(axis);
+    let mut b = farthest(frames.major[a as usize]);
+    if a == b {
+        b = faces.iter().copied().find(|&f| f != a).unwrap_or(a);
+    }
+    let mut mask = vec![false; mesh.face_count()];
+    for &f in faces {
+        mask[f as usize] = true;
+    }
+    let labels = if a == b {
+        return Ok(vec![faces.to_vec()]);
+    } else {
+        match random_walk(mesh, weights, &mask, &[a, b]) {
+            Ok(l) => l,
+            // Parts of the segment unreachable from both seeds (cut off by cut edges):
+            // split by connectivity alone.
+            Err(SegmentError::Unseeded { .. }) => {
+                let mut l = vec![NONE; mesh.face_count()];
+                for &f in faces {
+                    l[f as usize] = 0;
+                }
+                l
+            }
+            Err(e) => return Err(e.into()),
+        }
+    };
+    let parts = connected_parts(mesh, &labels, cut);
+    let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+    for &f in faces {
+        groups.entry(parts[f as usize]).or_default().push(f);
+    }
+    let mut out: Vec<Vec<u32>> = groups.into_values().collect();
+    if out.len() == 1 {
+        // The walk gave everything to one seed: halve by face order as a last resort,
+        // which always makes progress.
+        let all = out.pop().unwrap_or_default();
+        let (x, y) = all.split_at(all.len() / 2);
+        let mut l = vec![NONE; mesh.face_count()];
+        for &f in x {
+            l[f as usize] = 0;
+        }
+        for &f in y {
+            l[f as usize] = 1;
+        }
+        let parts = connected_parts(mesh, &l, cut);
+        let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+        for &f in &all {
+            groups.entry(parts[f as usize]).or_default().push(f);
+        }
+        out = groups.into_values().collect();
+    }
+    Ok(out)
+}
+
+/// The unit eigenvector of the largest eigenvalue of a symmetric 3x3 matrix (power
+/// iteration from the column of largest norm; enough to pick a seed direction).
+fn principal_axis(m: glam::DMat3) -> DVec3 {
+    let mut v = [m.x_axis, m.y_axis, m.z_axis]
+        .into_iter()
+        .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+        .unwrap_or(DVec3::X)
+        .try_normalize()
+        .unwrap_or(DVec3::X);
+    for _ in 0..32 {
+        v = (m * v).try_normalize().unwrap_or(v);
+    }
+    v
+}
+
+/// The field with each tensor replaced by its density times the identity of the
+/// tangent plane.
+fn isotropic_copy(mesh: &TriMesh, field: &TensorField) -> Result<TensorField, FieldError> {
+    let density = field.vertex_densities(mesh);
+    let dirs: Vec<DVec3> = mesh
+        .vertex_normals()
+        .iter()
+        .map(|n| crate::field::tangent_frame(*n).0)
+        .collect();
+    let ev: Vec<[f64; 2]> = density.iter().map(|&d| [d, d]).collect();
+    TensorField::from_frames(mesh, &dirs, &ev)
+}
+
+/// Cells for every parameterized segment, in parallel. The cell budget is shared:
+/// each segment's `max_cell_share` is scaled by its share of the total measure, and
+/// its boundary refinement by how many cells it gets.
+fn build_cells(
+    mesh: &TriMesh,
+    field: &TensorField,
+    params: &[SegmentParam],
+    options: &CurveOptions,
+) -> Result<Vec<SegmentSampling>, SurfaceError> {
+    let prepared: Vec<(Vec<glam::DVec2>, Vec<[f64; 3]>)> = params
+        .par_iter()
+        .map(|p| {
+            let (uv, _, _) = p.to_unit_square();
+            (uv, p.corner_density(mesh, field))
+        })
+        .collect();
+    let measure = |d: &[[f64; 3]], uv: &[glam::DVec2], p: &SegmentParam| -> f64 {
+        p.triangles
+            .iter()
+            .zip(d)
+            .map(|(t, c)| {
+                let q = t.map(|v| uv[v as usize]);
+                0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]) * (c[0] + c[1] + c[2]) / 3.0
+            })
+            .sum()
+    };
+    let measures: Vec<f64> = prepared
+        .iter()
+        .zip(params)
+        .map(|((uv, d), p)| measure(d, uv, p))
+        .collect();
+    let total: f64 = measures.iter().sum();
+    params
+        .par_iter()
+        .zip(prepared.par_iter())
+        .zip(measures.par_iter())
+        .enumerate()
+        .map(|(id, ((p, (uv, density)), &m))| {
+            let fraction = (m / total).max(f64::MIN_POSITIVE);
+            let share = (options.max_cell_share / fraction).min(1.0);
+            // Cells this segment may get, and boundary refinement to about their size.
+            let cells = 1.0 / share;
+            let level = ((cells.log2() * 0.5).ceil() as i64 + 2)
+                .clamp(1, options.boundary_level as i64) as u8;
+            let seg_options = CurveOptions {
+                max_cell_share: share,
+                boundary_level: level,
+                ..*options
+            };
+            let curve = SegmentCurve::build(
+                &CurveDomain {
+                    uv,
+                    triangles: &p.triangles,
+                    corner_density: density,
+                },
+                &seg_options,
+            )
+            .map_err(|source| SurfaceError::Curve {
+                segment: id,
+                source,
+            })?;
+            Ok(SegmentSampling {
+                segment: id as u32,
+                faces: p.faces.clone(),
+                curve,
+            })
+        })
+        .collect()
+}
