@@ -47,6 +47,22 @@ pub struct SurfaceOptions {
     /// Segments with fewer faces are not split further (isotropic fallback instead).
     /// Range >= 1; default 16.
     pub min_segment_faces: usize,
+    /// Which angle between the mapped field and the u axis must stay below `gamma`:
+    /// the area-weighted mean over the segment's faces (section 5.2, the default) or
+    /// the largest per-face angle (section 7.3.1's "no angle greater than gamma"),
+    /// which splits more.
+    pub angle_criterion: AngleCriterion,
+}
+
+/// The angle that the validity test compares with `gamma`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum AngleCriterion {
+    /// Area-weighted mean angle over the segment (section 5.2).
+    #[default]
+    Mean,
+    /// Largest per-face angle (section 7.3.1).
+    Max,
 }
 
 impl Default for SurfaceOptions {
@@ -56,6 +72,7 @@ impl Default for SurfaceOptions {
             param: ParamOptions::default(),
             curve: CurveOptions::default(),
             min_segment_faces: 16,
+            angle_criterion: AngleCriterion::Mean,
         }
     }
 }
@@ -164,8 +181,10 @@ impl Preprocessed {
     }
 }
 
-/// Parameterizes every segment, splitting invalid ones (see the module docs).
-fn parameterize_with_splitting(
+/// Parameterizes every segment of `segmentation`, splitting invalid ones (see the
+/// module docs). Returns the final segments' parameterizations, ordered by their lowest
+/// mesh face, and what happened (`segments_before_split` and `cells` are left 0).
+pub fn parameterize_with_splitting(
     mesh: &TriMesh,
     field: &TensorField,
     segmentation: &Segmentation,
@@ -190,7 +209,7 @@ fn parameterize_with_splitting(
         let mut next = Vec::new();
         for (faces, result) in pending.into_iter().zip(results) {
             match result {
-                Ok(p) if p.report.valid => accepted.push(p),
+                Ok(p) if p.report.valid && angle_ok(&p, options) => accepted.push(p),
                 _ if faces.len() < options.min_segment_faces.max(2) => small.push(faces),
                 _ => {
                     report.splits += 1;
@@ -224,6 +243,16 @@ fn parameterize_with_splitting(
     // Deterministic order: by lowest mesh face.
     accepted.sort_by_key(|p| p.faces.iter().copied().min().unwrap_or(u32::MAX));
     Ok((accepted, report))
+}
+
+/// The optional stricter angle test (the mean is part of `report.valid` already).
+fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
+    match options.angle_criterion {
+        AngleCriterion::Mean => true,
+        AngleCriterion::Max => {
+            p.report.isotropic_fallback || p.report.max_angle_deg < options.param.gamma.to_degrees()
+        }
+    }
 }
 
 /// Splits a segment in two by the random walk seeded at its two most different face

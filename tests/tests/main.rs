@@ -1,6 +1,7 @@
 //! strata integration tests: one binary, one module per stage.
 mod discrepancy;
 mod io;
+mod param;
 mod pipeline;
 mod segment;
 mod surface;
