@@ -4,6 +4,7 @@
 //! into engine inputs, and the `strata` command-line tool. (The ECS, hot reload and GPU
 //! layers will live here too; the pure algorithms are in `strata-engine`.)
 
+pub mod atlas;
 pub mod cli;
 pub mod config;
 pub mod scene;
