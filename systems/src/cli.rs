@@ -7,6 +7,8 @@ use anyhow::{Context, bail};
 use clap::{Parser, Subcommand};
 use strata_engine::sample::Sample;
 
+use strata_engine::surface::{SurfaceOptions, parameterize_with_splitting};
+
 use crate::config::SceneConfig;
 use crate::scene::Scene;
 
@@ -42,6 +44,9 @@ pub struct SegmentArgs {
     /// Segmentation seed (overrides the scene's `segment.seed`).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// SVG drawing of every final segment's parameter layout with the mapped field.
+    #[arg(long)]
+    pub atlas: Option<PathBuf>,
 }
 
 /// Arguments of `strata sample`.
@@ -165,7 +170,24 @@ fn segment(args: &SegmentArgs) -> anyhow::Result<()> {
     let seg = strata_engine::segment::segment(&mesh, &field, &options)
         .with_context(|| format!("{name}: segmentation"))?;
     let seg_time = t.elapsed();
-    let report = SegmentReport::new(&mesh, &seg, seg_time.as_secs_f64());
+    let surface_options = SurfaceOptions {
+        segment: options,
+        param: config.param,
+        curve: config.curve,
+        ..Default::default()
+    };
+    let t = Instant::now();
+    let (params, split) = parameterize_with_splitting(&mesh, &field, &seg, &surface_options)
+        .with_context(|| format!("{name}: parameterization"))?;
+    let param_time = t.elapsed();
+    let report = SegmentReport::new(
+        &mesh,
+        &seg,
+        &params,
+        split.splits,
+        seg_time.as_secs_f64(),
+        param_time.as_secs_f64(),
+    );
     let plus = report
         .singularities
         .iter()
@@ -177,11 +199,23 @@ fn segment(args: &SegmentArgs) -> anyhow::Result<()> {
         "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {index_sum}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
         report.faces,
         report.euler_characteristic,
-        report.segment_count,
+        report.segments_before_split,
         report.singularities.len(),
         report.cut_edges,
         seg_time.as_secs_f64(),
         load_time.as_secs_f64(),
+    );
+    let valid = report.segments.iter().filter(|s| s.valid).count();
+    let fallback = report
+        .segments
+        .iter()
+        .filter(|s| s.isotropic_fallback)
+        .count();
+    println!(
+        "parameterization: {} segments after {} splits, {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
+        report.segment_count,
+        report.splits,
+        param_time.as_secs_f64()
     );
     let not_discs = report
         .segments
@@ -191,13 +225,28 @@ fn segment(args: &SegmentArgs) -> anyhow::Result<()> {
     if not_discs > 0 {
         eprintln!("warning: {name}: {not_discs} segments are not topological discs");
     }
+    if let Some(path) = &args.atlas {
+        crate::atlas::write_atlas_svg(path, &mesh, &field, &params)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    let mut singular = vec![false; mesh.face_count()];
+    for s in &seg.singularities {
+        singular[s.face as usize] = true;
+    }
+    let mut final_segment = vec![0u32; mesh.face_count()];
+    for (id, p) in params.iter().enumerate() {
+        for &f in &p.faces {
+            final_segment[f as usize] = id as u32;
+        }
+    }
     if let Some(path) = &args.out {
         let colors: Vec<[u8; 3]> = (0..mesh.face_count())
             .map(|f| {
-                if seg.singularities.iter().any(|s| s.face as usize == f) {
+                if singular[f] {
                     [16, 16, 16]
                 } else {
-                    segment_color(seg.face_segment[f])
+                    segment_color(final_segment[f])
                 }
             })
             .collect();
@@ -214,22 +263,28 @@ fn segment(args: &SegmentArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The JSON report of `strata segment`.
+/// The JSON report of `strata segment` (schema in the README).
 #[derive(Debug, serde::Serialize)]
 pub struct SegmentReport {
     /// Faces of the mesh.
     pub faces: usize,
     /// Euler characteristic of the whole mesh.
     pub euler_characteristic: i64,
-    /// Number of segments.
+    /// Segments made by the segmentation (section 4), before splitting.
+    pub segments_before_split: usize,
+    /// Final segments, after splitting invalid ones (section 5.2).
     pub segment_count: usize,
+    /// Splits of invalid segments.
+    pub splits: usize,
     /// Singular faces with their index (+0.5 or -0.5).
     pub singularities: Vec<SingularityReport>,
     /// Edges cut inside segments (singularity trees and disc cuts).
     pub cut_edges: usize,
     /// Wall time of the segmentation, seconds.
-    pub time_s: f64,
-    /// Per segment.
+    pub segmentation_s: f64,
+    /// Wall time of parameterization with splitting, seconds.
+    pub parameterization_s: f64,
+    /// Per final segment.
     pub segments: Vec<SegmentEntry>,
 }
 
@@ -242,10 +297,10 @@ pub struct SingularityReport {
     pub index: f64,
 }
 
-/// One segment in the report.
+/// One final segment in the report.
 #[derive(Debug, serde::Serialize)]
 pub struct SegmentEntry {
-    /// Segment id (as in the coloured mesh and the samples).
+    /// Segment id (as in the coloured mesh, the atlas and the samples).
     pub id: usize,
     /// Number of faces.
     pub faces: usize,
@@ -255,19 +310,44 @@ pub struct SegmentEntry {
     pub boundary_loops: usize,
     /// Whether the segment holds a singular face.
     pub has_singular_face: bool,
+    /// Valid parameterization: no flip, no overlap, mean angle under gamma.
+    pub valid: bool,
+    /// Faces flipped in the parameter plane.
+    pub flipped: usize,
+    /// Whether the parameter mesh overlaps itself.
+    pub overlaps: bool,
+    /// Area-weighted mean angle between the mapped major direction and the u axis.
+    pub mean_angle_deg: f64,
+    /// Largest per-face angle.
+    pub max_angle_deg: f64,
+    /// Parameterized with the isotropic fallback frame.
+    pub isotropic_fallback: bool,
 }
 
 impl SegmentReport {
-    /// Builds the report of a segmentation.
+    /// Builds the report of a segmentation and its final parameterizations.
     pub fn new(
         mesh: &strata_engine::mesh::TriMesh,
         seg: &strata_engine::segment::Segmentation,
-        time_s: f64,
+        params: &[strata_engine::param::SegmentParam],
+        splits: usize,
+        segmentation_s: f64,
+        parameterization_s: f64,
     ) -> Self {
+        let mut cut = vec![false; mesh.edge_count()];
+        for &e in &seg.cut_edges {
+            cut[e as usize] = true;
+        }
+        let mut singular = vec![false; mesh.face_count()];
+        for s in &seg.singularities {
+            singular[s.face as usize] = true;
+        }
         Self {
             faces: mesh.face_count(),
             euler_characteristic: mesh.euler_characteristic(),
-            segment_count: seg.segments.len(),
+            segments_before_split: seg.segments.len(),
+            segment_count: params.len(),
+            splits,
             singularities: seg
                 .singularities
                 .iter()
@@ -277,17 +357,27 @@ impl SegmentReport {
                 })
                 .collect(),
             cut_edges: seg.cut_edges.len(),
-            time_s,
-            segments: seg
-                .segments
+            segmentation_s,
+            parameterization_s,
+            segments: params
                 .iter()
                 .enumerate()
-                .map(|(id, s)| SegmentEntry {
-                    id,
-                    faces: s.faces.len(),
-                    euler_characteristic: s.euler_characteristic,
-                    boundary_loops: s.boundary_loops.len(),
-                    has_singular_face: s.has_singular_face,
+                .map(|(id, p)| {
+                    let topo = strata_engine::segment::patch_topology(mesh, &p.faces, &cut);
+                    let r = &p.report;
+                    SegmentEntry {
+                        id,
+                        faces: p.faces.len(),
+                        euler_characteristic: topo.euler_characteristic,
+                        boundary_loops: topo.boundary_loops.len(),
+                        has_singular_face: p.faces.iter().any(|&f| singular[f as usize]),
+                        valid: r.valid,
+                        flipped: r.flipped,
+                        overlaps: r.overlaps,
+                        mean_angle_deg: r.mean_angle_deg,
+                        max_angle_deg: r.max_angle_deg,
+                        isotropic_fallback: r.isotropic_fallback,
+                    }
                 })
                 .collect(),
         }
