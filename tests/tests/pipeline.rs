@@ -28,12 +28,7 @@ fn every_bundled_config_samples_exactly_its_count() {
             eprintln!("skipping {}: {} is absent", path.display(), mesh.display());
             continue;
         }
-        let scene = match Scene::build(&config) {
-            Ok(scene) => scene,
-            // Curved surfaces need segmentation (not built yet): the error says so.
-            Err(e) if e.to_string().contains("not planar") => continue,
-            Err(e) => panic!("{}: {e}", path.display()),
-        };
+        let scene = Scene::build(&config).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let n = config.sampling.count as usize;
         let samples = scene.sampler.sample(n, config.sampling.seed);
         assert_eq!(samples.len(), n, "{}", path.display());
@@ -130,11 +125,57 @@ fn cli_errors_are_one_line_with_file_and_position() {
 
     let curved = dir.path().join("sphere.ron");
     std::fs::write(&curved, "(mesh: Shape(Sphere(radius: 1.0, resolution: 4)))").expect("write");
-    let e = strata(&["sample", curved.to_str().expect("utf-8")]).expect_err("not planar yet");
-    assert!(one_line(&e).contains("not planar"), "{}", one_line(&e));
+    strata(&["sample", curved.to_str().expect("utf-8"), "-n", "100"])
+        .expect("curved meshes sample");
+    let bad_param = dir.path().join("gamma.ron");
+    std::fs::write(&bad_param, "(mesh: Shape(Sphere()), param: (gamma: -1.0))").expect("write");
+    let e = strata(&["sample", bad_param.to_str().expect("utf-8")]).expect_err("negative gamma");
+    assert!(one_line(&e).contains("gamma"), "{}", one_line(&e));
 
-    let good = config_files().into_iter().next().expect("a config");
+    let good = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("default.ron"))
+        .expect("default.ron");
     let e = strata(&["sample", good.to_str().expect("utf-8"), "--out", "x.txt"])
         .expect_err("bad extension");
     assert!(one_line(&e).contains(".ply or .csv"));
+}
+
+#[test]
+fn cli_bench_reports_timings_and_memory_as_json() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let config = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("plane-gaussian.ron"))
+        .expect("bundled");
+    let json = dir.path().join("bench.json");
+    strata(&[
+        "bench",
+        config.to_str().expect("utf-8"),
+        "-n",
+        "5000",
+        "--repeat",
+        "3",
+        "--json",
+        json.to_str().expect("utf-8"),
+    ])
+    .expect("bench");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse");
+    for key in [
+        "faces",
+        "segments",
+        "preprocess_s",
+        "stages",
+        "count",
+        "sample_median_s",
+        "bytes",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}: {v}");
+    }
+    assert_eq!(v["count"], 5000);
+    assert_eq!(v["faces"], 8192);
+    assert!(v["sample_median_s"].as_f64().expect("number") > 0.0);
+    assert!(v["bytes"].as_u64().expect("number") > 0);
+    assert!(strata(&["bench", config.to_str().expect("utf-8"), "--repeat", "0"]).is_err());
 }
