@@ -331,15 +331,15 @@ impl SegmentCurve {
             let uv = key.origin() + DVec2::new(x, y) * key.size();
             return self.point_location(cands, uv);
         }
-        self.descend_partial(key, cands, t)
+        self.descend_partial(key, cands, t, levels.min(self.options.leaf_levels as u32))
     }
 
     /// Exact descent through the sub-cells of a boundary leaf.
-    fn descend_partial(&self, key: CellKey, cands: &[u32], mut t: f64) -> DomainPoint {
+    fn descend_partial(&self, key: CellKey, cands: &[u32], mut t: f64, levels: u32) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
         let mut state = key.state;
-        for _ in 0..self.options.leaf_levels {
+        for depth in 0..levels {
             let half = 0.5 * size;
             let mut m = [0.0f64; 4];
             let mut full = [false; 4];
@@ -381,7 +381,7 @@ impl SegmentCurve {
             size = half;
             state = child_state;
             if full[rank] {
-                let levels = self.options.leaf_levels as u32;
+                let levels = levels - depth - 1;
                 let (x, y) = super::hilbert::point_in_node(state, t, levels);
                 return self.point_location(cands, lo + DVec2::new(x, y) * size);
             }
