@@ -57,6 +57,107 @@ pub struct Sampler {
     segments: Vec<SegmentSampling>,
     faces: Vec<FaceRecord>,
     total_measure: f64,
+    /// Segments one by one: `0..t` as groups of one (order, offsets, measures).
+    singles: Groups,
+    /// Chains of neighbouring segments (section 6.2), used when `t / N >= 1/3`.
+    chains: Groups,
+}
+
+/// Groups of segments sampled with one stratified sequence each, in CSR form.
+#[derive(Clone, Debug, Default)]
+struct Groups {
+    order: Vec<u32>,
+    offsets: Vec<u32>,
+    measures: Vec<f64>,
+}
+
+impl Groups {
+    fn new(groups: &[Vec<u32>], segments: &[SegmentSampling]) -> Self {
+        let mut g = Groups {
+            offsets: vec![0],
+            ..Default::default()
+        };
+        for group in groups {
+            g.order.extend_from_slice(group);
+            g.offsets.push(g.order.len() as u32);
+            g.measures.push(
+                group
+                    .iter()
+                    .map(|&i| segments[i as usize].curve.measure())
+                    .sum(),
+            );
+        }
+        g
+    }
+
+    fn len(&self) -> usize {
+        self.measures.len()
+    }
+
+    fn members(&self, i: usize) -> &[u32] {
+        &self.order[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+}
+
+/// Links neighbouring segments into chains (section 6.2): a chain starts at the
+/// unchained segment with the fewest unchained neighbours (the edge of what is left,
+/// the paper's "weighted toward the boundary"; ties by lowest index) and repeatedly
+/// appends the smallest-measure unchained neighbour of its last segment, until there
+/// is none. Deterministic.
+fn link_chains(mesh: &TriMesh, segments: &[SegmentSampling]) -> Vec<Vec<u32>> {
+    let mut owner = vec![u32::MAX; mesh.face_count()];
+    for (i, s) in segments.iter().enumerate() {
+        for &f in &s.faces {
+            owner[f as usize] = i as u32;
+        }
+    }
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); segments.len()];
+    for [a, b] in mesh.edge_faces() {
+        if *a == crate::mesh::NONE || *b == crate::mesh::NONE {
+            continue;
+        }
+        let (x, y) = (owner[*a as usize], owner[*b as usize]);
+        if x != y && x != u32::MAX && y != u32::MAX {
+            neighbours[x as usize].push(y);
+            neighbours[y as usize].push(x);
+        }
+    }
+    for n in &mut neighbours {
+        n.sort_unstable();
+        n.dedup();
+    }
+    let measure = |i: u32| segments[i as usize].curve.measure();
+    let mut chained = vec![false; segments.len()];
+    let mut chains = Vec::new();
+    loop {
+        let free_neighbours = |i: usize, chained: &[bool]| {
+            neighbours[i]
+                .iter()
+                .filter(|&&n| !chained[n as usize])
+                .count()
+        };
+        let Some(start) = (0..segments.len())
+            .filter(|&i| !chained[i])
+            .min_by_key(|&i| (free_neighbours(i, &chained), i))
+        else {
+            break;
+        };
+        let mut chain = vec![start as u32];
+        chained[start] = true;
+        let mut current = start;
+        while let Some(next) = neighbours[current]
+            .iter()
+            .copied()
+            .filter(|&n| !chained[n as usize])
+            .min_by(|&a, &b| measure(a).total_cmp(&measure(b)).then(a.cmp(&b)))
+        {
+            chained[next as usize] = true;
+            chain.push(next);
+            current = next as usize;
+        }
+        chains.push(chain);
+    }
+    chains
 }
 
 impl Sampler {
@@ -80,12 +181,17 @@ impl Sampler {
             return Err(SampleError::Empty);
         }
         let faces = FaceRecord::build_all(&mesh, &field);
+        let ones: Vec<Vec<u32>> = (0..segments.len() as u32).map(|i| vec![i]).collect();
+        let singles = Groups::new(&ones, &segments);
+        let chains = Groups::new(&link_chains(&mesh, &segments), &segments);
         Ok(Self {
             mesh,
             field,
             segments,
             faces,
             total_measure,
+            singles,
+            chains,
         })
     }
 
@@ -130,55 +236,106 @@ impl Sampler {
     /// value `k` of its stratified sequence is mapped through the cumulative measure to
     /// a leaf cell and along the continuous Hilbert curve to a point.
     pub fn sample_into(&self, seed: u64, out: &mut [Sample]) {
+        let linked = self.uses_chains(out.len());
+        self.sample_into_linked(seed, out, linked);
+    }
+
+    /// As [`sample_into`](Self::sample_into), choosing explicitly whether segments are
+    /// linked into chains (for experiments such as the paper's section 7.3.3).
+    pub fn sample_into_linked(&self, seed: u64, out: &mut [Sample], linked: bool) {
         let n = out.len() as u64;
         if n == 0 {
             return;
         }
         let scale = (self.total_measure / n as f64).sqrt();
+        let groups = if linked { &self.chains } else { &self.singles };
         out.par_chunks_mut(CHUNK)
             .enumerate()
             .for_each(|(chunk, dst)| {
                 let start = (chunk * CHUNK) as u64;
-                self.fill_chunk(seed, n, start, scale, dst);
+                self.fill_chunk(groups, seed, n, start, scale, dst);
             });
     }
 
     /// Fills the outputs `start..start + dst.len()` of an `n`-sample request.
-    fn fill_chunk(&self, seed: u64, n: u64, start: u64, scale: f64, dst: &mut [Sample]) {
-        // Recompute the allocation up to this chunk (O(segments), no allocation).
+    /// Section 6.2: segments are sampled one by one unless they are many relative to
+    /// the samples (t / N >= 1/3), where rounding per segment would show; then chains
+    /// of neighbouring segments are sampled, each with one stratified sequence.
+    fn fill_chunk(
+        &self,
+        groups: &Groups,
+        seed: u64,
+        n: u64,
+        start: u64,
+        scale: f64,
+        dst: &mut [Sample],
+    ) {
+        // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
-        allocate(
-            n,
-            self.segments.iter().map(|s| s.curve.measure()),
-            |i, count| {
-                let (seg_lo, seg_hi) = (first, first + count);
-                first = seg_hi;
-                let lo = seg_lo.max(start);
-                let hi = seg_hi.min(end);
-                if lo >= hi {
-                    return;
+        allocate(n, groups.measures.iter().copied(), |i, count| {
+            let (grp_lo, grp_hi) = (first, first + count);
+            first = grp_hi;
+            let lo = grp_lo.max(start);
+            let hi = grp_hi.min(end);
+            if lo >= hi {
+                return;
+            }
+            let members = groups.members(i);
+            let group_measure = groups.measures[i];
+            // Position in the group: member index and the measure before it.
+            let mut member = 0usize;
+            let mut before = 0.0f64;
+            let mut leaf = 0usize;
+            let mut levels =
+                self.leaf_levels(&self.segments[members[0] as usize], count, group_measure);
+            for g in lo..hi {
+                let k = g - grp_lo;
+                let mut m = stratified_value(seed, i as u64, k, count) * group_measure;
+                // Move to the member holding m (values increase along the group).
+                while member + 1 < members.len()
+                    && m >= before + self.segments[members[member] as usize].curve.measure()
+                {
+                    before += self.segments[members[member] as usize].curve.measure();
+                    member += 1;
+                    leaf = 0;
+                    levels = self.leaf_levels(
+                        &self.segments[members[member] as usize],
+                        count,
+                        group_measure,
+                    );
                 }
-                let seg = &self.segments[i];
+                let seg = &self.segments[members[member] as usize];
                 let curve = &seg.curve;
                 let cum = curve.cumulative();
-                let measure = curve.measure();
-                // Levels of the continuous map inside a leaf: enough to separate the
-                // samples that share a leaf (log4 of their number), plus 5 (1024
-                // sub-cells per sample) to place them evenly.
-                let per_leaf = count as f64 / curve.cell_count() as f64;
-                let levels = (per_leaf.max(1.0).log2() * 0.5).ceil() as u32 + 5;
-                let mut leaf = 0usize;
-                for g in lo..hi {
-                    let k = g - seg_lo;
-                    let m = stratified_value(seed, seg.segment as u64, k, count) * measure;
-                    leaf = advance(cum, leaf, m);
-                    let local = (m - cum[leaf]) / (cum[leaf + 1] - cum[leaf]);
-                    let p = curve.point_in_leaf_to(leaf, local, levels);
-                    dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
-                }
-            },
-        );
+                m = (m - before).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
+                leaf = advance(cum, leaf, m);
+                let local = (m - cum[leaf]) / (cum[leaf + 1] - cum[leaf]);
+                let p = curve.point_in_leaf_to(leaf, local, levels);
+                dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
+            }
+        });
+    }
+
+    /// Whether a request for `n` samples links segments into chains (t / N >= 1/3).
+    pub fn uses_chains(&self, n: usize) -> bool {
+        3 * self.segments.len() >= n && self.chains.len() < self.segments.len()
+    }
+
+    /// The chains of segment indices used when segments are many relative to samples.
+    pub fn chains(&self) -> Vec<&[u32]> {
+        (0..self.chains.len())
+            .map(|i| self.chains.members(i))
+            .collect()
+    }
+
+    /// Levels of the continuous map inside a leaf of `seg` for a group receiving
+    /// `count` samples over `group_measure`: enough to separate the samples that share a
+    /// leaf (log4 of their number), plus 5 (1024 sub-cells per sample).
+    fn leaf_levels(&self, seg: &SegmentSampling, count: u64, group_measure: f64) -> u32 {
+        let share = seg.curve.measure() / group_measure;
+        let per_leaf = count as f64 * share / seg.curve.cell_count() as f64;
+        (per_leaf.max(1.0).log2() * 0.5).ceil() as u32 + 5
     }
 
     /// Turns a domain point of `seg` into a surface sample.
