@@ -188,3 +188,147 @@ fn surface_samples_are_deterministic_across_thread_counts() {
     };
     assert!(run(1) == run(2));
 }
+
+#[test]
+fn scaling_the_mesh_scales_the_samples() {
+    let base = shapes::torus(1.0, 0.4, 16).expect("torus");
+    let sample = |scale: f64| {
+        let positions: Vec<glam::DVec3> = base.positions().iter().map(|p| *p * scale).collect();
+        let mesh = Arc::new(TriMesh::new(positions, base.triangles().to_vec()).expect("mesh"));
+        let field = Arc::new(projected().build(&mesh).expect("field"));
+        let pre = Preprocessed::build(mesh, field, &SurfaceOptions::default()).expect("preprocess");
+        (pre.params.len(), pre.sampler.sample(5000, 3))
+    };
+    let (segments, reference) = sample(1.0);
+    for scale in [1e-3, 1e3] {
+        let (s, scaled) = sample(scale);
+        assert_eq!(s, segments, "scale {scale}: segments");
+        let same = reference
+            .iter()
+            .zip(&scaled)
+            .filter(|(a, b)| {
+                a.face == b.face
+                    && (0..3)
+                        .all(|k| (a.position[k] as f64 - b.position[k] as f64 / scale).abs() < 1e-4)
+            })
+            .count();
+        // Round-off may move a handful of samples to a neighbouring leaf; all but a few
+        // must coincide.
+        assert!(
+            same >= 4990,
+            "scale {scale}: {same} of 5000 samples coincide"
+        );
+    }
+}
+
+#[test]
+fn cylinder_four_to_one_along_the_axis() {
+    // A 4:1 field along the axis of an open cylinder: samples four times closer along
+    // z than around. Measured like the planar test: spacing from the nearest
+    // neighbours in the field's metric, in the unrolled (angle * r, z) plane.
+    let mesh = Arc::new(shapes::cylinder(1.0, 6.0, 96).expect("cylinder"));
+    let field = Arc::new(
+        FieldSpec::Constant {
+            direction: [0.0, 0.0, 1.0],
+            anisotropy: 4.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field"),
+    );
+    let pre = Preprocessed::build(mesh, field, &SurfaceOptions::default()).expect("preprocess");
+    assert!(
+        pre.params.iter().all(|p| p.report.valid),
+        "{:?}",
+        pre.report
+    );
+    let samples = pre.sampler.sample(6000, 1);
+    let pts: Vec<glam::DVec2> = samples
+        .iter()
+        .map(|s| {
+            glam::DVec2::new(
+                (s.position[1] as f64).atan2(s.position[0] as f64),
+                s.position[2] as f64,
+            )
+        })
+        .collect();
+    // sqrt(l): 2 along z, 1/2 around (the metric stretches z by 2 and the angle by 1/2).
+    let (mut around, mut along, mut count) = (0.0, 0.0, 0usize);
+    for (i, p) in pts.iter().enumerate() {
+        if p.y.abs() > 2.0 {
+            continue; // away from the open ends
+        }
+        let mut near: Vec<(f64, glam::DVec2)> = pts
+            .iter()
+            .enumerate()
+            .filter(|(j, q)| *j != i && (q.y - p.y).abs() < 0.5)
+            .map(|(_, q)| {
+                let mut d = *q - *p;
+                d.x = (d.x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                (glam::DVec2::new(d.x * 0.5, d.y * 2.0).length(), d)
+            })
+            .collect();
+        near.select_nth_unstable_by(4, |a, b| a.0.total_cmp(&b.0));
+        for (_, d) in &near[..4] {
+            around += d.x.abs();
+            along += d.y.abs();
+        }
+        count += 4;
+    }
+    let ratio = around / along;
+    println!("cylinder spacing ratio around/along = {ratio:.3} over {count} neighbours");
+    assert!((ratio - 4.0).abs() <= 0.4, "ratio {ratio}");
+}
+
+#[test]
+fn seams_show_neither_gaps_nor_clusters() {
+    // Samples per unit of measure in thin bands along segment boundaries against the
+    // interior: within 10%. Uniform density on a torus with a field that segments it.
+    let mesh = Arc::new(shapes::torus(1.0, 0.4, 40).expect("torus"));
+    let field = Arc::new(projected().build(&mesh).expect("field"));
+    let pre =
+        Preprocessed::build(mesh.clone(), field, &SurfaceOptions::default()).expect("preprocess");
+    assert!(pre.params.len() > 4, "the test needs several segments");
+    let mut owner = vec![0usize; mesh.face_count()];
+    for (i, p) in pre.params.iter().enumerate() {
+        for &f in &p.faces {
+            owner[f as usize] = i;
+        }
+    }
+    // Faces touching another segment (through an edge or a vertex) form the seam band.
+    let mut seam = vec![false; mesh.face_count()];
+    for v in 0..mesh.vertex_count() as u32 {
+        let faces = mesh.vertex_faces(v);
+        if faces
+            .iter()
+            .any(|&f| owner[f as usize] != owner[faces[0] as usize])
+        {
+            for &f in faces {
+                seam[f as usize] = true;
+            }
+        }
+    }
+    let area = |band: bool| -> f64 {
+        mesh.face_areas()
+            .iter()
+            .zip(&seam)
+            .filter(|(_, s)| **s == band)
+            .map(|(a, _)| a)
+            .sum()
+    };
+    let n = 200_000;
+    let samples = pre.sampler.sample(n, 9);
+    let in_seam = samples.iter().filter(|s| seam[s.face as usize]).count() as f64;
+    let (seam_area, inner_area) = (area(true), area(false));
+    let seam_rate = in_seam / seam_area;
+    let inner_rate = (n as f64 - in_seam) / inner_area;
+    println!(
+        "seam band {:.1}% of the area: {seam_rate:.1} vs interior {inner_rate:.1} samples per unit area",
+        100.0 * seam_area / (seam_area + inner_area)
+    );
+    assert!(
+        (seam_rate / inner_rate - 1.0).abs() < 0.1,
+        "seam {seam_rate} vs interior {inner_rate}"
+    );
+}
