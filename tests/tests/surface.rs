@@ -332,3 +332,71 @@ fn seams_show_neither_gaps_nor_clusters() {
         "seam {seam_rate} vs interior {inner_rate}"
     );
 }
+
+#[test]
+fn counts_over_random_patches_beat_random_sampling_threefold() {
+    // Patches: breadth-first balls of 60 faces around random faces, not aligned with
+    // segments. Expected count: N times the patch's share of the measure (uniform
+    // density: of the area). Random sampling of the same density: faces by area,
+    // uniform inside. The RMS deviation of strata's counts must be at most a third of
+    // random sampling's.
+    let mesh = Arc::new(shapes::genus2(2.0, 3).expect("genus2"));
+    let field = Arc::new(projected().build(&mesh).expect("field"));
+    let pre =
+        Preprocessed::build(mesh.clone(), field, &SurfaceOptions::default()).expect("preprocess");
+    let n = 100_000;
+    let ours = pre.sampler.sample(n, 4);
+    let total: f64 = mesh.face_areas().iter().sum();
+    let mut rng = strata_engine::rng::Rng::new(77, 0);
+    // Random sampling: count per face.
+    let mut cum = vec![0.0];
+    for a in mesh.face_areas() {
+        cum.push(cum.last().copied().unwrap_or(0.0) + a);
+    }
+    let mut random_per_face = vec![0u32; mesh.face_count()];
+    for _ in 0..n {
+        let u = rng.next_f64() * total;
+        let f = cum.partition_point(|&c| c <= u) - 1;
+        random_per_face[f.min(mesh.face_count() - 1)] += 1;
+    }
+    let mut ours_per_face = vec![0u32; mesh.face_count()];
+    for s in &ours {
+        ours_per_face[s.face as usize] += 1;
+        // Unit normals on the sample's side of its face.
+        let nrm = glam::DVec3::from(s.normal.map(|x| x as f64));
+        assert!(
+            (nrm.length() - 1.0).abs() < 1e-5
+                && nrm.dot(mesh.face_normals()[s.face as usize]) > 0.0
+        );
+    }
+    let (mut se_ours, mut se_random) = (0.0, 0.0);
+    let patches = 300;
+    for _ in 0..patches {
+        let start = rng.below(mesh.face_count() as u64) as u32;
+        let mut patch = vec![start];
+        let mut seen = std::collections::HashSet::from([start]);
+        let mut i = 0;
+        while patch.len() < 60 && i < patch.len() {
+            for &nb in &mesh.face_neighbors()[patch[i] as usize] {
+                if nb != strata_engine::mesh::NONE && patch.len() < 60 && seen.insert(nb) {
+                    patch.push(nb);
+                }
+            }
+            i += 1;
+        }
+        let area: f64 = patch.iter().map(|&f| mesh.face_areas()[f as usize]).sum();
+        let expect = n as f64 * area / total;
+        let count = |per: &[u32]| patch.iter().map(|&f| per[f as usize] as f64).sum::<f64>();
+        se_ours += (count(&ours_per_face) - expect).powi(2);
+        se_random += (count(&random_per_face) - expect).powi(2);
+    }
+    let (rms_ours, rms_random) = (
+        (se_ours / patches as f64).sqrt(),
+        (se_random / patches as f64).sqrt(),
+    );
+    println!("patch count RMS deviation: strata {rms_ours:.2}, random {rms_random:.2}");
+    assert!(
+        rms_ours * 3.0 <= rms_random,
+        "strata {rms_ours} vs random {rms_random}"
+    );
+}
