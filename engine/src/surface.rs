@@ -139,12 +139,33 @@ pub struct Preprocessed {
     pub stages: Vec<(&'static str, Duration)>,
 }
 
+/// A preprocessing stage starting or finishing, reported to a caller's callback (the
+/// engine does not log; an application shows progress from these).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Progress {
+    /// A stage starts.
+    Start(&'static str),
+    /// A stage finished after this long.
+    Done(&'static str, Duration),
+}
+
 impl Preprocessed {
     /// Runs segmentation, parameterization (with splitting) and cell construction.
     pub fn build(
         mesh: Arc<TriMesh>,
         field: Arc<TensorField>,
         options: &SurfaceOptions,
+    ) -> Result<Self, SurfaceError> {
+        Self::build_with_progress(mesh, field, options, &|_| {})
+    }
+
+    /// As [`build`](Self::build), calling `progress` when each stage starts and ends
+    /// (`"segmentation"`, `"parameterization"`, `"cells"`).
+    pub fn build_with_progress(
+        mesh: Arc<TriMesh>,
+        field: Arc<TensorField>,
+        options: &SurfaceOptions,
+        progress: &dyn Fn(Progress),
     ) -> Result<Self, SurfaceError> {
         if options.min_segment_faces == 0 {
             return Err(SurfaceError::InvalidMinSegmentFaces);
@@ -155,21 +176,29 @@ impl Preprocessed {
             .map_err(|source| SurfaceError::Curve { segment: 0, source })?;
         options.param.validate()?;
         let mut stages = Vec::new();
+        let mut stage = |name: &'static str, t: Instant| {
+            let d = t.elapsed();
+            progress(Progress::Done(name, d));
+            stages.push((name, d));
+        };
+        progress(Progress::Start("segmentation"));
         let t = Instant::now();
         let segmentation = segment(&mesh, &field, &options.segment)?;
-        stages.push(("segmentation", t.elapsed()));
+        stage("segmentation", t);
 
+        progress(Progress::Start("parameterization"));
         let t = Instant::now();
         let (params, mut report) =
             parameterize_with_splitting(&mesh, &field, &segmentation, options)?;
         report.segments_before_split = segmentation.segments.len();
         report.segments = params.len();
-        stages.push(("parameterization", t.elapsed()));
+        stage("parameterization", t);
 
+        progress(Progress::Start("cells"));
         let t = Instant::now();
         let segments = build_cells(&mesh, &field, &params, &options.curve)?;
         report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
-        stages.push(("cells", t.elapsed()));
+        stage("cells", t);
         let sampler = Sampler::new(mesh, field, segments)?;
         Ok(Self {
             segmentation,

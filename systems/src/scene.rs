@@ -90,7 +90,12 @@ impl Scene {
                     curve: config.curve,
                     ..Default::default()
                 };
-                let pre = Preprocessed::build(mesh.clone(), field.clone(), &options)?;
+                let pre = Preprocessed::build_with_progress(
+                    mesh.clone(),
+                    field.clone(),
+                    &options,
+                    &progress_spinners(),
+                )?;
                 stages.extend(pre.stages.iter().copied());
                 let surface = SurfaceSummary {
                     segments_before_split: pre.report.segments_before_split,
@@ -108,6 +113,29 @@ impl Scene {
                 })
             }
             Err(e) => Err(e.into()),
+        }
+    }
+}
+
+/// Progress of the surface stages as spinners on standard error (hidden when it is
+/// not a terminal, so logs and CI output stay clean).
+fn progress_spinners() -> impl Fn(strata_engine::surface::Progress) {
+    use strata_engine::surface::Progress;
+    let bar = std::sync::Mutex::new(None::<indicatif::ProgressBar>);
+    move |p| {
+        let Ok(mut slot) = bar.lock() else { return };
+        match p {
+            Progress::Start(stage) => {
+                let b = indicatif::ProgressBar::new_spinner();
+                b.set_message(stage);
+                b.enable_steady_tick(std::time::Duration::from_millis(100));
+                *slot = Some(b);
+            }
+            Progress::Done(stage, took) => {
+                if let Some(b) = slot.take() {
+                    b.finish_with_message(format!("{stage}: {:.1} ms", took.as_secs_f64() * 1e3));
+                }
+            }
         }
     }
 }
