@@ -385,21 +385,26 @@ fn push_num(out: &mut String, x: f64) {
     }
 }
 
+/// A fully saturated colour (RGB in [0, 1]) per segment id: hues in golden-ratio steps,
+/// so that neighbouring ids look different. Shared by the atlas and the coloured mesh.
+pub fn segment_hue(id: usize) -> [f64; 3] {
+    let hue = (id as f64 * 0.618_033_988_749_895).fract() * 6.0;
+    let x = 1.0 - (hue % 2.0 - 1.0).abs();
+    match hue as u32 {
+        0 => [1.0, x, 0.0],
+        1 => [x, 1.0, 0.0],
+        2 => [0.0, 1.0, x],
+        3 => [0.0, x, 1.0],
+        4 => [x, 0.0, 1.0],
+        _ => [1.0, 0.0, x],
+    }
+}
+
 /// A light colour per segment id (golden-ratio hue steps), mixed with red for invalid
 /// segments, as `#rrggbb`.
 fn segment_fill(id: usize, valid: bool) -> String {
-    let hue = (id as f64 * 0.618_033_988_749_895).fract() * 6.0;
-    let x = 1.0 - (hue % 2.0 - 1.0).abs();
-    let (r, g, b) = match hue as u32 {
-        0 => (1.0, x, 0.0),
-        1 => (x, 1.0, 0.0),
-        2 => (0.0, 1.0, x),
-        3 => (0.0, x, 1.0),
-        4 => (x, 0.0, 1.0),
-        _ => (1.0, 0.0, x),
-    };
     // Pastel: mostly white with a touch of the hue.
-    let mut rgb = [r, g, b].map(|c| 0.8 + 0.2 * c);
+    let mut rgb = segment_hue(id).map(|c| 0.8 + 0.2 * c);
     if !valid {
         let red = [1.0, 0.45, 0.45];
         for (c, t) in rgb.iter_mut().zip(red) {

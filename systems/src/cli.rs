@@ -489,20 +489,9 @@ impl SegmentReport {
     }
 }
 
-/// A bright, deterministic colour per segment id (golden-ratio hue steps).
+/// A bright, deterministic colour per segment id (the atlas's hues).
 fn segment_color(id: u32) -> [u8; 3] {
-    let h = (id as f64 * 0.618_033_988_749_895).fract() * 6.0;
-    let x = 1.0 - (h % 2.0 - 1.0).abs();
-    let (r, g, b) = match h as u32 {
-        0 => (1.0, x, 0.0),
-        1 => (x, 1.0, 0.0),
-        2 => (0.0, 1.0, x),
-        3 => (0.0, x, 1.0),
-        4 => (x, 0.0, 1.0),
-        _ => (1.0, 0.0, x),
-    };
-    let v = |c: f64| (60.0 + 195.0 * c) as u8;
-    [v(r), v(g), v(b)]
+    crate::atlas::segment_hue(id as usize).map(|c| (60.0 + 195.0 * c) as u8)
 }
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it over `path`.

@@ -6,28 +6,14 @@
 //! median of `repeats` runs (default 3) of `segment::segment` alone (loading the mesh
 //! and building the field are excluded and shown apart).
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use strata_engine::field::FieldSpec;
 use strata_engine::segment::{SegmentOptions, segment};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let repeats: usize = std::env::args()
-        .nth(1)
-        .map(|a| a.parse())
-        .transpose()?
-        .unwrap_or(3);
-    let dir = std::env::var_os("STRATA_MESH_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"));
-    if !dir.is_dir() {
-        return Err(format!(
-            "{}: mesh folder not found (set STRATA_MESH_DIR)",
-            dir.display()
-        )
-        .into());
-    }
+    let repeats = strata_bench::repeats_arg(3)?;
+    let dir = strata_bench::shared_mesh_dir()?;
     let fields = [
         (
             "constant 3:1",

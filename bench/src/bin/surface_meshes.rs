@@ -5,7 +5,6 @@
 //! Each time is the median of `repeats` full preprocessings (default 3). Reads the
 //! meshes from `STRATA_MESH_DIR` or `../shared/meshes`.
 
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -19,21 +18,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let repeats: usize = std::env::args()
-        .nth(1)
-        .map(|a| a.parse())
-        .transpose()?
-        .unwrap_or(3);
-    let dir = std::env::var_os("STRATA_MESH_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"));
-    if !dir.is_dir() {
-        return Err(format!(
-            "{}: mesh folder not found (set STRATA_MESH_DIR)",
-            dir.display()
-        )
-        .into());
-    }
+    let repeats = strata_bench::repeats_arg(3)?;
+    let dir = strata_bench::shared_mesh_dir()?;
     let spec = FieldSpec::Constant {
         direction: [1.0, 0.3, 0.2],
         anisotropy: 3.0,
