@@ -2,6 +2,18 @@
 
 use std::path::PathBuf;
 
+/// The shared meshes, largest first, as the benchmark tables list them.
+pub const SHARED_MESHES: [&str; 8] = [
+    "stanford-bunny",
+    "rocker-arm",
+    "fandisk",
+    "homer",
+    "spot",
+    "cow",
+    "two-torus",
+    "wing",
+];
+
 /// The shared test meshes: `STRATA_MESH_DIR`, else `../shared/meshes` beside the
 /// project; an error naming the folder where it is absent.
 pub fn shared_mesh_dir() -> Result<PathBuf, String> {

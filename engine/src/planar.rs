@@ -18,7 +18,7 @@ use std::sync::Arc;
 
 use glam::{DMat3, DVec2, DVec3};
 
-use crate::curve::{CurveDomain, CurveError, CurveOptions, SegmentCurve};
+use crate::curve::{CurveDomain, CurveError, CurveOptions, SegmentCurve, corner_densities};
 use crate::field::{Eigen2, TensorField, eigen_in_plane};
 use crate::mesh::TriMesh;
 use crate::sample::{SampleError, Sampler, SegmentSampling};
@@ -105,16 +105,12 @@ pub fn sampler(
         .map(|p| map.to_uv(*p).clamp(DVec2::ZERO, DVec2::ONE))
         .collect();
     let density = field.vertex_densities(&mesh);
-    let corner_density: Vec<[f64; 3]> = mesh
-        .triangles()
-        .iter()
-        .zip(mesh.face_areas())
-        .map(|(t, area)| {
-            let p = t.map(|v| uv[v as usize]);
-            let area_uv = 0.5 * (p[1] - p[0]).perp_dot(p[2] - p[0]);
-            t.map(|v| density[v as usize] * area / area_uv)
-        })
-        .collect();
+    let corner_density = corner_densities(
+        &uv,
+        mesh.triangles(),
+        |f| mesh.face_areas()[f],
+        |v| density[v as usize],
+    );
     let curve = SegmentCurve::build(
         &CurveDomain {
             uv: &uv,

@@ -317,53 +317,49 @@ fn split_in_two(
     if a == b {
         b = faces.iter().copied().find(|&f| f != a).unwrap_or(a);
     }
+    if a == b {
+        return Ok(vec![faces.to_vec()]); // a single face: nothing to split
+    }
     let mut mask = vec![false; mesh.face_count()];
     for &f in faces {
         mask[f as usize] = true;
     }
-    let labels = if a == b {
-        return Ok(vec![faces.to_vec()]);
-    } else {
-        match random_walk(mesh, weights, &mask, &[a, b]) {
-            Ok(l) => l,
-            // Parts of the segment unreachable from both seeds (cut off by cut edges):
-            // split by connectivity alone.
-            Err(SegmentError::Unseeded { .. }) => {
-                let mut l = vec![NONE; mesh.face_count()];
-                for &f in faces {
-                    l[f as usize] = 0;
-                }
-                l
-            }
-            Err(e) => return Err(e.into()),
-        }
+    let labels = match random_walk(mesh, weights, &mask, &[a, b]) {
+        Ok(l) => l,
+        // Parts of the segment unreachable from both seeds (cut off by cut edges):
+        // split by connectivity alone.
+        Err(SegmentError::Unseeded { .. }) => mask_labels(mesh, faces, |_| 0),
+        Err(e) => return Err(e.into()),
     };
-    let parts = connected_parts(mesh, &labels, cut);
+    let out = parts_of(mesh, faces, &labels, cut);
+    if out.len() > 1 {
+        return Ok(out);
+    }
+    // The walk gave everything to one seed: halve by face order as a last resort,
+    // which always makes progress.
+    let half = faces.len() / 2;
+    let labels = mask_labels(mesh, faces, |i| (i >= half) as u32);
+    Ok(parts_of(mesh, faces, &labels, cut))
+}
+
+/// Per mesh face, `label(i)` for the `i`-th face of `faces` and `NONE` elsewhere.
+fn mask_labels(mesh: &TriMesh, faces: &[u32], label: impl Fn(usize) -> u32) -> Vec<u32> {
+    let mut l = vec![NONE; mesh.face_count()];
+    for (i, &f) in faces.iter().enumerate() {
+        l[f as usize] = label(i);
+    }
+    l
+}
+
+/// `faces` grouped into the connected parts of their labels (not crossing `cut`),
+/// in order of each part's lowest face.
+fn parts_of(mesh: &TriMesh, faces: &[u32], labels: &[u32], cut: &[bool]) -> Vec<Vec<u32>> {
+    let parts = connected_parts(mesh, labels, cut);
     let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
     for &f in faces {
         groups.entry(parts[f as usize]).or_default().push(f);
     }
-    let mut out: Vec<Vec<u32>> = groups.into_values().collect();
-    if out.len() == 1 {
-        // The walk gave everything to one seed: halve by face order as a last resort,
-        // which always makes progress.
-        let all = out.pop().unwrap_or_default();
-        let (x, y) = all.split_at(all.len() / 2);
-        let mut l = vec![NONE; mesh.face_count()];
-        for &f in x {
-            l[f as usize] = 0;
-        }
-        for &f in y {
-            l[f as usize] = 1;
-        }
-        let parts = connected_parts(mesh, &l, cut);
-        let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-        for &f in &all {
-            groups.entry(parts[f as usize]).or_default().push(f);
-        }
-        out = groups.into_values().collect();
-    }
-    Ok(out)
+    groups.into_values().collect()
 }
 
 /// The unit eigenvector of the largest eigenvalue of a symmetric 3x3 matrix (power
@@ -407,7 +403,8 @@ fn build_cells(
         .par_iter()
         .map(|p| {
             let (uv, _, _) = p.to_unit_square();
-            (uv, p.corner_density(mesh, field))
+            let density = p.corner_density(mesh, field, &uv);
+            (uv, density)
         })
         .collect();
     let measure = |d: &[[f64; 3]], uv: &[glam::DVec2], p: &SegmentParam| -> f64 {

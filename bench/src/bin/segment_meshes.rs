@@ -29,16 +29,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| mesh | faces | field | field build (ms) | segmentation median (ms) | segments | singularities | index sum | Euler char. | cut edges |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    for name in [
-        "stanford-bunny",
-        "rocker-arm",
-        "fandisk",
-        "homer",
-        "spot",
-        "cow",
-        "two-torus",
-        "wing",
-    ] {
+    for name in strata_bench::SHARED_MESHES {
         let mesh = strata_engine::io::load(&dir.join(format!("{name}.obj")))?;
         for (label, spec) in &fields {
             let t = Instant::now();

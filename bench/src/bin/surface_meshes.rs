@@ -32,16 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| mesh | faces | segmentation | parameterization + splitting | cells | total | segments before / after split | splits | isotropic fallback | single-face | cells | 10^5 samples |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    for name in [
-        "stanford-bunny",
-        "rocker-arm",
-        "fandisk",
-        "homer",
-        "spot",
-        "cow",
-        "two-torus",
-        "wing",
-    ] {
+    for name in strata_bench::SHARED_MESHES {
         let mesh = Arc::new(strata_engine::io::load(&dir.join(format!("{name}.obj")))?);
         let field = Arc::new(spec.build(&mesh)?);
         let mut stage_times: Vec<Vec<f64>> = vec![Vec::new(); 3];

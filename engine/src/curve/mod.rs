@@ -14,6 +14,34 @@ pub mod hilbert;
 pub use cells::{CellKey, CurveDomain, DomainPoint, SegmentCurve, barycentric};
 pub use clip::{Poly, clip_triangle};
 
+/// Per triangle, the density per unit of parameter area at its corners: the surface
+/// density at each corner times `surface area / parameter area` of the triangle, so
+/// that a region's measure in the parameter domain equals its measure on the surface.
+/// Triangles with non-positive parameter area get 0 (the cells reject them).
+///
+/// `surface_area(i)` is the surface area of triangle `i`; `density(v)` the surface
+/// density at parameter vertex `v`.
+pub fn corner_densities(
+    uv: &[glam::DVec2],
+    triangles: &[[u32; 3]],
+    surface_area: impl Fn(usize) -> f64,
+    density: impl Fn(u32) -> f64,
+) -> Vec<[f64; 3]> {
+    triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let p = t.map(|v| uv[v as usize]);
+            let area_uv = 0.5 * (p[1] - p[0]).perp_dot(p[2] - p[0]);
+            if !(area_uv > 0.0) {
+                return [0.0; 3];
+            }
+            let ratio = surface_area(i) / area_uv;
+            t.map(|v| density(v) * ratio)
+        })
+        .collect()
+}
+
 /// Settings of the adaptive Hilbert cells.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

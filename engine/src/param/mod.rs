@@ -262,21 +262,21 @@ impl SegmentParam {
     /// area` of the triangle, so that a region's measure in the unit square equals its
     /// surface measure (as in [`planar`](crate::planar)). Triangles with non-positive
     /// `uv` area (an invalid parameterization) get density 0.
-    pub fn corner_density(&self, mesh: &TriMesh, field: &TensorField) -> Vec<[f64; 3]> {
-        let (unit, _, _) = self.to_unit_square();
-        self.triangles
-            .iter()
-            .zip(&self.faces)
-            .map(|(t, &f)| {
-                let p = t.map(|v| unit[v as usize]);
-                let area_uv = 0.5 * (p[1] - p[0]).perp_dot(p[2] - p[0]);
-                if !(area_uv > 0.0) {
-                    return [0.0; 3];
-                }
-                let ratio = mesh.face_areas()[f as usize] / area_uv;
-                t.map(|v| field.vertex_density(mesh, self.local_to_mesh[v as usize]) * ratio)
-            })
-            .collect()
+    ///
+    /// `unit` is [`to_unit_square`](Self::to_unit_square)'s `uv` (passed in because
+    /// the caller needs it too).
+    pub fn corner_density(
+        &self,
+        mesh: &TriMesh,
+        field: &TensorField,
+        unit: &[DVec2],
+    ) -> Vec<[f64; 3]> {
+        crate::curve::corner_densities(
+            unit,
+            &self.triangles,
+            |i| mesh.face_areas()[self.faces[i] as usize],
+            |v| field.vertex_density(mesh, self.local_to_mesh[v as usize]),
+        )
     }
 
     /// Boundary edges of the local mesh as directed local vertex pairs (following the

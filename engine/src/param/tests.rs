@@ -117,7 +117,7 @@ fn constant_field_on_a_plane_is_the_linear_map() {
         assert!((*r * scale + offset).distance(*q) < 1e-12);
     }
     // Corner densities as in planar.rs: density * surface area / unit-square area.
-    let densities = p.corner_density(&mesh, &field);
+    let densities = p.corner_density(&mesh, &field, &unit);
     for ((t, &f), d) in p.triangles.iter().zip(&p.faces).zip(&densities) {
         let q = t.map(|v| planar_uv[v as usize]);
         let area_uv = 0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]);
@@ -573,7 +573,7 @@ fn unit_square_and_corner_densities_feed_the_curve_stage() {
     let field = constant(&mesh, [0.0, 0.0, 1.0], 3.0, 2.0);
     let p = run(&mesh, &field, &all_faces(&mesh), &cut);
     let (unit, _, _) = p.to_unit_square();
-    let density = p.corner_density(&mesh, &field);
+    let density = p.corner_density(&mesh, &field, &unit);
     let curve = SegmentCurve::build(
         &CurveDomain {
             uv: &unit,

@@ -25,10 +25,13 @@ pub mod walk;
 
 pub use pipeline::segment;
 
-pub use paths::{ShortestPaths, dijkstra, field_edge_costs, singularity_tree};
+pub use paths::{
+    ShortestPaths, dijkstra, field_edge_costs, field_edge_costs_with, singularity_tree,
+};
 pub use seeds::{FaceField, face_frames, place_seeds};
 pub use singularity::{
     LineFieldTransport, detect_singularities, isotropic_faces, line_field_transport,
+    singularities_from,
 };
 pub use topology::{PatchTopology, disc_cuts, patch_topology};
 pub use walk::{WalkSystem, connected_parts, random_walk, walk_weights};

@@ -23,7 +23,7 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-use super::singularity::line_field_transport;
+use super::singularity::{LineFieldTransport, line_field_transport};
 use crate::field::{TensorField, eigen_in_plane};
 use crate::mesh::{NONE, TriMesh};
 
@@ -52,7 +52,16 @@ pub const HALF_WEIGHT_COHERENCE: f64 = 0.05;
 ///
 /// O(V + E + F) (one [`line_field_transport`]).
 pub fn field_edge_costs(mesh: &TriMesh, field: &TensorField) -> Vec<f64> {
-    let transport = line_field_transport(mesh, field);
+    field_edge_costs_with(mesh, field, &line_field_transport(mesh, field))
+}
+
+/// [`field_edge_costs`] with the field's transport already computed (the segmentation
+/// also needs it to find singularities, so it computes it once for both).
+pub fn field_edge_costs_with(
+    mesh: &TriMesh,
+    field: &TensorField,
+    transport: &LineFieldTransport,
+) -> Vec<f64> {
     let pos = mesh.positions();
     let normals = mesh.vertex_normals();
     let tensors = field.tensors();

@@ -2,9 +2,9 @@
 
 use rayon::prelude::*;
 
-use super::paths::{field_edge_costs, singularity_tree};
+use super::paths::{field_edge_costs_with, singularity_tree};
 use super::seeds::{face_frames, place_seeds};
-use super::singularity::detect_singularities;
+use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, patch_topology};
 use super::walk::{connected_parts, random_walk, walk_weights};
 use super::{Segment, SegmentError, SegmentOptions, Segmentation};
@@ -45,8 +45,9 @@ pub fn segment(
     options.validate()?;
     let f_count = mesh.face_count();
     let frames = face_frames(mesh, field);
-    let costs = field_edge_costs(mesh, field);
-    let singularities = detect_singularities(mesh, field);
+    let transport = line_field_transport(mesh, field);
+    let costs = field_edge_costs_with(mesh, field, &transport);
+    let singularities = singularities_from(mesh, &transport);
     let mut cut = vec![false; mesh.edge_count()];
 
     // 1. The whole mesh.

@@ -291,8 +291,12 @@ pub fn face_double_indices(mesh: &TriMesh, transport: &LineFieldTransport) -> Ve
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn detect_singularities(mesh: &TriMesh, field: &TensorField) -> Vec<Singularity> {
-    let transport = line_field_transport(mesh, field);
-    face_double_indices(mesh, &transport)
+    singularities_from(mesh, &line_field_transport(mesh, field))
+}
+
+/// [`detect_singularities`] from an already computed [`line_field_transport`].
+pub fn singularities_from(mesh: &TriMesh, transport: &LineFieldTransport) -> Vec<Singularity> {
+    face_double_indices(mesh, transport)
         .into_iter()
         .enumerate()
         .filter(|&(_, n)| n != 0)
