@@ -146,6 +146,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let count = usize::try_from(args.look.count.unwrap_or(config.sampling.count))
         .context("sample count does not fit in memory")?;
     let seed = args.look.seed.unwrap_or(config.sampling.seed);
+    let max = crate::gpu::buffers::max_samples(&ctx.device);
+    if count > max {
+        anyhow::bail!(
+            "{count} samples do not fit in one GPU buffer on this adapter (at most {max})"
+        );
+    }
     let samples = scene.sampler.sample(count, seed);
     let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
     renderer.upload(&ctx.device, &ctx.queue, &samples)?;

@@ -209,6 +209,13 @@ impl Viewer {
                 samples: 1,
             },
         )?;
+        let max = crate::gpu::buffers::max_samples(&ctx.device);
+        if self.count > max {
+            anyhow::bail!(
+                "{} samples do not fit in one GPU buffer on this adapter (at most {max})",
+                self.count
+            );
+        }
         let segments = crate::gpu::splat::face_segments(&self.scene.sampler);
         renderer.set_mesh(&ctx.device, &ctx.queue, &self.scene.mesh, Some(&segments))?;
         self.camera = Some(
@@ -305,7 +312,10 @@ impl Viewer {
         match key {
             Key::Named(NamedKey::Escape) => event_loop.exit(),
             Key::Named(NamedKey::ArrowUp) => {
-                self.count = self.count.saturating_mul(2).max(1);
+                let max = self.gpu.as_ref().map_or(usize::MAX, |g| {
+                    crate::gpu::buffers::max_samples(&g.ctx.device)
+                });
+                self.count = self.count.saturating_mul(2).clamp(1, max);
                 self.style.log_density_range = [0.0, 1.0];
             }
             Key::Named(NamedKey::ArrowDown) => {

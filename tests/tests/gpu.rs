@@ -377,6 +377,42 @@ fn unknown_adapter_name_is_a_typed_error() {
     );
 }
 
+/// `strata render` end to end: a PNG of the requested size.
+#[test]
+fn render_command_writes_a_png() {
+    use clap::Parser;
+    let Some(ctx) = gpu("render_command_writes_a_png") else {
+        return;
+    };
+    println!("adapter: {}", ctx.adapter_summary());
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("plane.ron");
+    std::fs::write(&scene, PLANE).expect("scene written");
+    let out = dir.path().join("plane.png");
+    let cli = strata_systems::cli::Cli::try_parse_from([
+        "strata".as_ref(),
+        "render".as_ref(),
+        scene.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--width".as_ref(),
+        "200".as_ref(),
+        "--height".as_ref(),
+        "120".as_ref(),
+        "-n".as_ref(),
+        "500".as_ref(),
+        "--color".as_ref(),
+        "segment".as_ref(),
+    ])
+    .expect("arguments parse");
+    strata_systems::cli::run(cli).expect("render succeeds");
+    let bytes = std::fs::read(&out).expect("PNG written");
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    assert_eq!((be(&bytes[16..20]), be(&bytes[20..24])), (200, 120));
+}
+
 /// `strata render` without a usable adapter fails with one line and writes nothing.
 #[test]
 fn render_without_an_adapter_fails_in_one_line() {

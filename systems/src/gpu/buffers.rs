@@ -46,6 +46,19 @@ pub fn next_capacity(capacity: usize, count: usize) -> usize {
     }
 }
 
+/// The most samples one buffer can hold on `device` (its `max_buffer_size`, with room
+/// for the power-of-two capacity policy).
+pub fn max_samples(device: &wgpu::Device) -> usize {
+    let bytes = device.limits().max_buffer_size;
+    let fit = usize::try_from(bytes / SAMPLE_BYTES).unwrap_or(usize::MAX);
+    // Capacities are powers of two: the largest one that fits.
+    if fit == 0 {
+        0
+    } else {
+        1usize << (usize::BITS - 1 - fit.leading_zeros())
+    }
+}
+
 impl SampleBuffer {
     /// An empty buffer of [`MIN_CAPACITY`] samples.
     pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
