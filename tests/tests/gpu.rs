@@ -27,7 +27,10 @@ fn gpu(test: &str) -> Option<GpuContext> {
                 std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
                 "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
             );
-            eprintln!("skipping {test}: {e}");
+            // Written to the process's stderr, not through `eprintln!`, which the test
+            // harness captures and hides for passing tests.
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
             None
         }
     }

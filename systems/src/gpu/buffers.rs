@@ -123,6 +123,14 @@ impl SampleBuffer {
         let Some(size) = wgpu::BufferSize::new(samples.len() as u64 * SAMPLE_BYTES) else {
             return Ok(());
         };
+        // Non-blocking: runs the callbacks of staging chunks whose copies have finished,
+        // so that they return to the belt instead of new ones being allocated.
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|source| GpuError::Poll {
+                operation: "recycling staging memory",
+                source,
+            })?;
         scoped(device, "uploading samples", || {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("strata sample upload"),
