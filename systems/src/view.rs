@@ -87,6 +87,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
         frames: 0,
         max_frames: args.frames,
         status: String::new(),
+        refit_colors: true,
     };
     app.style = args.look.style(&[]);
     event_loop
@@ -131,6 +132,8 @@ struct Viewer {
     frames: u64,
     max_frames: Option<u64>,
     status: String,
+    /// Refit the density colour map to the next frame's samples (after a count change).
+    refit_colors: bool,
 }
 
 fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureView {
@@ -247,9 +250,10 @@ impl Viewer {
             &gpu.ctx.device,
             &gpu.ctx.queue,
         )?;
-        if self.style.log_density_range == [0.0, 1.0] {
+        if self.refit_colors {
             self.style.log_density_range =
                 crate::gpu::layout::log_density_range(self.stream.samples());
+            self.refit_colors = false;
         }
         let texture = match gpu.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
@@ -316,11 +320,11 @@ impl Viewer {
                     crate::gpu::buffers::max_samples(&g.ctx.device)
                 });
                 self.count = self.count.saturating_mul(2).clamp(1, max);
-                self.style.log_density_range = [0.0, 1.0];
+                self.refit_colors = true;
             }
             Key::Named(NamedKey::ArrowDown) => {
                 self.count /= 2;
-                self.style.log_density_range = [0.0, 1.0];
+                self.refit_colors = true;
             }
             Key::Character(c) => match c.as_str() {
                 "s" | "S" => self.seed = self.seed.wrapping_add(1),

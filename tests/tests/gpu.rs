@@ -250,6 +250,93 @@ fn colour_mode_changes_the_image_not_the_coverage() {
     }
 }
 
+/// Gaussian splats reach further than discs (1.5 semi-axes) and are softer; the plain
+/// mesh fills the plane's whole image.
+#[test]
+fn footprints_and_mesh_modes_draw_what_they_say() {
+    let Some(ctx) = gpu("footprints_and_mesh_modes_draw_what_they_say") else {
+        return;
+    };
+    let scene = scene(PLANE);
+    let samples = scene.sampler.sample(1500, 5);
+    let (w, h) = (256, 256);
+    let camera = OrbitCamera {
+        yaw: 0.0,
+        pitch: 0.0,
+        ..OrbitCamera::framing(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), 1.0, 0.0, 0.0)
+    };
+    let base = SplatStyle {
+        color_mode: ColorMode::Constant,
+        mesh_mode: MeshMode::None,
+        splat_scale: 0.6,
+        background: BACKGROUND,
+        base_color: [1.0, 1.0, 1.0],
+        ..SplatStyle::default()
+    };
+    let (x0, y1) = project(&camera, w, h, Vec3::ZERO);
+    let (x1, y0) = project(&camera, w, h, Vec3::new(1.0, 1.0, 0.0));
+    let inside = |x: u32, y: u32| {
+        (x as f32) > x0 + 2.0
+            && (x as f32) < x1 - 2.0
+            && (y as f32) > y0 + 2.0
+            && (y as f32) < y1 - 2.0
+    };
+    let stats = |im: &RgbaImage| {
+        let (mut covered, mut total, mut brightness) = (0usize, 0usize, 0f64);
+        for y in 0..h {
+            for x in 0..w {
+                if inside(x, y) {
+                    let p = im.pixel(x, y);
+                    total += 1;
+                    if !is_background(p) {
+                        covered += 1;
+                        brightness += f64::from(p[0]);
+                    }
+                }
+            }
+        }
+        (
+            covered as f64 / total as f64,
+            brightness / covered.max(1) as f64,
+        )
+    };
+    let disc = render(&ctx, &scene, &samples, &camera, &base, (w, h));
+    let gaussian = render(
+        &ctx,
+        &scene,
+        &samples,
+        &camera,
+        &SplatStyle {
+            footprint: strata_systems::gpu::Footprint::Gaussian,
+            ..base
+        },
+        (w, h),
+    );
+    let with_mesh = render(
+        &ctx,
+        &scene,
+        &samples,
+        &camera,
+        &SplatStyle {
+            mesh_mode: MeshMode::Plain,
+            ..base
+        },
+        (w, h),
+    );
+    let (disc_cover, disc_bright) = stats(&disc);
+    let (gauss_cover, gauss_bright) = stats(&gaussian);
+    let (mesh_cover, _) = stats(&with_mesh);
+    println!(
+        "disc: coverage {disc_cover:.3}, mean red {disc_bright:.1}; gaussian: {gauss_cover:.3}, {gauss_bright:.1}; with mesh: {mesh_cover:.3}"
+    );
+    assert!(gauss_cover > disc_cover, "{gauss_cover} <= {disc_cover}");
+    assert!(
+        gauss_bright < disc_bright,
+        "{gauss_bright} >= {disc_bright}"
+    );
+    assert_eq!(mesh_cover, 1.0);
+}
+
 /// Uploads of changing sizes: the buffer follows the capacity policy and reads back
 /// exactly the CPU samples every time.
 #[test]
