@@ -7,4 +7,7 @@
 pub mod atlas;
 pub mod cli;
 pub mod config;
+pub mod gpu;
+pub mod render;
 pub mod scene;
+pub mod view;

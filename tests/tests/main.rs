@@ -1,6 +1,7 @@
 //! strata integration tests: one binary, one module per stage.
 mod chains;
 mod discrepancy;
+mod gpu;
 mod io;
 mod param;
 mod pipeline;
