@@ -30,6 +30,9 @@ pub enum Command {
     Segment(SegmentArgs),
     /// Preprocess a scene once, resample it several times, and report timings and memory.
     Bench(BenchArgs),
+    /// Watch a scene file: recompute what each change invalidates, print per stage what
+    /// reran, rewrite the samples file atomically after each change.
+    Watch(crate::watch::WatchArgs),
 }
 
 /// Arguments of `strata bench`.
@@ -131,6 +134,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sample(args) => sample(&args),
         Command::Segment(args) => segment(&args),
         Command::Bench(args) => bench(&args),
+        Command::Watch(args) => crate::watch::run(&args),
     }
 }
 

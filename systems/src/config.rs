@@ -42,6 +42,63 @@ pub struct SceneConfig {
     /// Parameterization settings (gamma, isotropy threshold).
     #[serde(default)]
     pub param: ParamOptions,
+    /// Where the mesh is placed in the world (applied to the samples, so changing it
+    /// only reruns sampling). Default: identity.
+    #[serde(default)]
+    pub transform: TransformConfig,
+}
+
+/// A similarity transform of the mesh: scale, then rotate, then translate.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TransformConfig {
+    /// Translation in world units. Default (0, 0, 0).
+    pub translation: [f64; 3],
+    /// Rotation as Euler angles in degrees about x, then y, then z. Default (0, 0, 0).
+    pub rotation_deg: [f64; 3],
+    /// Uniform scale, finite and > 0. Default 1.
+    pub scale: f64,
+}
+
+impl Default for TransformConfig {
+    fn default() -> Self {
+        Self {
+            translation: [0.0; 3],
+            rotation_deg: [0.0; 3],
+            scale: 1.0,
+        }
+    }
+}
+
+impl TransformConfig {
+    /// The transform as an affine map.
+    pub fn to_affine(&self) -> glam::DAffine3 {
+        let [x, y, z] = self.rotation_deg.map(f64::to_radians);
+        glam::DAffine3::from_scale_rotation_translation(
+            glam::DVec3::splat(self.scale),
+            glam::DQuat::from_euler(glam::EulerRot::XYZ, x, y, z),
+            glam::DVec3::from(self.translation),
+        )
+    }
+
+    /// Checks that every value is finite and the scale positive.
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = self
+            .translation
+            .iter()
+            .chain(&self.rotation_deg)
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err("transform: translation and rotation_deg must be finite".to_owned());
+        }
+        if !(self.scale > 0.0 && self.scale.is_finite()) {
+            return Err(format!(
+                "transform: scale = {} must be finite and > 0",
+                self.scale
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Where the mesh comes from.
@@ -153,6 +210,7 @@ impl SceneConfig {
         self.curve.validate().map_err(|e| e.to_string())?;
         self.segment.validate().map_err(|e| e.to_string())?;
         self.param.validate().map_err(|e| e.to_string())?;
+        self.transform.validate()?;
         Ok(())
     }
 }

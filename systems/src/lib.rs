@@ -7,4 +7,7 @@
 pub mod atlas;
 pub mod cli;
 pub mod config;
+pub mod ecs;
+pub mod hot_reload;
 pub mod scene;
+pub mod watch;

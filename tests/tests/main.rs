@@ -1,6 +1,8 @@
 //! strata integration tests: one binary, one module per stage.
 mod chains;
 mod discrepancy;
+mod ecs;
+mod hot_reload;
 mod io;
 mod param;
 mod pipeline;
