@@ -585,3 +585,60 @@ pub fn segment_cells(
         &seg_options,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::FieldSpec;
+    use crate::mesh::shapes;
+
+    fn torus_case() -> (Arc<TriMesh>, Arc<TensorField>) {
+        let mesh = Arc::new(shapes::torus(1.0, 0.4, 20).expect("torus"));
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.3, 0.2],
+            anisotropy: 3.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        (mesh, Arc::new(field))
+    }
+
+    #[test]
+    fn per_segment_parameterization_and_cells_equal_the_whole_build() {
+        let (mesh, field) = torus_case();
+        let options = SurfaceOptions::default();
+        let pre = Preprocessed::build(mesh.clone(), field.clone(), &options).expect("build");
+        let seg = &pre.segmentation;
+        let context = SplitContext::new(&mesh, &field, &seg.cut_edges, &options);
+        let mut pieces = Vec::new();
+        for s in &seg.segments {
+            let (p, _) =
+                parameterize_segment_with_splitting(&mesh, &field, &context, &s.faces, &options)
+                    .expect("segment");
+            assert!(
+                p.windows(2)
+                    .all(|w| lowest_face(&w[0]) < lowest_face(&w[1]))
+            );
+            pieces.extend(p);
+        }
+        pieces.sort_by_key(lowest_face);
+        assert_eq!(pieces.len(), pre.params.len());
+        for (a, b) in pieces.iter().zip(&pre.params) {
+            assert_eq!(a.faces, b.faces);
+            assert_eq!(a.uv, b.uv);
+        }
+        let inputs: Vec<CellInput> = pieces
+            .iter()
+            .map(|p| CellInput::new(&mesh, &field, p))
+            .collect();
+        let total: f64 = inputs.iter().map(|c| c.measure).sum();
+        // The cells' exact measures sum to the same total up to rounding.
+        assert!((total / pre.sampler.total_measure() - 1.0).abs() < 1e-9);
+        for ((p, c), s) in pieces.iter().zip(&inputs).zip(pre.sampler.segments()) {
+            let curve = segment_cells(p, c, total, &options.curve).expect("cells");
+            assert_eq!(curve.cell_count(), s.curve.cell_count());
+            assert_eq!(curve.measure(), s.curve.measure());
+        }
+    }
+}

@@ -55,19 +55,19 @@ pub fn run(args: &WatchArgs) -> anyhow::Result<()> {
             }
             writeln!(out, "update: {:.2} ms", took.as_secs_f64() * 1e3)?;
         }
-        if engine.sample_generation() != generation {
-            if let Some(path) = &args.out {
-                let t = Instant::now();
-                strata_engine::io::write_samples_ply(path, engine.samples())
-                    .with_context(|| format!("writing {}", path.display()))?;
-                writeln!(
-                    out,
-                    "wrote {} samples to {} ({:.2} ms)",
-                    engine.samples().len(),
-                    path.display(),
-                    t.elapsed().as_secs_f64() * 1e3
-                )?;
-            }
+        if engine.sample_generation() != generation
+            && let Some(path) = &args.out
+        {
+            let t = Instant::now();
+            strata_engine::io::write_samples_ply(path, engine.samples())
+                .with_context(|| format!("writing {}", path.display()))?;
+            writeln!(
+                out,
+                "wrote {} samples to {} ({:.2} ms)",
+                engine.samples().len(),
+                path.display(),
+                t.elapsed().as_secs_f64() * 1e3
+            )?;
         }
         out.flush()?;
         drop(out);

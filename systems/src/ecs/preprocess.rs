@@ -279,15 +279,11 @@ pub fn parameterize_segments(
     mut errors: ResMut<EngineErrors>,
     meshes: Query<(&MeshData, &FieldData, &PreprocessSettings)>,
     all: Query<&SegmentFaces>,
-    mut dirty: Query<(Entity, &SegmentFaces, &mut SegmentParams), Changed<SegmentFaces>>,
+    mut dirty: Query<(&SegmentFaces, &mut SegmentParams), Changed<SegmentFaces>>,
 ) {
-    let mut by_mesh: HashMap<Entity, Vec<(Entity, Mut<SegmentParams>, &SegmentFaces)>> =
-        HashMap::new();
-    for (e, faces, params) in &mut dirty {
-        by_mesh
-            .entry(faces.mesh)
-            .or_default()
-            .push((e, params, faces));
+    let mut by_mesh: HashMap<Entity, Vec<(Mut<SegmentParams>, &SegmentFaces)>> = HashMap::new();
+    for (faces, params) in &mut dirty {
+        by_mesh.entry(faces.mesh).or_default().push((params, faces));
     }
     let mut keys: Vec<Entity> = by_mesh.keys().copied().collect();
     keys.sort();
@@ -308,12 +304,12 @@ pub fn parameterize_segments(
         let context = SplitContext::new(mesh, field, &cut, options);
         let results: Vec<_> = work
             .par_iter()
-            .map(|(_, _, s)| {
+            .map(|(_, s)| {
                 parameterize_segment_with_splitting(mesh, field, &context, &s.faces, options)
             })
             .collect();
         let count = work.len();
-        for ((_, params, _), result) in work.iter_mut().zip(results) {
+        for ((params, _), result) in work.iter_mut().zip(results) {
             match result {
                 Ok((pieces, report)) => {
                     params.pieces = pieces;
