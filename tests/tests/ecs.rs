@@ -276,4 +276,9 @@ fn each_change_reruns_only_what_it_invalidates() {
     }
     assert_covering(&mut engine, mesh.face_count());
     assert_eq!(engine.samples().len(), 20_000);
+
+    // Despawning the mesh entity despawns its segments.
+    engine.world.despawn(e);
+    engine.schedule.run(&mut engine.world);
+    assert!(engine.segments().is_empty());
 }

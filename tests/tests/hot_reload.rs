@@ -331,3 +331,30 @@ fn bunny_scene_changes_rerun_only_what_they_invalidate() {
     );
     assert_eq!(segment_count(&mut engine), segments_before);
 }
+
+#[test]
+fn strata_watch_writes_the_samples_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = dir.path().join("scene.ron");
+    save_in_place(&scene, &sphere_scene(1234));
+    let out = dir.path().join("samples.ply");
+    let argv = [
+        "strata",
+        "watch",
+        scene.to_str().expect("utf-8 path"),
+        "--out",
+        out.to_str().expect("utf-8 path"),
+        "--updates",
+        "1",
+    ];
+    let cli = <strata_systems::cli::Cli as clap::Parser>::try_parse_from(argv).expect("args");
+    strata_systems::cli::run(cli).expect("strata watch");
+    let samples = strata_engine::io::read_samples_ply(&out).expect("samples file");
+    assert_eq!(samples.len(), 1234);
+    // No temporary file left beside it.
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .expect("dir")
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}

@@ -33,7 +33,9 @@ pub mod stats;
 use bevy_ecs::prelude::*;
 
 pub use components::*;
-pub use preprocess::{assemble_samplers, build_curves, parameterize_segments, segment_meshes};
+pub use preprocess::{
+    assemble_samplers, build_curves, despawn_orphan_segments, parameterize_segments, segment_meshes,
+};
 pub use sampling::{SampleRequest, sample_meshes};
 pub use stats::{EngineErrors, Stage, StageRun, StageStats};
 
@@ -114,7 +116,9 @@ pub fn register(world: &mut World, schedule: &mut Schedule) {
     );
     schedule.add_systems((
         stats::begin_update.in_set(EngineSystems::Begin),
-        segment_meshes.in_set(EngineSystems::Segment),
+        (despawn_orphan_segments, segment_meshes)
+            .chain()
+            .in_set(EngineSystems::Segment),
         parameterize_segments.in_set(EngineSystems::Parameterize),
         build_curves.in_set(EngineSystems::Curves),
         assemble_samplers.in_set(EngineSystems::Chains),

@@ -248,6 +248,19 @@ pub fn segment_meshes(
     }
 }
 
+/// Despawns segment entities whose mesh entity no longer exists (or lost its mesh).
+pub fn despawn_orphan_segments(
+    mut commands: Commands,
+    meshes: Query<(), With<MeshData>>,
+    segments: Query<(Entity, &SegmentFaces)>,
+) {
+    for (e, s) in &segments {
+        if meshes.get(s.mesh).is_err() {
+            commands.entity(e).despawn();
+        }
+    }
+}
+
 /// A whole-mesh segmentation replacing `existing`: segments whose hash matches an
 /// existing one keep that entity; the others are returned for spawning, and unmatched
 /// existing entities are despawned.

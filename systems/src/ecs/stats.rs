@@ -72,7 +72,12 @@ pub struct StageRun {
     pub note: String,
 }
 
-/// Every stage run since the last [`clear`](Self::clear), and the update counter.
+/// Runs kept at most; older ones are dropped first (an application that never clears
+/// the statistics does not grow without bound).
+pub const MAX_RUNS: usize = 4096;
+
+/// Every stage run since the last [`clear`](Self::clear) (at most [`MAX_RUNS`], the
+/// newest), and the update counter.
 #[derive(Resource, Clone, Debug, Default)]
 pub struct StageStats {
     /// The current update (incremented at the start of every schedule run).
@@ -91,6 +96,9 @@ impl StageStats {
         took: Duration,
         note: String,
     ) {
+        if self.runs.len() >= MAX_RUNS {
+            self.runs.drain(..MAX_RUNS / 2);
+        }
         self.runs.push(StageRun {
             stage,
             entity,
