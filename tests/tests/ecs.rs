@@ -282,3 +282,33 @@ fn each_change_reruns_only_what_it_invalidates() {
     engine.schedule.run(&mut engine.world);
     assert!(engine.segments().is_empty());
 }
+
+/// A Bevy app keeps its schedules in the world (`Schedules`); the engine registers
+/// into one of them with `World::schedule_scope`, and runs with `run_schedule`.
+#[test]
+fn registers_into_a_labelled_schedule_stored_in_the_world() {
+    use bevy_ecs::schedule::ScheduleLabel;
+    #[derive(ScheduleLabel, Clone, Debug, PartialEq, Eq, Hash)]
+    struct Update;
+
+    let mesh = Arc::new(strata_engine::mesh::shapes::sphere(1.0, 4).expect("sphere"));
+    let field = projected(&mesh);
+    let mut world = World::new();
+    world.add_schedule(Schedule::new(Update));
+    world.schedule_scope(Update, |world, schedule| ecs::register(world, schedule));
+    let e = world
+        .spawn(MeshBundle::new(
+            mesh,
+            field,
+            SurfaceOptions::default(),
+            321,
+            1,
+        ))
+        .id();
+    world.run_schedule(Update);
+    assert_eq!(
+        world.get::<SampleBuffer>(e).map(|b| b.samples.len()),
+        Some(321)
+    );
+    assert_eq!(world.resource::<StageStats>().runs_of(Stage::Sampling), 1);
+}

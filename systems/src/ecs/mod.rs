@@ -95,8 +95,9 @@ pub enum EngineError {
 }
 
 /// Adds the engine's resources to `world` and its systems to `schedule`, ordered by
-/// [`EngineSystems`]. Call once; works with any `Schedule` (a Bevy app's `Update`
-/// schedule included, with the same bevy_ecs version).
+/// [`EngineSystems`]. Call once; works with any `Schedule`. A Bevy app (same bevy_ecs
+/// version) keeps its schedules in the world: register with
+/// `world.schedule_scope(Update, |world, schedule| register(world, schedule))`.
 pub fn register(world: &mut World, schedule: &mut Schedule) {
     world.init_resource::<StageStats>();
     world.init_resource::<EngineErrors>();
