@@ -76,6 +76,14 @@ pub struct SegmentationState {
     pub settings: Option<PreprocessSettings>,
 }
 
+impl SegmentationState {
+    /// Whether the segments were computed on `mesh` (false after a segmentation of a
+    /// new mesh failed: the old segments then must not be used with it).
+    pub fn segments_current(&self, mesh: &MeshData) -> bool {
+        self.mesh.as_ref().is_some_and(|m| Arc::ptr_eq(m, &mesh.0))
+    }
+}
+
 /// The sampler of a mesh entity: all its segments' cells, in the engine's segment
 /// order, linked into chains. `None` until the first segments have cells.
 #[derive(Component, Debug, Default)]

@@ -10,7 +10,11 @@
 //! - [`parameterize_segments`] runs for segment entities that are new or whose faces
 //!   changed (`Changed<SegmentFaces>`), in parallel over segments.
 //! - [`build_curves`] runs for segments whose parameterization changed, or for all of
-//!   a mesh's segments when its [`CurveSettings`] changed.
+//!   a mesh's segments when its [`CurveSettings`] changed. A segment's cell budget is
+//!   its share of the mesh's total measure ([`segment_cells`]); segments kept across a
+//!   field change keep cells budgeted with the total of when they were built (the
+//!   budget only sets refinement: sampling uses the cells' exact measures, so the
+//!   density is unaffected).
 //! - [`assemble_samplers`] rebuilds a mesh's sampler (segment order and chains) when
 //!   any of its segments' cells changed or a segment was removed.
 //!
@@ -290,7 +294,12 @@ fn replace_all(
 pub fn parameterize_segments(
     mut stats: ResMut<StageStats>,
     mut errors: ResMut<EngineErrors>,
-    meshes: Query<(&MeshData, &FieldData, &PreprocessSettings)>,
+    meshes: Query<(
+        &MeshData,
+        &FieldData,
+        &PreprocessSettings,
+        &SegmentationState,
+    )>,
     all: Query<&SegmentFaces>,
     mut dirty: Query<(&SegmentFaces, &mut SegmentParams), Changed<SegmentFaces>>,
 ) {
@@ -304,9 +313,12 @@ pub fn parameterize_segments(
         let Some(mut work) = by_mesh.remove(&mesh_entity) else {
             continue;
         };
-        let Ok((mesh, field, settings)) = meshes.get(mesh_entity) else {
+        let Ok((mesh, field, settings, state)) = meshes.get(mesh_entity) else {
             continue;
         };
+        if !state.segments_current(mesh) {
+            continue; // the mesh's segmentation failed: its segments are stale
+        }
         let t = Instant::now();
         let (mesh, field, options) = (&*mesh.0, &*field.0, &settings.0);
         let cut: Vec<u32> = all
@@ -346,10 +358,19 @@ pub fn parameterize_segments(
 pub fn build_curves(
     mut stats: ResMut<StageStats>,
     mut errors: ResMut<EngineErrors>,
-    meshes: Query<(Entity, &MeshData, &FieldData, Ref<CurveSettings>)>,
+    meshes: Query<(
+        Entity,
+        &MeshData,
+        &FieldData,
+        Ref<CurveSettings>,
+        &SegmentationState,
+    )>,
     mut segments: Query<(&SegmentFaces, Ref<SegmentParams>, &mut SegmentCells)>,
 ) {
-    for (mesh_entity, mesh, field, curve) in &meshes {
+    for (mesh_entity, mesh, field, curve, state) in &meshes {
+        if !state.segments_current(mesh) {
+            continue;
+        }
         let omega_changed = curve.is_changed();
         let note = if omega_changed && !curve.is_added() {
             "omega changed"
@@ -424,11 +445,20 @@ pub fn assemble_samplers(
     mut stats: ResMut<StageStats>,
     mut errors: ResMut<EngineErrors>,
     mut removed: RemovedComponents<SegmentFaces>,
-    mut meshes: Query<(Entity, &MeshData, &FieldData, &mut MeshSampler)>,
+    mut meshes: Query<(
+        Entity,
+        &MeshData,
+        &FieldData,
+        &SegmentationState,
+        &mut MeshSampler,
+    )>,
     segments: Query<(&SegmentFaces, &SegmentParams, Ref<SegmentCells>)>,
 ) {
     let any_removed = removed.read().count() > 0;
-    for (mesh_entity, mesh, field, mut sampler) in &mut meshes {
+    for (mesh_entity, mesh, field, state, mut sampler) in &mut meshes {
+        if !state.segments_current(mesh) {
+            continue;
+        }
         let mine: Vec<_> = segments
             .iter()
             .filter(|(s, _, _)| s.mesh == mesh_entity)
