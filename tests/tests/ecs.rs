@@ -295,7 +295,7 @@ fn registers_into_a_labelled_schedule_stored_in_the_world() {
     let field = projected(&mesh);
     let mut world = World::new();
     world.add_schedule(Schedule::new(Update));
-    world.schedule_scope(Update, |world, schedule| ecs::register(world, schedule));
+    world.schedule_scope(Update, ecs::register);
     let e = world
         .spawn(MeshBundle::new(
             mesh,
