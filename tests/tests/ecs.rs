@@ -143,8 +143,9 @@ fn ecs_result_equals_the_engine_stages_called_directly() {
     };
     let field = projected(&mesh);
     let (count, seed) = (30_000, 11);
-    let engine = Engine::new(mesh.clone(), field.clone(), count, seed);
-    let direct = Preprocessed::build(mesh, field, &SurfaceOptions::default()).expect("direct");
+    let mut engine = Engine::new(mesh.clone(), field.clone(), count, seed);
+    let direct = Preprocessed::build(mesh.clone(), field.clone(), &SurfaceOptions::default())
+        .expect("direct");
     let expected = direct.sampler.sample(count, seed);
     let got = engine.samples();
     assert_eq!(got.len(), count);
@@ -159,6 +160,29 @@ fn ecs_result_equals_the_engine_stages_called_directly() {
     assert_eq!(
         stats.items_of(Stage::Segmentation),
         direct.segmentation.segments.len()
+    );
+
+    // A new segmentation seed re-segments the whole mesh; segments that come out the
+    // same keep their entities and results, and the samples still equal the engine's.
+    let mut options = SurfaceOptions::default();
+    options.segment.seed = 5;
+    engine
+        .world
+        .get_mut::<ecs::PreprocessSettings>(engine.mesh)
+        .expect("settings")
+        .0
+        .segment
+        .seed = 5;
+    engine.update();
+    let direct = Preprocessed::build(mesh, field, &options).expect("direct, seed 5");
+    assert!(
+        engine.samples() == direct.sampler.sample(count, seed),
+        "after re-segmentation"
+    );
+    let stats = engine.stats();
+    assert!(
+        stats.items_of(Stage::Parameterization) <= direct.segmentation.segments.len(),
+        "only new segments are parameterized"
     );
 }
 
