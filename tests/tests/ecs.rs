@@ -335,4 +335,22 @@ fn registers_into_a_labelled_schedule_stored_in_the_world() {
         Some(321)
     );
     assert_eq!(world.resource::<StageStats>().runs_of(Stage::Sampling), 1);
+
+    // Nothing changed: no sampling, unless requested once or asked for every update.
+    world.run_schedule(Update);
+    assert_eq!(world.resource::<StageStats>().runs_of(Stage::Sampling), 1);
+    world.resource_mut::<ecs::SampleRequest>().0 = true;
+    world.run_schedule(Update);
+    world.run_schedule(Update);
+    assert_eq!(world.resource::<StageStats>().runs_of(Stage::Sampling), 2);
+    world
+        .resource_mut::<ecs::EngineSettings>()
+        .sample_every_update = true;
+    world.run_schedule(Update);
+    world.run_schedule(Update);
+    assert_eq!(world.resource::<StageStats>().runs_of(Stage::Sampling), 4);
+    assert_eq!(
+        world.resource::<StageStats>().runs_of(Stage::Segmentation),
+        1
+    );
 }
