@@ -91,6 +91,26 @@ fn malformed_save_keeps_the_samples_and_reports_line_and_column() {
     assert_eq!(engine.samples(), good.as_slice(), "last good samples kept");
     assert_eq!(engine.sample_generation(), generation);
 
+    // A save that parses but does not validate: the option's line and column.
+    save_by_rename(
+        &scene,
+        "(\n    mesh: Shape(Sphere(radius: 1.0, resolution: 6)),\n    sampling: (count: 900, seed: 5),\n    curve: (max_cell_share: 2.0),\n)\n",
+    );
+    errors.clear();
+    assert!(
+        wait_until(&mut engine, |e| {
+            errors.extend(e.take_errors());
+            !errors.is_empty()
+        }),
+        "the invalid save was reported"
+    );
+    let message = errors[0].to_string();
+    assert!(
+        message.contains("scene.ron:4:13: ") && message.contains("max_cell_share"),
+        "{message}"
+    );
+    assert_eq!(engine.samples(), good.as_slice(), "last good samples kept");
+
     // The next good save applies.
     save_by_rename(&scene, &sphere_scene(1500));
     assert!(wait_until(&mut engine, count_is(1500)), "good save applied");
