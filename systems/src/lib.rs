@@ -1,8 +1,9 @@
 //! # strata-systems
 //!
 //! The application layer of strata: scene configuration files (RON), turning a scene
-//! into engine inputs, and the `strata` command-line tool. (The ECS, hot reload and GPU
-//! layers will live here too; the pure algorithms are in `strata-engine`.)
+//! into engine inputs, the streaming engine as a bevy_ecs world ([`ecs`]) with scene
+//! hot reload ([`hot_reload`]), and the `strata` command-line tool. (The GPU layer will
+//! live here too; the pure algorithms are in `strata-engine`.)
 
 pub mod atlas;
 pub mod cli;
