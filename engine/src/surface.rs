@@ -219,22 +219,112 @@ pub fn parameterize_with_splitting(
     segmentation: &Segmentation,
     options: &SurfaceOptions,
 ) -> Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError> {
-    let mut cut = vec![false; mesh.edge_count()];
-    for &e in &segmentation.cut_edges {
-        cut[e as usize] = true;
-    }
-    let frames = face_frames(mesh, field);
-    let weights = walk_weights(mesh, &frames, options.segment.sigma, &cut);
+    let context = SplitContext::new(mesh, field, &segmentation.cut_edges, options);
+    let results: Vec<Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError>> = segmentation
+        .segments
+        .par_iter()
+        .map(|s| parameterize_segment_with_splitting(mesh, field, &context, &s.faces, options))
+        .collect();
     let mut report = SurfaceReport::default();
     let mut accepted: Vec<SegmentParam> = Vec::new();
-    let mut pending: Vec<Vec<u32>> = segmentation
-        .segments
-        .iter()
-        .map(|s| s.faces.clone())
-        .collect();
+    for result in results {
+        let (params, r) = result?;
+        report.splits += r.splits;
+        report.isotropic_segments += r.isotropic_segments;
+        report.single_face_segments += r.single_face_segments;
+        accepted.extend(params);
+    }
+    // Deterministic order: by lowest mesh face.
+    accepted.sort_by_key(lowest_face);
+    Ok((accepted, report))
+}
+
+/// The lowest mesh face of a parameterized segment: the key that orders segments.
+pub fn lowest_face(p: &SegmentParam) -> u32 {
+    p.faces.iter().copied().min().unwrap_or(u32::MAX)
+}
+
+/// What splitting needs besides the segment: the cut edges as a per-edge mask, the
+/// per-face field directions and the random walk's edge weights, computed once for
+/// the whole mesh and shared by every segment (and the isotropic fallback field, made
+/// on first use).
+#[derive(Debug)]
+pub struct SplitContext {
+    cut: Vec<bool>,
+    frames: crate::segment::FaceField,
+    weights: Vec<f64>,
+    isotropic: std::sync::OnceLock<TensorField>,
+}
+
+impl SplitContext {
+    /// Prepares splitting on `mesh` with `field`, the walk not crossing `cut_edges`
+    /// (the segmentation's cuts). Cost O(F).
+    pub fn new(
+        mesh: &TriMesh,
+        field: &TensorField,
+        cut_edges: &[u32],
+        options: &SurfaceOptions,
+    ) -> Self {
+        let mut cut = vec![false; mesh.edge_count()];
+        for &e in cut_edges {
+            if let Some(c) = cut.get_mut(e as usize) {
+                *c = true;
+            }
+        }
+        let frames = face_frames(mesh, field);
+        let weights = walk_weights(mesh, &frames, options.segment.sigma, &cut);
+        Self {
+            cut,
+            frames,
+            weights,
+            isotropic: std::sync::OnceLock::new(),
+        }
+    }
+
+    fn isotropic(&self, mesh: &TriMesh, field: &TensorField) -> Result<&TensorField, FieldError> {
+        if let Some(iso) = self.isotropic.get() {
+            return Ok(iso);
+        }
+        let iso = isotropic_copy(mesh, field)?;
+        Ok(self.isotropic.get_or_init(|| iso))
+    }
+}
+
+/// Parameterizes one segment (its `faces`), splitting it while invalid, as
+/// [`parameterize_with_splitting`] does for every segment: the result for a segment
+/// does not depend on the other segments, so a caller may redo only the segments that
+/// changed. Returns the final pieces' parameterizations, ordered by their lowest face,
+/// and the split counts.
+///
+/// ```
+/// use strata_engine::{field::FieldSpec, mesh::shapes, segment::segment};
+/// use strata_engine::surface::{parameterize_segment_with_splitting, SplitContext, SurfaceOptions};
+/// let mesh = shapes::sphere(1.0, 4)?;
+/// let field = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 }
+///     .build(&mesh)?;
+/// let options = SurfaceOptions::default();
+/// let seg = segment(&mesh, &field, &options.segment)?;
+/// let context = SplitContext::new(&mesh, &field, &seg.cut_edges, &options);
+/// let (pieces, _) = parameterize_segment_with_splitting(
+///     &mesh, &field, &context, &seg.segments[0].faces, &options)?;
+/// let faces: usize = pieces.iter().map(|p| p.faces.len()).sum();
+/// assert_eq!(faces, seg.segments[0].faces.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn parameterize_segment_with_splitting(
+    mesh: &TriMesh,
+    field: &TensorField,
+    context: &SplitContext,
+    faces: &[u32],
+    options: &SurfaceOptions,
+) -> Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError> {
+    let cut = &context.cut;
+    let mut report = SurfaceReport::default();
+    let mut accepted: Vec<SegmentParam> = Vec::new();
+    let mut pending: Vec<Vec<u32>> = vec![faces.to_vec()];
     let mut small: Vec<Vec<u32>> = Vec::new();
     while !pending.is_empty() {
-        let results = parameterize_all(mesh, field, &pending, &cut, &options.param);
+        let results = parameterize_all(mesh, field, &pending, cut, &options.param);
         let mut to_split = Vec::new();
         for (faces, result) in pending.into_iter().zip(results) {
             match result {
@@ -248,14 +338,14 @@ pub fn parameterize_with_splitting(
         // the halves are collected in order, so the result does not depend on threads.
         let halves: Vec<Vec<Vec<u32>>> = to_split
             .par_iter()
-            .map(|faces| split_in_two(mesh, &frames, &weights, &cut, faces))
+            .map(|faces| split_in_two(mesh, &context.frames, &context.weights, cut, faces))
             .collect::<Result<_, _>>()?;
         pending = halves.into_iter().flatten().collect();
     }
     if !small.is_empty() {
         // Isotropic fallback: the same density, no anisotropy.
-        let iso = isotropic_copy(mesh, field)?;
-        let results = parameterize_all(mesh, &iso, &small, &cut, &options.param);
+        let iso = context.isotropic(mesh, field)?;
+        let results = parameterize_all(mesh, iso, &small, cut, &options.param);
         for (faces, result) in small.into_iter().zip(results) {
             match result {
                 Ok(mut p) if p.report.flipped == 0 && !p.report.overlaps => {
@@ -265,7 +355,7 @@ pub fn parameterize_with_splitting(
                 }
                 _ => {
                     for f in faces {
-                        let p = crate::param::parameterize(mesh, &iso, &[f], &cut, &options.param)?;
+                        let p = crate::param::parameterize(mesh, iso, &[f], cut, &options.param)?;
                         report.single_face_segments += 1;
                         accepted.push(p);
                     }
@@ -273,8 +363,7 @@ pub fn parameterize_with_splitting(
             }
         }
     }
-    // Deterministic order: by lowest mesh face.
-    accepted.sort_by_key(|p| p.faces.iter().copied().min().unwrap_or(u32::MAX));
+    accepted.sort_by_key(lowest_face);
     Ok((accepted, report))
 }
 
@@ -403,59 +492,21 @@ fn build_cells(
     params: &[SegmentParam],
     options: &CurveOptions,
 ) -> Result<Vec<SegmentSampling>, SurfaceError> {
-    let prepared: Vec<(Vec<glam::DVec2>, Vec<[f64; 3]>)> = params
+    let inputs: Vec<CellInput> = params
         .par_iter()
-        .map(|p| {
-            let (uv, _, _) = p.to_unit_square();
-            let density = p.corner_density(mesh, field, &uv);
-            (uv, density)
-        })
+        .map(|p| CellInput::new(mesh, field, p))
         .collect();
-    let measure = |d: &[[f64; 3]], uv: &[glam::DVec2], p: &SegmentParam| -> f64 {
-        p.triangles
-            .iter()
-            .zip(d)
-            .map(|(t, c)| {
-                let q = t.map(|v| uv[v as usize]);
-                0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]) * (c[0] + c[1] + c[2]) / 3.0
-            })
-            .sum()
-    };
-    let measures: Vec<f64> = prepared
-        .iter()
-        .zip(params)
-        .map(|((uv, d), p)| measure(d, uv, p))
-        .collect();
-    let total: f64 = measures.iter().sum();
+    let total: f64 = inputs.iter().map(|c| c.measure).sum();
     params
         .par_iter()
-        .zip(prepared.par_iter())
-        .zip(measures.par_iter())
+        .zip(inputs.par_iter())
         .enumerate()
-        .map(|(id, ((p, (uv, density)), &m))| {
-            let fraction = (m / total).max(f64::MIN_POSITIVE);
-            let share = (options.max_cell_share / fraction).min(1.0);
-            // Cells this segment may get, and boundary refinement to about their size.
-            let cells = 1.0 / share;
-            let level = ((cells.log2() * 0.5).ceil() as i64 + 2)
-                .clamp(1, options.boundary_level as i64) as u8;
-            let seg_options = CurveOptions {
-                max_cell_share: share,
-                boundary_level: level,
-                ..*options
-            };
-            let curve = SegmentCurve::build(
-                &CurveDomain {
-                    uv,
-                    triangles: &p.triangles,
-                    corner_density: density,
-                },
-                &seg_options,
-            )
-            .map_err(|source| SurfaceError::Curve {
-                segment: id,
-                source,
-            })?;
+        .map(|(id, (p, input))| {
+            let curve =
+                segment_cells(p, input, total, options).map_err(|source| SurfaceError::Curve {
+                    segment: id,
+                    source,
+                })?;
             Ok(SegmentSampling {
                 segment: id as u32,
                 faces: p.faces.clone(),
@@ -463,4 +514,129 @@ fn build_cells(
             })
         })
         .collect()
+}
+
+/// One parameterized segment prepared for its cells: its parameter layout scaled into
+/// the unit square, the density per triangle corner, and its measure (the integral of
+/// the density over it), which sets its share of the cell budget.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellInput {
+    /// Parameter coordinates in the unit square, per parameter vertex.
+    pub uv: Vec<glam::DVec2>,
+    /// Density per unit of parameter area at each triangle's corners.
+    pub corner_density: Vec<[f64; 3]>,
+    /// The segment's measure.
+    pub measure: f64,
+}
+
+impl CellInput {
+    /// Prepares `param` (a segment of `mesh`) with `field`. Cost O(segment).
+    pub fn new(mesh: &TriMesh, field: &TensorField, param: &SegmentParam) -> Self {
+        let (uv, _, _) = param.to_unit_square();
+        let corner_density = param.corner_density(mesh, field, &uv);
+        let measure = param
+            .triangles
+            .iter()
+            .zip(&corner_density)
+            .map(|(t, c)| {
+                let q = t.map(|v| uv[v as usize]);
+                0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]) * (c[0] + c[1] + c[2]) / 3.0
+            })
+            .sum();
+        Self {
+            uv,
+            corner_density,
+            measure,
+        }
+    }
+}
+
+/// The adaptive Hilbert cells of one segment whose [`CellInput`] is `input`, when all
+/// segments together measure `total_measure`: the segment's `max_cell_share` is
+/// `options.max_cell_share` divided by its fraction of the total (capped at 1), so that
+/// the whole surface gets about `1 / options.max_cell_share` cells, and its boundary
+/// refinement follows its cell count. This is what [`Preprocessed::build`] does per
+/// segment; a caller that rebuilds only some segments passes the current total.
+pub fn segment_cells(
+    param: &SegmentParam,
+    input: &CellInput,
+    total_measure: f64,
+    options: &CurveOptions,
+) -> Result<SegmentCurve, CurveError> {
+    let fraction = (input.measure / total_measure).max(f64::MIN_POSITIVE);
+    let share = (options.max_cell_share / fraction).min(1.0);
+    // Cells this segment may get, and boundary refinement to about their size.
+    let cells = 1.0 / share;
+    let level =
+        ((cells.log2() * 0.5).ceil() as i64 + 2).clamp(1, options.boundary_level as i64) as u8;
+    let seg_options = CurveOptions {
+        max_cell_share: share,
+        boundary_level: level,
+        ..*options
+    };
+    SegmentCurve::build(
+        &CurveDomain {
+            uv: &input.uv,
+            triangles: &param.triangles,
+            corner_density: &input.corner_density,
+        },
+        &seg_options,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::FieldSpec;
+    use crate::mesh::shapes;
+
+    fn torus_case() -> (Arc<TriMesh>, Arc<TensorField>) {
+        let mesh = Arc::new(shapes::torus(1.0, 0.4, 20).expect("torus"));
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.3, 0.2],
+            anisotropy: 3.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        (mesh, Arc::new(field))
+    }
+
+    #[test]
+    fn per_segment_parameterization_and_cells_equal_the_whole_build() {
+        let (mesh, field) = torus_case();
+        let options = SurfaceOptions::default();
+        let pre = Preprocessed::build(mesh.clone(), field.clone(), &options).expect("build");
+        let seg = &pre.segmentation;
+        let context = SplitContext::new(&mesh, &field, &seg.cut_edges, &options);
+        let mut pieces = Vec::new();
+        for s in &seg.segments {
+            let (p, _) =
+                parameterize_segment_with_splitting(&mesh, &field, &context, &s.faces, &options)
+                    .expect("segment");
+            assert!(
+                p.windows(2)
+                    .all(|w| lowest_face(&w[0]) < lowest_face(&w[1]))
+            );
+            pieces.extend(p);
+        }
+        pieces.sort_by_key(lowest_face);
+        assert_eq!(pieces.len(), pre.params.len());
+        for (a, b) in pieces.iter().zip(&pre.params) {
+            assert_eq!(a.faces, b.faces);
+            assert_eq!(a.uv, b.uv);
+        }
+        let inputs: Vec<CellInput> = pieces
+            .iter()
+            .map(|p| CellInput::new(&mesh, &field, p))
+            .collect();
+        let total: f64 = inputs.iter().map(|c| c.measure).sum();
+        // The cells' exact measures sum to the same total up to rounding.
+        assert!((total / pre.sampler.total_measure() - 1.0).abs() < 1e-9);
+        for ((p, c), s) in pieces.iter().zip(&inputs).zip(pre.sampler.segments()) {
+            let curve = segment_cells(p, c, total, &options.curve).expect("cells");
+            assert_eq!(curve.cell_count(), s.curve.cell_count());
+            assert_eq!(curve.measure(), s.curve.measure());
+        }
+    }
 }

@@ -34,6 +34,9 @@ pub enum Command {
     Render(crate::render::RenderArgs),
     /// Open a window that resamples and draws the scene every frame (orbit camera).
     View(crate::view::ViewArgs),
+    /// Watch a scene file: recompute what each change invalidates, print per stage what
+    /// reran, rewrite the samples file atomically after each change.
+    Watch(crate::watch::WatchArgs),
 }
 
 /// Arguments of `strata bench`.
@@ -137,6 +140,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(args) => bench(&args),
         Command::Render(args) => crate::render::run(&args),
         Command::View(args) => crate::view::run(&args),
+        Command::Watch(args) => crate::watch::run(&args),
     }
 }
 

@@ -42,6 +42,63 @@ pub struct SceneConfig {
     /// Parameterization settings (gamma, isotropy threshold).
     #[serde(default)]
     pub param: ParamOptions,
+    /// Where the mesh is placed in the world (applied to the samples, so changing it
+    /// only reruns sampling). Default: identity.
+    #[serde(default)]
+    pub transform: TransformConfig,
+}
+
+/// A similarity transform of the mesh: scale, then rotate, then translate.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TransformConfig {
+    /// Translation in world units. Default (0, 0, 0).
+    pub translation: [f64; 3],
+    /// Rotation as Euler angles in degrees about x, then y, then z. Default (0, 0, 0).
+    pub rotation_deg: [f64; 3],
+    /// Uniform scale, finite and > 0. Default 1.
+    pub scale: f64,
+}
+
+impl Default for TransformConfig {
+    fn default() -> Self {
+        Self {
+            translation: [0.0; 3],
+            rotation_deg: [0.0; 3],
+            scale: 1.0,
+        }
+    }
+}
+
+impl TransformConfig {
+    /// The transform as an affine map.
+    pub fn to_affine(&self) -> glam::DAffine3 {
+        let [x, y, z] = self.rotation_deg.map(f64::to_radians);
+        glam::DAffine3::from_scale_rotation_translation(
+            glam::DVec3::splat(self.scale),
+            glam::DQuat::from_euler(glam::EulerRot::XYZ, x, y, z),
+            glam::DVec3::from(self.translation),
+        )
+    }
+
+    /// Checks that every value is finite and the scale positive.
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = self
+            .translation
+            .iter()
+            .chain(&self.rotation_deg)
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err("transform `translation` and `rotation_deg` must be finite".to_owned());
+        }
+        if !(self.scale > 0.0 && self.scale.is_finite()) {
+            return Err(format!(
+                "transform `scale` = {} must be finite and > 0",
+                self.scale
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// Where the mesh comes from.
@@ -112,6 +169,41 @@ pub enum ConfigError {
         /// What is wrong.
         message: String,
     },
+    /// The scene parsed but a value is out of range; the option it names was found in
+    /// the file at this line and column.
+    #[error("{path}:{line}:{column}: {message}")]
+    InvalidAt {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line of the option's name.
+        line: usize,
+        /// 1-based column of the option's name.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Where in `text` the option that a validation `message` names is set: the first
+/// word of the message that occurs in `text` as a RON key (`word:`), preferring a word
+/// in backticks. 1-based line and column (in characters), or `None`.
+fn locate_option(text: &str, message: &str) -> Option<(usize, usize)> {
+    let quoted = message.split('`').skip(1).step_by(2);
+    let words = message
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .filter(|w| w.len() > 1 && w.chars().next().is_some_and(|c| c.is_ascii_lowercase()));
+    quoted.chain(words).find_map(|word| {
+        text.match_indices(word).find_map(|(at, _)| {
+            let before = text[..at].chars().next_back();
+            let after = text[at + word.len()..].trim_start().starts_with(':');
+            let boundary = before.is_none_or(|c| !(c.is_ascii_alphanumeric() || c == '_'));
+            (after && boundary).then(|| {
+                let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+                let line = text[..at].matches('\n').count() + 1;
+                (line, text[line_start..at].chars().count() + 1)
+            })
+        })
+    })
 }
 
 impl SceneConfig {
@@ -124,10 +216,20 @@ impl SceneConfig {
             column: e.span.start.col,
             message: e.code.to_string(),
         })?;
-        scene.validate().map_err(|message| ConfigError::Invalid {
-            path: path.to_path_buf(),
-            message,
-        })?;
+        scene
+            .validate()
+            .map_err(|message| match locate_option(text, &message) {
+                Some((line, column)) => ConfigError::InvalidAt {
+                    path: path.to_path_buf(),
+                    line,
+                    column,
+                    message,
+                },
+                None => ConfigError::Invalid {
+                    path: path.to_path_buf(),
+                    message,
+                },
+            })?;
         let base = path.parent().unwrap_or(Path::new("."));
         if let MeshSource::File(p) = &mut scene.mesh
             && p.is_relative()
@@ -153,6 +255,7 @@ impl SceneConfig {
         self.curve.validate().map_err(|e| e.to_string())?;
         self.segment.validate().map_err(|e| e.to_string())?;
         self.param.validate().map_err(|e| e.to_string())?;
+        self.transform.validate()?;
         Ok(())
     }
 }
@@ -217,6 +320,19 @@ mod tests {
         )
         .expect_err("anisotropy < 1");
         assert!(e.to_string().contains("anisotropy"), "{e}");
+        // Out-of-range values name the line and column of their option.
+        let e = SceneConfig::from_ron(
+            "(\n  mesh: Shape(Plane()),\n  curve: (boundary_level: 3, max_cell_share: 2.0),\n)",
+            Path::new("range.ron"),
+        )
+        .expect_err("max_cell_share > 1");
+        assert!(e.to_string().starts_with("range.ron:3:30: "), "{e}");
+        let e = SceneConfig::from_ron(
+            "(mesh: Shape(Plane()),\n transform: (scale: -1.0))",
+            Path::new("t.ron"),
+        )
+        .expect_err("negative scale");
+        assert!(e.to_string().starts_with("t.ron:2:14: "), "{e}");
         let e = SceneConfig::from_ron("(mesh: Shape(Plane(", Path::new("cut.ron"))
             .expect_err("truncated");
         assert!(e.to_string().starts_with("cut.ron:1:"), "{e}");

@@ -1,13 +1,18 @@
 //! # strata-systems
 //!
 //! The application layer of strata: scene configuration files (RON), turning a scene
-//! into engine inputs, and the `strata` command-line tool. (The ECS, hot reload and GPU
-//! layers will live here too; the pure algorithms are in `strata-engine`.)
+//! into engine inputs, the streaming engine as a bevy_ecs world ([`ecs`]) with scene
+//! hot reload ([`hot_reload`]), GPU streaming and field-aligned splat rendering with
+//! wgpu ([`gpu`]), and the `strata` command-line tool. The pure algorithms are in
+//! `strata-engine`.
 
 pub mod atlas;
 pub mod cli;
 pub mod config;
+pub mod ecs;
 pub mod gpu;
+pub mod hot_reload;
 pub mod render;
 pub mod scene;
 pub mod view;
+pub mod watch;

@@ -2,6 +2,8 @@
 mod chains;
 mod discrepancy;
 mod gpu;
+mod ecs;
+mod hot_reload;
 mod io;
 mod param;
 mod pipeline;

@@ -18,12 +18,14 @@
 
 pub mod paths;
 mod pipeline;
+pub mod region;
 pub mod seeds;
 pub mod singularity;
 pub mod topology;
 pub mod walk;
 
 pub use pipeline::segment;
+pub use region::{RegionError, segment_region};
 
 pub use paths::{
     ShortestPaths, dijkstra, field_edge_costs, field_edge_costs_with, singularity_tree,

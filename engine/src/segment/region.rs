@@ -1,0 +1,248 @@
+//! Segmentation restricted to a region of a mesh, for incremental recomputation.
+//!
+//! Input: a mesh, a field, a set of faces (the region) and [`SegmentOptions`]. Output: a
+//! [`Segmentation`] of the region alone, in the mesh's face, vertex and edge ids (faces
+//! outside the region have segment `NONE`). The region is extracted as a mesh of its
+//! own and segmented with [`segment`], so its segments satisfy everything `segment`
+//! guarantees (connected, singularity-free, discs) and together cover exactly the
+//! region. A caller that keeps the segments outside the region and replaces those
+//! inside it still has a covering of the whole mesh by disc segments.
+//!
+//! The field on the extracted mesh is the mesh's tensors re-projected into the
+//! extracted mesh's tangent planes, which differ from the mesh's only at vertices on the
+//! region boundary (their normals see fewer faces). Cost: that of [`segment`] on the
+//! region, plus O(region) to extract it.
+
+use super::{Segment, SegmentError, SegmentOptions, Segmentation, Singularity, segment};
+use crate::field::{FieldError, TensorField};
+use crate::mesh::{MeshError, NONE, TriMesh};
+
+/// Errors of [`segment_region`].
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RegionError {
+    /// The region is empty or names a face the mesh does not have.
+    #[error("region face {face} is not a face of the mesh ({face_count} faces)")]
+    BadFace {
+        /// The offending face (or `u32::MAX` for an empty region).
+        face: u32,
+        /// The mesh's face count.
+        face_count: usize,
+    },
+    /// The region could not be extracted as a mesh of its own.
+    #[error("extracting the region: {0}")]
+    Mesh(#[from] MeshError),
+    /// Extraction repaired the region (merged, dropped or reordered faces), so its ids
+    /// no longer match the mesh's; segment the whole mesh instead.
+    #[error("the extracted region does not keep the mesh's faces one to one")]
+    NotOneToOne,
+    /// The field is not positive definite in the extracted mesh's tangent planes.
+    #[error("field on the region: {0}")]
+    Field(#[from] FieldError),
+    /// Segmenting the region failed.
+    #[error("{0}")]
+    Segment(#[from] SegmentError),
+}
+
+/// Segments only `faces` of `mesh` (see the module docs). `faces` need not be sorted or
+/// connected; duplicates are ignored.
+///
+/// ```
+/// use strata_engine::{field::FieldSpec, mesh::shapes, segment::{segment_region, SegmentOptions}};
+/// let mesh = shapes::sphere(1.0, 8)?;
+/// let field = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 }
+///     .build(&mesh)?;
+/// let region: Vec<u32> = (0..mesh.face_count() as u32 / 4).collect();
+/// let seg = segment_region(&mesh, &field, &region, &SegmentOptions::default())?;
+/// let covered: usize = seg.segments.iter().map(|s| s.faces.len()).sum();
+/// assert_eq!(covered, region.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn segment_region(
+    mesh: &TriMesh,
+    field: &TensorField,
+    faces: &[u32],
+    options: &SegmentOptions,
+) -> Result<Segmentation, RegionError> {
+    let mut faces = faces.to_vec();
+    faces.sort_unstable();
+    faces.dedup();
+    let face_count = mesh.face_count();
+    match faces.last() {
+        None => {
+            return Err(RegionError::BadFace {
+                face: u32::MAX,
+                face_count,
+            });
+        }
+        Some(&f) if f as usize >= face_count => {
+            return Err(RegionError::BadFace {
+                face: f,
+                face_count,
+            });
+        }
+        Some(_) => {}
+    }
+    // Region vertices in ascending mesh order.
+    let mut local_of = vec![NONE; mesh.vertex_count()];
+    for &f in &faces {
+        for v in mesh.triangles()[f as usize] {
+            local_of[v as usize] = 0;
+        }
+    }
+    let mut global_of = Vec::new();
+    for (v, slot) in local_of.iter_mut().enumerate() {
+        if *slot != NONE {
+            *slot = global_of.len() as u32;
+            global_of.push(v as u32);
+        }
+    }
+    let positions = global_of
+        .iter()
+        .map(|&v| mesh.positions()[v as usize])
+        .collect();
+    let triangles: Vec<[u32; 3]> = faces
+        .iter()
+        .map(|&f| mesh.triangles()[f as usize].map(|v| local_of[v as usize]))
+        .collect();
+    let sub = TriMesh::new(positions, triangles.clone())?;
+    // The extracted mesh must be the region face for face, vertex for vertex, so that
+    // its edge of corner k is the mesh's edge of corner k.
+    let identity = sub
+        .input_vertex_map()
+        .iter()
+        .enumerate()
+        .all(|(i, &v)| v == i as u32);
+    if !identity || sub.triangles() != triangles.as_slice() {
+        return Err(RegionError::NotOneToOne);
+    }
+    let tensors = global_of
+        .iter()
+        .map(|&v| field.tensors()[v as usize])
+        .collect();
+    let sub_field = TensorField::new(&sub, tensors)?;
+    let local = segment(&sub, &sub_field, options)?;
+
+    let edge_of = |local_edge: u32| -> u32 {
+        // Find the corner of a face holding this edge and read the mesh's edge there.
+        let [fa, _] = sub.edge_faces()[local_edge as usize];
+        let k = sub.face_edges()[fa as usize]
+            .iter()
+            .position(|&e| e == local_edge)
+            .unwrap_or(0);
+        mesh.face_edges()[faces[fa as usize] as usize][k]
+    };
+    let mut face_segment = vec![NONE; face_count];
+    for (i, &s) in local.face_segment.iter().enumerate() {
+        face_segment[faces[i] as usize] = s;
+    }
+    let segments = local
+        .segments
+        .into_iter()
+        .map(|s| Segment {
+            faces: s.faces.iter().map(|&f| faces[f as usize]).collect(),
+            boundary_loops: s
+                .boundary_loops
+                .iter()
+                .map(|l| l.iter().map(|&v| global_of[v as usize]).collect())
+                .collect(),
+            euler_characteristic: s.euler_characteristic,
+            has_singular_face: s.has_singular_face,
+        })
+        .collect();
+    let singularities = local
+        .singularities
+        .iter()
+        .map(|s| Singularity {
+            face: faces[s.face as usize],
+            index: s.index,
+        })
+        .collect();
+    let mut cut_edges: Vec<u32> = local.cut_edges.iter().map(|&e| edge_of(e)).collect();
+    cut_edges.sort_unstable();
+    Ok(Segmentation {
+        face_segment,
+        segments,
+        singularities,
+        cut_edges,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::FieldSpec;
+    use crate::mesh::shapes;
+
+    #[test]
+    fn whole_mesh_region_equals_segment() {
+        let mesh = shapes::torus(1.0, 0.4, 24).expect("torus");
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.3, 0.0],
+            anisotropy: 3.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        let all: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        let options = SegmentOptions::default();
+        let whole = segment(&mesh, &field, &options).expect("segment");
+        let region = segment_region(&mesh, &field, &all, &options).expect("region");
+        assert_eq!(region, whole);
+    }
+
+    #[test]
+    fn region_segments_cover_the_region_only_and_are_connected() {
+        let mesh = shapes::sphere(1.0, 8).expect("sphere");
+        let field = FieldSpec::Constant {
+            direction: [0.0, 0.0, 1.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        // The faces whose barycentre has x > 0.3: a cap.
+        let region: Vec<u32> = (0..mesh.face_count() as u32)
+            .filter(|&f| mesh.face_positions(f).iter().map(|p| p.x).sum::<f64>() > 0.9)
+            .collect();
+        assert!(!region.is_empty() && region.len() < mesh.face_count());
+        let seg =
+            segment_region(&mesh, &field, &region, &SegmentOptions::default()).expect("region");
+        let mut covered: Vec<u32> = seg.segments.iter().flat_map(|s| s.faces.clone()).collect();
+        covered.sort_unstable();
+        assert_eq!(covered, region, "every region face in exactly one segment");
+        for (f, &s) in seg.face_segment.iter().enumerate() {
+            assert_eq!(s == NONE, region.binary_search(&(f as u32)).is_err());
+        }
+        for s in &seg.segments {
+            assert_eq!(s.boundary_loops.len(), 1, "a disc has one boundary loop");
+            assert_eq!(s.euler_characteristic, 1);
+        }
+        // Cut edges are mesh edges of region faces.
+        for &e in &seg.cut_edges {
+            let [a, b] = mesh.edge_faces()[e as usize];
+            assert!(region.binary_search(&a).is_ok() || region.binary_search(&b).is_ok());
+        }
+    }
+
+    #[test]
+    fn bad_regions_are_errors() {
+        let mesh = shapes::plane(1.0, 2).expect("plane");
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 1.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        let o = SegmentOptions::default();
+        assert!(matches!(
+            segment_region(&mesh, &field, &[], &o),
+            Err(RegionError::BadFace { .. })
+        ));
+        assert!(matches!(
+            segment_region(&mesh, &field, &[99], &o),
+            Err(RegionError::BadFace { face: 99, .. })
+        ));
+    }
+}

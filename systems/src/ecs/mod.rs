@@ -1,0 +1,128 @@
+//! The streaming engine as a bevy_ecs world: meshes, segments, parameterizations and
+//! cells are components; systems with change detection redo only what a change of the
+//! mesh, the field or the settings invalidated (DESIGN.md, "Architecture").
+//!
+//! Embedding: call [`register`] on a caller's `World` and `Schedule`, spawn a mesh
+//! entity with [`MeshBundle`], run the schedule; the samples appear in the entity's
+//! [`SampleBuffer`]. Per-stage runs are recorded in [`StageStats`], errors in
+//! [`EngineErrors`]. Scene files and hot reload: [`crate::hot_reload`].
+//!
+//! ```
+//! use std::sync::Arc;
+//! use bevy_ecs::prelude::*;
+//! use strata_engine::{field::FieldSpec, mesh::shapes, surface::SurfaceOptions};
+//! use strata_systems::ecs::{self, MeshBundle, SampleBuffer, Stage, StageStats};
+//! let mesh = Arc::new(shapes::sphere(1.0, 4)?);
+//! let field = Arc::new(FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 }
+//!     .build(&mesh)?);
+//! let mut world = World::new();
+//! let mut schedule = Schedule::default();
+//! ecs::register(&mut world, &mut schedule);
+//! let e = world.spawn(MeshBundle::new(mesh, field, SurfaceOptions::default(), 500, 7)).id();
+//! schedule.run(&mut world);
+//! assert_eq!(world.get::<SampleBuffer>(e).map(|b| b.samples.len()), Some(500));
+//! assert_eq!(world.resource::<StageStats>().runs_of(Stage::Segmentation), 1);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod components;
+pub mod preprocess;
+pub mod sampling;
+pub mod stats;
+
+use bevy_ecs::prelude::*;
+
+pub use components::*;
+pub use preprocess::{
+    assemble_samplers, build_curves, despawn_orphan_segments, parameterize_segments, segment_meshes,
+};
+pub use sampling::{SampleRequest, sample_meshes};
+pub use stats::{EngineErrors, Stage, StageRun, StageStats};
+
+/// The engine's systems, in the order they run in an update.
+#[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EngineSystems {
+    /// Bookkeeping at the start of an update.
+    Begin,
+    /// Applying changed scene files ([`crate::hot_reload`]).
+    ApplyScene,
+    /// Segmentation.
+    Segment,
+    /// Parameterization.
+    Parameterize,
+    /// Cells.
+    Curves,
+    /// Sampler assembly (chains).
+    Chains,
+    /// Sampling into the sample buffers.
+    Sample,
+}
+
+/// Global settings of the engine.
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct EngineSettings {
+    /// Resample every update even when nothing changed (per-frame LOD, renderers that
+    /// consume the buffer); default false: sample when something changed or on
+    /// [`SampleRequest`].
+    pub sample_every_update: bool,
+}
+
+/// An error of one of the engine's stages; the state it would have changed is kept.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum EngineError {
+    /// A scene file could not be read, parsed or validated.
+    #[error("{0}")]
+    Config(#[from] crate::config::ConfigError),
+    /// The scene's mesh could not be loaded or built.
+    #[error("mesh: {0}")]
+    Mesh(#[from] strata_engine::mesh::MeshError),
+    /// The scene's field could not be built.
+    #[error("field: {0}")]
+    Field(#[from] strata_engine::field::FieldError),
+    /// Segmentation failed.
+    #[error("segmentation: {0}")]
+    Segment(#[from] strata_engine::segment::SegmentError),
+    /// Parameterization or its splitting failed.
+    #[error("{0}")]
+    Surface(#[from] strata_engine::surface::SurfaceError),
+    /// Cells could not be built.
+    #[error("cells: {0}")]
+    Curve(#[from] strata_engine::curve::CurveError),
+    /// The sampler could not be assembled.
+    #[error("sampler: {0}")]
+    Sample(#[from] strata_engine::sample::SampleError),
+}
+
+/// Adds the engine's resources to `world` and its systems to `schedule`, ordered by
+/// [`EngineSystems`]. Call once; works with any `Schedule`. A Bevy app (same bevy_ecs
+/// version) keeps its schedules in the world: register with
+/// `world.schedule_scope(Update, |world, schedule| register(world, schedule))`.
+pub fn register(world: &mut World, schedule: &mut Schedule) {
+    world.init_resource::<StageStats>();
+    world.init_resource::<EngineErrors>();
+    world.init_resource::<EngineSettings>();
+    world.init_resource::<SampleRequest>();
+    schedule.configure_sets(
+        (
+            EngineSystems::Begin,
+            EngineSystems::ApplyScene,
+            EngineSystems::Segment,
+            EngineSystems::Parameterize,
+            EngineSystems::Curves,
+            EngineSystems::Chains,
+            EngineSystems::Sample,
+        )
+            .chain(),
+    );
+    schedule.add_systems((
+        stats::begin_update.in_set(EngineSystems::Begin),
+        (despawn_orphan_segments, segment_meshes)
+            .chain()
+            .in_set(EngineSystems::Segment),
+        parameterize_segments.in_set(EngineSystems::Parameterize),
+        build_curves.in_set(EngineSystems::Curves),
+        assemble_samplers.in_set(EngineSystems::Chains),
+        sample_meshes.in_set(EngineSystems::Sample),
+    ));
+}

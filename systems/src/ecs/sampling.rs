@@ -1,0 +1,79 @@
+//! Sampling: draws each mesh's samples into its [`SampleBuffer`] when its sampler,
+//! count, seed or transform changed, on demand ([`SampleRequest`]), or every update
+//! when [`EngineSettings::sample_every_update`] is set.
+
+use std::time::Instant;
+
+use bevy_ecs::prelude::*;
+use strata_engine::sample::Sample;
+
+use super::EngineSettings;
+use super::components::*;
+use super::stats::{Stage, StageStats};
+
+/// Set `0` to true to resample every mesh in the next update (cleared by sampling).
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub struct SampleRequest(pub bool);
+
+/// Draws samples into the sample buffers (see the module docs).
+#[allow(clippy::type_complexity)]
+pub fn sample_meshes(
+    settings: Res<EngineSettings>,
+    mut request: ResMut<SampleRequest>,
+    mut stats: ResMut<StageStats>,
+    mut meshes: Query<(
+        Entity,
+        Ref<MeshSampler>,
+        Ref<SamplingSettings>,
+        Ref<MeshTransform>,
+        &mut SampleBuffer,
+    )>,
+) {
+    let forced = settings.sample_every_update || request.0;
+    for (entity, sampler, sampling, transform, mut buffer) in &mut meshes {
+        let dirty = sampler.is_changed() || sampling.is_changed() || transform.is_changed();
+        let Some(s) = sampler.0.as_ref() else {
+            continue;
+        };
+        if !(forced || dirty) {
+            continue;
+        }
+        let t = Instant::now();
+        let buffer = &mut *buffer;
+        buffer.samples.resize(sampling.count, Sample::default());
+        s.sample_into(sampling.seed, &mut buffer.samples);
+        if transform.0 != glam::DAffine3::IDENTITY {
+            transform_samples(&transform.0, &mut buffer.samples);
+        }
+        buffer.generation += 1;
+        stats.record(
+            Stage::Sampling,
+            entity,
+            sampling.count,
+            t.elapsed(),
+            String::new(),
+        );
+    }
+    if request.0 {
+        request.0 = false;
+    }
+}
+
+/// Applies a similarity transform to samples: positions mapped, normals and major axes
+/// rotated (and renormalised), spacings scaled.
+pub fn transform_samples(transform: &glam::DAffine3, samples: &mut [Sample]) {
+    let m = transform.matrix3;
+    // The uniform scale of a similarity: the cube root of the determinant.
+    let scale = m.determinant().abs().cbrt();
+    let dir = |v: [f32; 3]| -> [f32; 3] {
+        let d = m * glam::DVec3::from(v.map(f64::from));
+        d.normalize_or_zero().as_vec3().to_array()
+    };
+    for s in samples {
+        let p = transform.transform_point3(glam::DVec3::from(s.position.map(f64::from)));
+        s.position = p.as_vec3().to_array();
+        s.normal = dir(s.normal);
+        s.major_axis = dir(s.major_axis);
+        s.spacing = s.spacing.map(|x| (f64::from(x) * scale) as f32);
+    }
+}

@@ -1,0 +1,82 @@
+//! `strata watch`: the engine loop on a scene file. Applies every change of the scene
+//! (or of the mesh and field files it names), prints what reran and how long it took,
+//! and rewrites the samples file atomically after each change.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+
+use crate::hot_reload::StreamingEngine;
+
+/// Arguments of `strata watch`.
+#[derive(Debug, clap::Args)]
+pub struct WatchArgs {
+    /// Scene file (RON) to watch.
+    pub config: PathBuf,
+    /// Samples file (binary PLY), rewritten atomically (temporary file, then rename)
+    /// after every change.
+    #[arg(long, short = 'o')]
+    pub out: Option<PathBuf>,
+    /// Stop after this many updates that changed something (default: run until
+    /// interrupted).
+    #[arg(long)]
+    pub updates: Option<usize>,
+}
+
+/// Runs `strata watch`.
+pub fn run(args: &WatchArgs) -> anyhow::Result<()> {
+    let mut engine = StreamingEngine::watch(&args.config)
+        .with_context(|| format!("watching {}", args.config.display()))?;
+    eprintln!("watching {} (Ctrl-C to stop)", args.config.display());
+    let mut done = 0usize;
+    loop {
+        engine.clear_stats();
+        let generation = engine.sample_generation();
+        let t = Instant::now();
+        engine.update();
+        let took = t.elapsed();
+        let mut out = std::io::stdout().lock();
+        for e in engine.take_errors() {
+            eprintln!("error: {e} (keeping the last good state)");
+        }
+        let runs = &engine.stats().runs;
+        if !runs.is_empty() {
+            for r in runs {
+                writeln!(
+                    out,
+                    "  {:<17} {:>8} {:>9.2} ms  {}",
+                    r.stage.name(),
+                    r.items,
+                    r.took.as_secs_f64() * 1e3,
+                    r.note
+                )?;
+            }
+            writeln!(out, "update: {:.2} ms", took.as_secs_f64() * 1e3)?;
+        }
+        if engine.sample_generation() != generation
+            && let Some(path) = &args.out
+        {
+            let t = Instant::now();
+            strata_engine::io::write_samples_ply(path, engine.samples())
+                .with_context(|| format!("writing {}", path.display()))?;
+            writeln!(
+                out,
+                "wrote {} samples to {} ({:.2} ms)",
+                engine.samples().len(),
+                path.display(),
+                t.elapsed().as_secs_f64() * 1e3
+            )?;
+        }
+        out.flush()?;
+        drop(out);
+        if !runs.is_empty() {
+            done += 1;
+            if args.updates.is_some_and(|n| done >= n) {
+                return Ok(());
+            }
+        }
+        while !engine.wait_for_change(Duration::from_secs(3600)) {}
+    }
+}
