@@ -85,7 +85,12 @@ impl LookArgs {
 
     /// The camera framing `scene`'s mesh for a target of `aspect` (width / height).
     pub fn camera(&self, scene: &Scene, aspect: f32) -> OrbitCamera {
-        let (min, max) = scene.mesh.bounds();
+        self.camera_for_mesh(&scene.mesh, aspect)
+    }
+
+    /// The camera framing `mesh` for a target of `aspect` (width / height).
+    pub fn camera_for_mesh(&self, mesh: &strata_engine::mesh::TriMesh, aspect: f32) -> OrbitCamera {
+        let (min, max) = mesh.bounds();
         let mut camera = OrbitCamera {
             yaw: self.yaw.to_radians(),
             pitch: self.pitch.to_radians(),

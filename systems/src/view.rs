@@ -1,13 +1,18 @@
-//! `strata view`: a window (winit) with an orbit camera that resamples the scene every
-//! frame and draws the splats; the title shows the frame time and the sample count.
+//! `strata view`: a window (winit) with an orbit camera over the streaming engine
+//! ([`crate::hot_reload::StreamingEngine`]): the scene file (and the mesh and field
+//! files it names) is watched and hot-reloaded, the engine resamples every frame, and
+//! the GPU upload system ([`crate::gpu::upload`]) streams the samples into the
+//! renderer's buffer; the title shows the frame time and the sample count.
 //!
 //! Mouse: drag to orbit, wheel to zoom. Keys: `Up`/`Down` double or halve the count,
-//! `S` a new seed, `C` the next colour mode, `M` the next mesh mode, `F` disc or
-//! Gaussian splats, `Escape` quits. (Live config reload arrives with the ECS engine.)
+//! `S` a new seed (both until the scene file sets them again), `C` the next colour
+//! mode, `M` the next mesh mode, `F` disc or Gaussian splats, `Escape` quits. A scene
+//! saved with an error keeps the last good state and prints the error (file, line,
+//! column); the window shows it in its title until a good save.
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow};
 use winit::application::ApplicationHandler;
@@ -16,16 +21,18 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use crate::config::SceneConfig;
+use strata_engine::mesh::TriMesh;
+
+use crate::ecs::{
+    EngineSettings, MeshData, MeshSampler, MeshTransform, SamplingSettings, Stage, StageStats,
+};
 use crate::gpu::headless::DEPTH_FORMAT;
 use crate::gpu::splat::{FrameTarget, TargetFormat};
-use crate::gpu::stream::StreamTimings;
 use crate::gpu::{
-    ColorMode, Footprint, GpuContext, MeshMode, OrbitCamera, SampleStream, SplatRenderer,
-    SplatStyle,
+    ColorMode, Footprint, GpuContext, GpuSplats, MeshMode, OrbitCamera, SplatRenderer, SplatStyle,
 };
+use crate::hot_reload::StreamingEngine;
 use crate::render::LookArgs;
-use crate::scene::Scene;
 
 /// Arguments of `strata view`.
 #[derive(Debug, clap::Args)]
@@ -50,7 +57,6 @@ pub struct ViewArgs {
 /// Runs `strata view` until the window closes.
 pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     args.look.validate()?;
-    let config = SceneConfig::load(&args.config)?;
     // The display first: without one, fail in one line before the preprocessing.
     let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
     if cfg!(target_os = "linux")
@@ -65,23 +71,50 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow!("cannot open a window: {e} (no display; `strata render` draws without one)")
     })?;
-    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
-    let count = usize::try_from(args.look.count.unwrap_or(config.sampling.count))
-        .context("sample count does not fit in memory")?;
+    let mut engine = StreamingEngine::watch(&args.config)
+        .with_context(|| format!("watching {}", args.config.display()))?;
+    engine
+        .world
+        .resource_mut::<EngineSettings>()
+        .sample_every_update = true;
+    crate::gpu::upload::register(&mut engine.schedule);
+    // A scene that is bad at start-up is waited for: the first good save opens it.
+    let mesh_entity = loop {
+        engine.update();
+        for e in engine.take_errors() {
+            eprintln!("error: {e}");
+        }
+        if let Some(e) = engine.mesh_entity() {
+            break e;
+        }
+        eprintln!(
+            "waiting for a good save of {} (Ctrl-C quits)",
+            args.config.display()
+        );
+        engine.wait_for_change(Duration::from_secs(3600));
+    };
+    if let Some(count) = args.look.count {
+        set_sampling(&mut engine, mesh_entity, |s| {
+            s.count = usize::try_from(count).unwrap_or(usize::MAX)
+        });
+    }
+    if let Some(seed) = args.look.seed {
+        set_sampling(&mut engine, mesh_entity, |s| s.seed = seed);
+    }
     let mut app = Viewer {
         title: args.config.display().to_string(),
         size: (args.width.max(1), args.height.max(1)),
         look: args.look.clone(),
-        scene,
-        count,
-        seed: args.look.seed.unwrap_or(config.sampling.seed),
-        stream: SampleStream::new(),
+        engine,
+        mesh_entity,
+        shown_mesh: None,
         style: SplatStyle::default(),
         camera: None,
         gpu: None,
         drag: None,
         dragging: false,
         error: None,
+        scene_error: None,
         last_frame: None,
         frame_ms: 0.0,
         frames: 0,
@@ -104,12 +137,40 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     }
 }
 
+/// Changes the sampling settings of the engine's mesh entity.
+fn set_sampling(
+    engine: &mut StreamingEngine,
+    e: bevy_ecs::entity::Entity,
+    f: impl FnOnce(&mut SamplingSettings),
+) {
+    if let Some(mut s) = engine.world.get_mut::<SamplingSettings>(e) {
+        f(&mut s);
+    }
+}
+
+/// The mesh as placed by the entity's transform (what the samples lie on).
+fn placed_mesh(mesh: &Arc<TriMesh>, transform: Option<&MeshTransform>) -> Arc<TriMesh> {
+    match transform {
+        Some(t) if t.0 != glam::DAffine3::IDENTITY => {
+            let positions = mesh
+                .positions()
+                .iter()
+                .map(|p| t.0.transform_point3(*p))
+                .collect();
+            TriMesh::new(positions, mesh.triangles().to_vec())
+                .map(Arc::new)
+                .unwrap_or_else(|_| mesh.clone())
+        }
+        _ => mesh.clone(),
+    }
+}
+
+/// The window side of the GPU; the device and the renderer live in the engine's
+/// [`GpuSplats`] resource, where the upload system streams the samples.
 struct WindowGpu {
     window: Arc<Window>,
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
-    ctx: GpuContext,
-    renderer: SplatRenderer,
     depth: wgpu::TextureView,
 }
 
@@ -117,16 +178,19 @@ struct Viewer {
     title: String,
     size: (u32, u32),
     look: LookArgs,
-    scene: Scene,
-    count: usize,
-    seed: u64,
-    stream: SampleStream,
+    engine: StreamingEngine,
+    mesh_entity: bevy_ecs::entity::Entity,
+    /// The source mesh and transform drawn under the splats (to notice a reloaded
+    /// mesh or a new transform).
+    shown_mesh: Option<(Arc<TriMesh>, glam::DAffine3)>,
     style: SplatStyle,
     camera: Option<OrbitCamera>,
     gpu: Option<WindowGpu>,
     drag: Option<(f64, f64)>,
     dragging: bool,
     error: Option<anyhow::Error>,
+    /// The last scene error, shown until a good save.
+    scene_error: Option<String>,
     last_frame: Option<Instant>,
     frame_ms: f64,
     frames: u64,
@@ -204,7 +268,7 @@ impl Viewer {
         crate::gpu::context::scoped(&ctx.device, "configuring the window surface", || {
             surface.configure(&ctx.device, &config)
         })?;
-        let mut renderer = SplatRenderer::new(
+        let renderer = SplatRenderer::new(
             &ctx.device,
             TargetFormat {
                 color: format,
@@ -213,62 +277,155 @@ impl Viewer {
             },
         )?;
         let max = crate::gpu::buffers::max_samples(&ctx.device);
-        if self.count > max {
+        let count = self.sampling().count;
+        if count > max {
             anyhow::bail!(
-                "{} samples do not fit in one GPU buffer on this adapter (at most {max})",
-                self.count
+                "{count} samples do not fit in one GPU buffer on this adapter (at most {max})"
             );
         }
-        let segments = crate::gpu::splat::face_segments(&self.scene.sampler);
-        renderer.set_mesh(&ctx.device, &ctx.queue, &self.scene.mesh, Some(&segments))?;
-        self.camera = Some(
-            self.look
-                .camera(&self.scene, config.width as f32 / config.height as f32),
-        );
         let depth = depth_view(&ctx.device, config.width, config.height);
         println!("strata view: {}", ctx.adapter_summary());
+        let mut splats = GpuSplats::new(ctx, renderer);
+        splats.mesh = Some(self.mesh_entity);
+        self.engine.world.insert_resource(splats);
         self.gpu = Some(WindowGpu {
             window,
             surface,
             config,
-            ctx,
-            renderer,
             depth,
         });
+        let aspect = self.aspect();
+        self.camera = self
+            .current_mesh()
+            .map(|mesh| self.look.camera_for_mesh(&mesh, aspect));
         Ok(())
     }
 
+    fn aspect(&self) -> f32 {
+        self.gpu.as_ref().map_or(1.0, |g| {
+            g.config.width as f32 / g.config.height.max(1) as f32
+        })
+    }
+
+    /// The sampling settings of the mesh entity.
+    fn sampling(&self) -> SamplingSettings {
+        self.engine
+            .world
+            .get::<SamplingSettings>(self.mesh_entity)
+            .copied()
+            .unwrap_or(SamplingSettings { count: 0, seed: 0 })
+    }
+
+    /// The mesh entity's mesh, placed by its transform.
+    fn current_mesh(&self) -> Option<Arc<TriMesh>> {
+        let (mesh, transform) = self.current_source()?;
+        Some(placed_mesh(&mesh, Some(&MeshTransform(transform))))
+    }
+
+    /// The mesh entity's mesh and transform.
+    fn current_source(&self) -> Option<(Arc<TriMesh>, glam::DAffine3)> {
+        let world = &self.engine.world;
+        let mesh = world.get::<MeshData>(self.mesh_entity)?.0.clone();
+        let transform = world
+            .get::<MeshTransform>(self.mesh_entity)
+            .map_or(glam::DAffine3::IDENTITY, |t| t.0);
+        Some((mesh, transform))
+    }
+
+    /// Runs the engine once (hot reload, recomputation, sampling, upload) and keeps
+    /// the mesh under the splats current; scene errors go to stderr and the title.
+    fn update_engine(&mut self) -> anyhow::Result<Duration> {
+        self.engine.clear_stats();
+        self.engine.update();
+        for e in self.engine.take_errors() {
+            eprintln!("error: {e}");
+            self.scene_error = Some(e.to_string());
+        }
+        let stats = self.engine.world.resource::<StageStats>();
+        if stats.runs_of(Stage::Scene) > 0 && self.scene_error.is_some() {
+            // A good scene was applied after the error.
+            self.scene_error = None;
+        }
+        let sampling: Duration = stats
+            .runs
+            .iter()
+            .filter(|r| r.stage == Stage::Sampling)
+            .map(|r| r.took)
+            .sum();
+        let chains_ran = stats.runs_of(Stage::Chains) > 0;
+        let source = self.current_source();
+        let mesh_changed = match (&source, &self.shown_mesh) {
+            (Some((m, t)), Some((shown, shown_t))) => !Arc::ptr_eq(m, shown) || t != shown_t,
+            (Some(_), None) => true,
+            _ => false,
+        };
+        if let Some((mesh, transform)) = source
+            && (mesh_changed || chains_ran)
+        {
+            let placed = placed_mesh(&mesh, Some(&MeshTransform(transform)));
+            let segments = self
+                .engine
+                .world
+                .get::<MeshSampler>(self.mesh_entity)
+                .and_then(|s| s.0.as_ref())
+                .map(crate::gpu::splat::face_segments);
+            let mut gpu = self.engine.world.resource_mut::<GpuSplats>();
+            let gpu = &mut *gpu;
+            gpu.renderer.set_mesh(
+                &gpu.ctx.device,
+                &gpu.ctx.queue,
+                &placed,
+                segments.as_deref(),
+            )?;
+            if mesh_changed && self.shown_mesh.is_some() {
+                let aspect = self.aspect();
+                self.camera = Some(self.look.camera_for_mesh(&placed, aspect));
+            }
+            self.shown_mesh = Some((mesh, transform));
+            self.refit_colors = true;
+        }
+        if let Some(e) = self.engine.world.resource_mut::<GpuSplats>().error.take() {
+            return Err(e.into());
+        }
+        Ok(sampling)
+    }
+
     fn frame(&mut self) -> anyhow::Result<()> {
+        if self.gpu.is_none() || self.camera.is_none() {
+            return Ok(());
+        }
+        let sampling = self.update_engine()?;
+        let (count, upload) = {
+            let splats = self.engine.world.resource::<GpuSplats>();
+            (splats.renderer.samples().len(), splats.last.time)
+        };
+        if self.refit_colors {
+            self.style.log_density_range =
+                crate::gpu::layout::log_density_range(self.engine.samples());
+            self.refit_colors = false;
+        }
         let (Some(gpu), Some(camera)) = (&mut self.gpu, &self.camera) else {
             return Ok(());
         };
-        let timings: StreamTimings = self.stream.frame(
-            &self.scene.sampler,
-            self.count,
-            self.seed,
-            &mut gpu.renderer,
-            &gpu.ctx.device,
-            &gpu.ctx.queue,
-        )?;
-        if self.refit_colors {
-            self.style.log_density_range =
-                crate::gpu::layout::log_density_range(self.stream.samples());
-            self.refit_colors = false;
-        }
+        let mut splats = self.engine.world.resource_mut::<GpuSplats>();
+        let splats = &mut *splats;
         let texture = match gpu.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                gpu.surface.configure(&gpu.ctx.device, &gpu.config);
+                gpu.surface.configure(&splats.ctx.device, &gpu.config);
                 return Ok(());
             }
             _ => return Ok(()),
         };
         let view = texture.texture.create_view(&Default::default());
-        let mut encoder = gpu.ctx.device.create_command_encoder(&Default::default());
-        gpu.renderer.encode(
-            &gpu.ctx.device,
-            &gpu.ctx.queue,
+        let mut encoder = splats
+            .ctx
+            .device
+            .create_command_encoder(&Default::default());
+        splats.renderer.encode(
+            &splats.ctx.device,
+            &splats.ctx.queue,
             &mut encoder,
             FrameTarget {
                 color: &view,
@@ -279,9 +436,9 @@ impl Viewer {
             camera,
             &self.style,
         )?;
-        gpu.ctx.queue.submit([encoder.finish()]);
-        gpu.ctx.queue.present(texture);
-        gpu.ctx.take_uncaptured("drawing a frame")?;
+        splats.ctx.queue.submit([encoder.finish()]);
+        splats.ctx.queue.present(texture);
+        splats.ctx.take_uncaptured("drawing a frame")?;
         let now = Instant::now();
         if let Some(last) = self.last_frame {
             // Smoothed, so that the title is readable.
@@ -294,16 +451,18 @@ impl Viewer {
         }
         self.last_frame = Some(now);
         self.status = format!(
-            "{} samples | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {:?}, {:?}",
-            timings.count,
+            "{count} samples | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {:?}, {:?}",
             self.frame_ms,
-            timings.sample.as_secs_f64() * 1e3,
-            timings.upload.as_secs_f64() * 1e3,
+            sampling.as_secs_f64() * 1e3,
+            upload.as_secs_f64() * 1e3,
             self.style.color_mode,
             self.style.mesh_mode,
         );
-        gpu.window
-            .set_title(&format!("strata view: {} | {}", self.title, self.status));
+        let title = match &self.scene_error {
+            Some(e) => format!("strata view: {} | {} | {e}", self.title, self.status),
+            None => format!("strata view: {} | {}", self.title, self.status),
+        };
+        gpu.window.set_title(&title);
         self.frames += 1;
         if self.max_frames.is_some_and(|m| self.frames >= m) {
             return Ok(());
@@ -316,18 +475,26 @@ impl Viewer {
         match key {
             Key::Named(NamedKey::Escape) => event_loop.exit(),
             Key::Named(NamedKey::ArrowUp) => {
-                let max = self.gpu.as_ref().map_or(usize::MAX, |g| {
-                    crate::gpu::buffers::max_samples(&g.ctx.device)
+                let max = self
+                    .engine
+                    .world
+                    .get_resource::<GpuSplats>()
+                    .map_or(usize::MAX, |g| {
+                        crate::gpu::buffers::max_samples(&g.ctx.device)
+                    });
+                set_sampling(&mut self.engine, self.mesh_entity, |s| {
+                    s.count = s.count.saturating_mul(2).clamp(1, max)
                 });
-                self.count = self.count.saturating_mul(2).clamp(1, max);
                 self.refit_colors = true;
             }
             Key::Named(NamedKey::ArrowDown) => {
-                self.count /= 2;
+                set_sampling(&mut self.engine, self.mesh_entity, |s| s.count /= 2);
                 self.refit_colors = true;
             }
             Key::Character(c) => match c.as_str() {
-                "s" | "S" => self.seed = self.seed.wrapping_add(1),
+                "s" | "S" => set_sampling(&mut self.engine, self.mesh_entity, |s| {
+                    s.seed = s.seed.wrapping_add(1)
+                }),
                 "c" | "C" => {
                     self.style.color_mode = match self.style.color_mode {
                         ColorMode::Density => ColorMode::Segment,
@@ -379,8 +546,10 @@ impl ApplicationHandler for Viewer {
                 {
                     gpu.config.width = size.width;
                     gpu.config.height = size.height;
-                    gpu.surface.configure(&gpu.ctx.device, &gpu.config);
-                    gpu.depth = depth_view(&gpu.ctx.device, size.width, size.height);
+                    if let Some(splats) = self.engine.world.get_resource::<GpuSplats>() {
+                        gpu.surface.configure(&splats.ctx.device, &gpu.config);
+                        gpu.depth = depth_view(&splats.ctx.device, size.width, size.height);
+                    }
                     gpu.window.request_redraw();
                 }
             }

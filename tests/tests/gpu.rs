@@ -529,3 +529,89 @@ fn render_without_an_adapter_fails_in_one_line() {
     assert!(!line.contains('\n'), "{line}");
     assert!(!out.exists());
 }
+
+/// The per-frame ECS system: the engine samples into the mesh entity's buffer and
+/// `upload_samples` streams it to the GPU whenever it was rewritten (and only then).
+#[test]
+fn ecs_upload_system_streams_the_engine_samples() {
+    use bevy_ecs::prelude::{Schedule, World};
+    use std::sync::Arc;
+    use strata_engine::field::FieldSpec;
+    use strata_engine::mesh::shapes;
+    use strata_engine::surface::SurfaceOptions;
+    use strata_systems::ecs::{self, MeshBundle, SampleBuffer, SamplingSettings};
+    use strata_systems::gpu::GpuSplats;
+
+    let Some(ctx) = gpu("ecs_upload_system_streams_the_engine_samples") else {
+        return;
+    };
+    let format = HeadlessTarget::new(&ctx.device, 8, 8, 1)
+        .expect("target")
+        .format();
+    let renderer = SplatRenderer::new(&ctx.device, format).expect("pipelines");
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    ecs::register(&mut world, &mut schedule);
+    strata_systems::gpu::upload::register(&mut schedule);
+    world.insert_resource(GpuSplats::new(ctx, renderer));
+
+    let mesh = Arc::new(shapes::sphere(1.0, 3).expect("sphere"));
+    let field = Arc::new(
+        FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field"),
+    );
+    let e = world
+        .spawn(MeshBundle::new(
+            mesh,
+            field,
+            SurfaceOptions::default(),
+            3000,
+            5,
+        ))
+        .id();
+    let check = |world: &mut World, n: usize, uploads: u64| {
+        let cpu = world
+            .get::<SampleBuffer>(e)
+            .expect("buffer")
+            .samples
+            .clone();
+        assert_eq!(cpu.len(), n);
+        let gpu = world.resource::<GpuSplats>();
+        assert!(gpu.error.is_none(), "{:?}", gpu.error);
+        assert_eq!(gpu.last.uploads, uploads);
+        let back = gpu
+            .renderer
+            .samples()
+            .read_back(&gpu.ctx.device, &gpu.ctx.queue)
+            .expect("read back");
+        assert!(back == cpu, "GPU buffer differs from the engine's samples");
+    };
+    schedule.run(&mut world);
+    world.clear_trackers();
+    check(&mut world, 3000, 1);
+    // Nothing changed: no resampling, no upload.
+    schedule.run(&mut world);
+    world.clear_trackers();
+    check(&mut world, 3000, 1);
+    // A new count: resampled and uploaded (the buffer grows).
+    world
+        .get_mut::<SamplingSettings>(e)
+        .expect("settings")
+        .count = 70_000;
+    schedule.run(&mut world);
+    world.clear_trackers();
+    check(&mut world, 70_000, 2);
+    // And shrinks again.
+    world
+        .get_mut::<SamplingSettings>(e)
+        .expect("settings")
+        .count = 10;
+    schedule.run(&mut world);
+    world.clear_trackers();
+    check(&mut world, 10, 3);
+}

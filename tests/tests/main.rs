@@ -1,8 +1,8 @@
 //! strata integration tests: one binary, one module per stage.
 mod chains;
 mod discrepancy;
-mod gpu;
 mod ecs;
+mod gpu;
 mod hot_reload;
 mod io;
 mod param;

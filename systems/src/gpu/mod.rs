@@ -8,6 +8,7 @@
 //! - [`headless`]: offscreen target, readback, PNG.
 //! - [`camera`]: orbit camera and framing.
 //! - [`stream`]: per-frame resampling + upload without ECS.
+//! - [`upload`]: the ECS system streaming the engine's sample buffer to the GPU.
 //! - [`shaders`]: the WGSL sources from `shaders/`.
 //!
 //! A frame: `SampleStream::sample` (CPU, `Sampler::sample_into` into a reused vector),
@@ -22,6 +23,7 @@ pub mod layout;
 pub mod shaders;
 pub mod splat;
 pub mod stream;
+pub mod upload;
 
 /// The wgpu version this module is written against, re-exported so that callers (an
 /// ECS render system, tests) name the same types.
@@ -34,3 +36,4 @@ pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
 pub use splat::{SplatRenderer, SplatStyle};
 pub use stream::SampleStream;
+pub use upload::{GpuSplats, upload_samples};

@@ -1,9 +1,8 @@
 //! The per-frame streaming step without any ECS: resample into a reused CPU staging
 //! vector, then upload it into the renderer's sample buffer.
 //!
-//! This is the body of the future `sample_splats` + `upload_splats` systems: an ECS
-//! resource holds a [`SampleStream`], and the systems call [`SampleStream::sample`] and
-//! [`SampleStream::upload`] (or [`SampleStream::frame`] for both).
+//! For callers without the ECS engine (`strata render`, the frame benchmark); the
+//! engine streams through its own sample buffer and [`super::upload::upload_samples`].
 
 use std::time::{Duration, Instant};
 
