@@ -30,6 +30,8 @@ pub enum Command {
     Segment(SegmentArgs),
     /// Preprocess a scene once, resample it several times, and report timings and memory.
     Bench(BenchArgs),
+    /// Measure samples: discrepancy, spectra, differential domain analysis (JSON + PNG).
+    Analyze(crate::analyze::AnalyzeArgs),
 }
 
 /// Arguments of `strata bench`.
@@ -131,6 +133,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sample(args) => sample(&args),
         Command::Segment(args) => segment(&args),
         Command::Bench(args) => bench(&args),
+        Command::Analyze(args) => crate::analyze::analyze(&args),
     }
 }
 

@@ -4,7 +4,9 @@
 //! into engine inputs, and the `strata` command-line tool. (The ECS, hot reload and GPU
 //! layers will live here too; the pure algorithms are in `strata-engine`.)
 
+pub mod analyze;
 pub mod atlas;
 pub mod cli;
 pub mod config;
+pub mod plot;
 pub mod scene;

@@ -24,6 +24,12 @@
 //! and Wang without defining it; we read epsilon as the kernel's support radius in
 //! expected spacings: pairs with `|d'| < epsilon` count, with `sigma = epsilon / 3`.
 //!
+//! On surfaces, neighbours are found in space (not along the surface): pairs whose
+//! normals differ by more than [`DdaOptions::min_normal_cos`] are skipped, so that
+//! the far side of a thin part does not count; within the kernel's support the
+//! projection into the tangent plane is the usual first-order approximation of the
+//! surface's exponential map.
+//!
 //! **Method and cost.** Neighbours are found with a uniform grid in world space; the
 //! weighted differences are accumulated into a histogram of bin size
 //! `1 / bins_per_spacing` (nearest bin: at normalised frequency f the binning damps the
@@ -59,6 +65,11 @@ pub struct DdaOptions {
     pub frequency_step: f64,
     /// Histogram bins per expected spacing. Range >= 4; default 20.
     pub bins_per_spacing: usize,
+    /// Pairs whose normals make a cosine below this are skipped: on a surface, a
+    /// neighbour in space across a thin part (the other side of a tube or a sheet) is
+    /// not a neighbour on the surface. Range [-1, 1]; default 0.5 (60 degrees); planar
+    /// samplings are unaffected.
+    pub min_normal_cos: f64,
 }
 
 impl Default for DdaOptions {
@@ -68,6 +79,7 @@ impl Default for DdaOptions {
             max_frequency: 2.5,
             frequency_step: 0.05,
             bins_per_spacing: 20,
+            min_normal_cos: 0.5,
         }
     }
 }
@@ -113,6 +125,12 @@ impl DdaOptions {
         positive("epsilon", self.epsilon)?;
         positive("max_frequency", self.max_frequency)?;
         positive("frequency_step", self.frequency_step)?;
+        if !(-1.0..=1.0).contains(&self.min_normal_cos) {
+            return Err(DdaError::InvalidOption {
+                name: "min_normal_cos",
+                value: self.min_normal_cos,
+            });
+        }
         if self.bins_per_spacing < 4 {
             return Err(DdaError::InvalidOption {
                 name: "bins_per_spacing",
@@ -219,6 +237,10 @@ fn differences(samples: &[Sample], options: &DdaOptions, bins_half: usize) -> Ve
     let eps = options.epsilon;
     let sigma2 = (eps / 3.0).powi(2);
     let bins = options.bins_per_spacing as f64;
+    let normals: Vec<DVec3> = samples
+        .iter()
+        .map(|s| Vec3::from(s.normal).as_dvec3())
+        .collect();
     let pos: Vec<DVec3> = samples
         .iter()
         .map(|s| Vec3::from(s.position).as_dvec3())
@@ -246,7 +268,7 @@ fn differences(samples: &[Sample], options: &DdaOptions, bins_half: usize) -> Ve
             let mut h = vec![0.0; side * side];
             for &i in chunk {
                 let s = &samples[i];
-                let n = Vec3::from(s.normal).as_dvec3();
+                let n = normals[i];
                 let m1 = Vec3::from(s.major_axis).as_dvec3();
                 let m2 = n.cross(m1).try_normalize().unwrap_or(DVec3::Y);
                 let inv = DVec2::new(1.0 / s.spacing[0] as f64, 1.0 / s.spacing[1] as f64);
@@ -259,6 +281,9 @@ fn differences(samples: &[Sample], options: &DdaOptions, bins_half: usize) -> Ve
                                 continue;
                             };
                             for &j in list {
+                                if normals[j as usize].dot(n) < options.min_normal_cos {
+                                    continue;
+                                }
                                 let d = pos[j as usize] - pos[i];
                                 let q = DVec2::new(d.dot(m1), d.dot(m2)) * inv;
                                 let r2 = q.length_squared();
