@@ -58,6 +58,9 @@ pub struct AnalyzeArgs {
     pub alignment: bool,
 }
 
+/// Draws one plot into the given file.
+type DrawFn<'a> = dyn Fn(&Path) -> Result<(), plot::PlotError> + 'a;
+
 /// What was analysed.
 struct Input {
     sets: Vec<Vec<Sample>>,
@@ -76,7 +79,7 @@ pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut written: Vec<PathBuf> = Vec::new();
     let mut plot_errors: Vec<String> = Vec::new();
-    let mut plot_to = |name: &str, f: &dyn Fn(&Path) -> Result<(), plot::PlotError>| {
+    let mut plot_to = |name: &str, f: &DrawFn| {
         if args.no_plots {
             return;
         }
@@ -375,7 +378,7 @@ fn planar_frame(input: &Input) -> Option<Frame> {
 fn alignment_map(
     args: &AnalyzeArgs,
     input: &Input,
-    plot_to: &mut dyn FnMut(&str, &dyn Fn(&Path) -> Result<(), plot::PlotError>),
+    plot_to: &mut dyn FnMut(&str, &DrawFn),
 ) -> anyhow::Result<()> {
     let (Some((scene, _)), Some(config)) = (&input.scene, &input.config) else {
         bail!("--alignment needs a scene file");

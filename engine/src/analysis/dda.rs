@@ -198,10 +198,8 @@ pub fn dda(sets: &[Vec<Sample>], options: &DdaOptions) -> Result<DdaSpectrum, Dd
     }
     for (set, samples) in sets.iter().enumerate() {
         if let Some(index) = samples.iter().position(|s| {
-            !Vec3::from(s.position).is_finite()
-                || !(s.spacing[0] > 0.0 && s.spacing[1] > 0.0)
-                || !s.spacing[0].is_finite()
-                || !s.spacing[1].is_finite()
+            let ok = |v: f32| v.is_finite() && v > 0.0;
+            !(Vec3::from(s.position).is_finite() && ok(s.spacing[0]) && ok(s.spacing[1]))
         }) {
             return Err(DdaError::BadSample { set, index });
         }
@@ -445,7 +443,7 @@ mod tests {
             .build()
             .expect("pool")
             .install(|| dda(std::slice::from_ref(&set), &o).expect("dda"));
-        assert_eq!(one, dda(&[set.clone()], &o).expect("dda"));
+        assert_eq!(one, dda(std::slice::from_ref(&set), &o).expect("dda"));
         assert_eq!(dda(&[], &o), Err(DdaError::Empty));
         let mut bad = set;
         bad[3].spacing[1] = 0.0;
