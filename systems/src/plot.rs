@@ -160,9 +160,17 @@ pub fn line_chart(path: &Path, axes: &Axes, series: &[Series]) -> Result<(), Plo
         return Err(PlotError::Empty(path.to_path_buf()));
     }
     let (mut x0, mut x1) = min_max(all.iter().map(|p| p.0));
-    let (mut y0, mut y1) = axes
-        .y_range
-        .unwrap_or_else(|| min_max(all.iter().map(|p| p.1)));
+    // The fitted range includes the reference lines, so that none is drawn off the chart.
+    let (mut y0, mut y1) = axes.y_range.unwrap_or_else(|| {
+        min_max(
+            all.iter().map(|p| p.1).chain(
+                axes.reference
+                    .iter()
+                    .map(|r| ty(r.0))
+                    .filter(|v| v.is_finite()),
+            ),
+        )
+    });
     pad(&mut x0, &mut x1, 0.02);
     if axes.y_range.is_none() {
         pad(&mut y0, &mut y1, 0.05);
@@ -437,4 +445,36 @@ fn pad(lo: &mut f64, hi: &mut f64, fraction: f64) {
     let span = (*hi - *lo).abs().max(1e-9);
     *lo -= span * fraction;
     *hi += span * fraction;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Few colours survive the indexed encoding exactly; the file decodes to the image.
+    #[test]
+    fn indexed_png_round_trips() {
+        let (w, h) = (7u32, 5u32);
+        let colours = [[255u8, 255, 255], [10, 20, 30], [200, 0, 0]];
+        let rgb: Vec<u8> = (0..w * h).flat_map(|i| colours[(i % 3) as usize]).collect();
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("x.png");
+        encode(&path, &rgb, (w, h)).expect("encode");
+        let mut decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(&path).expect("open"),
+        ));
+        decoder.set_transformations(png::Transformations::EXPAND);
+        let mut reader = decoder.read_info().expect("header");
+        let mut out = vec![0; reader.output_buffer_size().expect("size")];
+        let info = reader.next_frame(&mut out).expect("frame");
+        assert_eq!((info.width, info.height), (w, h));
+        assert_eq!(&out[..info.buffer_size()], &rgb[..]);
+    }
+
+    #[test]
+    fn heat_scale_ends() {
+        assert_eq!(heat(0.0), RGBColor(60, 90, 255));
+        assert_eq!(heat(1.0), RGBColor(255, 55, 40));
+        assert_eq!(heat(f64::NAN), RGBColor(160, 160, 160));
+    }
 }
