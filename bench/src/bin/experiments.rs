@@ -1428,7 +1428,7 @@ fn section_7_5(ctx: &mut Ctx) -> Result<Section, BoxError> {
                 "stanford-bunny_curvature",
                 "two-torus_uniform",
                 "two-torus_curvature",
-                "stanford-bunny_poisson",
+                "two-torus_random",
             ],
         ),
         ("dda_jittered_rapsd.png", &["uniform", "jittered"]),
@@ -1490,6 +1490,7 @@ fn section_7_5(ctx: &mut Ctx) -> Result<Section, BoxError> {
             "shear",
             "perspective",
             "stanford-bunny_curvature",
+            "two-torus_uniform",
         ]
         .contains(&c.slug.as_str())
     }) {
