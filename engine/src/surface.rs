@@ -332,18 +332,22 @@ pub fn parameterize_with_splitting(
     let mut small: Vec<Vec<u32>> = Vec::new();
     while !pending.is_empty() {
         let results = parameterize_all(mesh, field, &pending, &cut, &options.param);
-        let mut next = Vec::new();
+        let mut to_split = Vec::new();
         for (faces, result) in pending.into_iter().zip(results) {
             match result {
                 Ok(p) if p.report.valid && angle_ok(&p, options) => accepted.push(p),
                 _ if faces.len() < options.min_segment_faces.max(2) => small.push(faces),
-                _ => {
-                    report.splits += 1;
-                    next.extend(split_in_two(mesh, &frames, &weights, &cut, &faces)?);
-                }
+                _ => to_split.push(faces),
             }
         }
-        pending = next;
+        report.splits += to_split.len();
+        // Each split is one random walk over its segment: independent, so in parallel;
+        // the halves are collected in order, so the result does not depend on threads.
+        let halves: Vec<Vec<Vec<u32>>> = to_split
+            .par_iter()
+            .map(|faces| split_in_two(mesh, &frames, &weights, &cut, faces))
+            .collect::<Result<_, _>>()?;
+        pending = halves.into_iter().flatten().collect();
     }
     if !small.is_empty() {
         // Isotropic fallback: the same density, no anisotropy.

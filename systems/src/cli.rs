@@ -30,6 +30,10 @@ pub enum Command {
     Segment(SegmentArgs),
     /// Preprocess a scene once, resample it several times, and report timings and memory.
     Bench(BenchArgs),
+    /// Sample a scene and draw it as field-aligned splats into a PNG, without a window.
+    Render(crate::render::RenderArgs),
+    /// Open a window that resamples and draws the scene every frame (orbit camera).
+    View(crate::view::ViewArgs),
     /// Measure samples: discrepancy, spectra, differential domain analysis (JSON + PNG).
     Analyze(crate::analyze::AnalyzeArgs),
 }
@@ -133,6 +137,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sample(args) => sample(&args),
         Command::Segment(args) => segment(&args),
         Command::Bench(args) => bench(&args),
+        Command::Render(args) => crate::render::run(&args),
+        Command::View(args) => crate::view::run(&args),
         Command::Analyze(args) => crate::analyze::analyze(&args),
     }
 }

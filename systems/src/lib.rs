@@ -8,5 +8,8 @@ pub mod analyze;
 pub mod atlas;
 pub mod cli;
 pub mod config;
+pub mod gpu;
 pub mod plot;
+pub mod render;
 pub mod scene;
+pub mod view;

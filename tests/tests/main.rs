@@ -2,6 +2,7 @@
 mod analysis;
 mod chains;
 mod discrepancy;
+mod gpu;
 mod io;
 mod param;
 mod pipeline;

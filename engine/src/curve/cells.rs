@@ -68,9 +68,6 @@ pub struct SegmentCurve {
     triangles: Vec<[u32; 3]>,
     /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
     density_planes: Vec<[f64; 3]>,
-    /// Per triangle, barycentric coordinates 1 and 2 as affine functions of `uv`:
-    /// `b1 = m[0] u + m[1] v + m[2]`, `b2 = m[3] u + m[4] v + m[5]`.
-    bary_planes: Vec<[f64; 6]>,
     options: CurveOptions,
 }
 
@@ -108,11 +105,6 @@ impl SegmentCurve {
             candidates: Vec::new(),
             uv: domain.uv.to_vec(),
             triangles: domain.triangles.to_vec(),
-            bary_planes: domain
-                .triangles
-                .iter()
-                .map(|t| bary_plane(&t.map(|v| domain.uv[v as usize])))
-                .collect(),
             density_planes,
             options: *options,
         };
@@ -123,6 +115,11 @@ impl SegmentCurve {
             return Err(CurveError::ZeroMeasure);
         }
         curve.refine(total);
+        // The cells are kept for the life of the sampler: drop the growth slack.
+        curve.keys.shrink_to_fit();
+        curve.cumulative.shrink_to_fit();
+        curve.candidates.shrink_to_fit();
+        curve.candidate_offsets.shrink_to_fit();
         Ok(curve)
     }
 
@@ -289,7 +286,6 @@ impl SegmentCurve {
             + self.uv.capacity() * 16
             + self.triangles.capacity() * 12
             + self.density_planes.capacity() * 24
-            + self.bary_planes.capacity() * 48
     }
 
     /// Index of the leaf holding cumulative measure `m` (clamped into range).
@@ -331,63 +327,88 @@ impl SegmentCurve {
             let uv = key.origin() + DVec2::new(x, y) * key.size();
             return self.point_location(cands, uv);
         }
-        self.descend_partial(key, cands, t, levels.min(self.options.leaf_levels as u32))
+        self.descend_partial(
+            leaf,
+            key,
+            cands,
+            t,
+            levels.min(self.options.leaf_levels as u32),
+        )
     }
 
     /// Exact descent through the sub-cells of a boundary leaf.
-    fn descend_partial(&self, key: CellKey, cands: &[u32], mut t: f64, levels: u32) -> DomainPoint {
+    ///
+    /// `t * measure(leaf)` is carried down as an absolute target, so at each level the
+    /// children are measured in curve order only until the one holding the target (on
+    /// average 2.5 of 4), and each child keeps only the candidate triangles that
+    /// overlap it, so deeper levels clip fewer triangles.
+    fn descend_partial(
+        &self,
+        leaf: usize,
+        key: CellKey,
+        cands: &[u32],
+        t: f64,
+        levels: u32,
+    ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
         let mut state = key.state;
+        let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
+        let mut target = t * node_measure;
+        // Candidates of the current node (`cur`) and of each child measured at this
+        // level (`kept`); lists longer than the buffers keep the parent's list.
+        let mut cur = Candidates::from_slice(cands);
+        let mut kept = [Candidates::EMPTY; 4];
         for depth in 0..levels {
             let half = 0.5 * size;
-            let mut m = [0.0f64; 4];
-            let mut full = [false; 4];
-            let mut corner = [DVec2::ZERO; 4];
+            let mut chosen = None;
+            let mut last = None;
             for rank in 0..4u8 {
-                let (qx, qy, _) = state.child(rank);
+                let (qx, qy, child_state) = state.child(rank);
                 let c_lo = lo + DVec2::new(qx as f64, qy as f64) * half;
-                corner[rank as usize] = c_lo;
-                let mut covered = 0.0;
-                for &tri in cands {
+                let list = &mut kept[rank as usize];
+                list.clear();
+                let (mut m, mut covered) = (0.0, 0.0);
+                for &tri in cur.as_slice(cands) {
                     let (mm, a) = self.overlap(tri as usize, c_lo, half);
-                    m[rank as usize] += mm;
-                    covered += a;
+                    if a > 0.0 {
+                        m += mm;
+                        covered += a;
+                        list.push(tri);
+                    }
                 }
-                full[rank as usize] = covered >= half * half * (1.0 - 1e-9);
-            }
-            let total: f64 = m.iter().sum();
-            if !(total > 0.0) {
-                break;
-            }
-            // Pick the child by the exact measures and rescale t into it; round-off at
-            // the end falls back to the last non-empty child.
-            let mut target = t * total;
-            let mut rank = 3;
-            for (r, &mr) in m.iter().enumerate() {
-                if mr > 0.0 && target < mr {
-                    rank = r;
+                if !(m > 0.0) {
+                    continue;
+                }
+                let full = covered >= half * half * (1.0 - 1e-9);
+                let child = (rank, c_lo, child_state, m, full);
+                last = Some(child);
+                if target < m {
+                    chosen = Some(child);
                     break;
                 }
-                target -= mr;
+                target -= m;
             }
-            if m[rank] == 0.0 || target >= m[rank] {
-                rank = (0..4).rev().find(|&r| m[r] > 0.0).unwrap_or(0);
-                target = m[rank];
-            }
-            t = (target / m[rank]).clamp(0.0, 1.0 - f64::EPSILON);
-            let (_, _, child_state) = state.child(rank as u8);
-            lo = corner[rank];
+            // Round-off past the last child falls back to its end.
+            let Some((rank, c_lo, child_state, m, full)) =
+                chosen.or_else(|| last.inspect(|c| target = c.3 * (1.0 - f64::EPSILON)))
+            else {
+                break;
+            };
+            cur = kept[rank as usize];
+            lo = c_lo;
             size = half;
             state = child_state;
-            if full[rank] {
-                let levels = levels - depth - 1;
-                let (x, y) = super::hilbert::point_in_node(state, t, levels);
-                return self.point_location(cands, lo + DVec2::new(x, y) * size);
+            node_measure = m;
+            if full {
+                let t = (target / node_measure).clamp(0.0, 1.0 - f64::EPSILON);
+                let (x, y) = super::hilbert::point_in_node(state, t, levels - depth - 1);
+                return self.point_location(cur.as_slice(cands), lo + DVec2::new(x, y) * size);
             }
         }
         // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
         // covered piece, which lies in the domain.
+        let cands = cur.as_slice(cands);
         let mut best = (0.0, DVec2::ZERO);
         for &tri in cands {
             let (a, c) =
@@ -411,10 +432,7 @@ impl SegmentCurve {
     fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         let mut best = (f64::NEG_INFINITY, 0u32, [1.0, 0.0, 0.0]);
         for &t in cands {
-            let m = &self.bary_planes[t as usize];
-            let b1 = m[0] * uv.x + m[1] * uv.y + m[2];
-            let b2 = m[3] * uv.x + m[4] * uv.y + m[5];
-            let b = [1.0 - b1 - b2, b1, b2];
+            let b = barycentric(&self.triangle_corners(t as usize), uv);
             let min = b[0].min(b[1]).min(b[2]);
             if min >= 0.0 {
                 return DomainPoint {
@@ -451,24 +469,6 @@ pub fn barycentric(t: &[DVec2; 3], p: DVec2) -> [f64; 3] {
     let b1 = d.perp_dot(e2) * inv;
     let b2 = e1.perp_dot(d) * inv;
     [1.0 - b1 - b2, b1, b2]
-}
-
-/// Barycentric coordinates 1 and 2 of triangle `p` as affine functions of the point.
-fn bary_plane(p: &[DVec2; 3]) -> [f64; 6] {
-    let e1 = p[1] - p[0];
-    let e2 = p[2] - p[0];
-    let inv = 1.0 / e1.perp_dot(e2);
-    // b1 = (d x e2) / det, b2 = (e1 x d) / det with d = q - p0.
-    let (a1, c1) = (e2.y * inv, -e2.x * inv);
-    let (a2, c2) = (-e1.y * inv, e1.x * inv);
-    [
-        a1,
-        c1,
-        -(a1 * p[0].x + c1 * p[0].y),
-        a2,
-        c2,
-        -(a2 * p[0].x + c2 * p[0].y),
-    ]
 }
 
 /// The affine density `g . p + h` that interpolates the corner densities.
@@ -521,4 +521,59 @@ fn validate_domain(domain: &CurveDomain<'_>) -> Result<(), CurveError> {
         }
     }
     Ok(())
+}
+
+/// A short candidate list on the stack, or "all of the leaf's candidates" when the
+/// leaf has more than fit (rare: leaves overlap a few triangles).
+#[derive(Clone, Copy)]
+struct Candidates {
+    ids: [u32; Candidates::CAP],
+    /// Number of ids, or `ALL` for the whole slice given to `as_slice`.
+    len: usize,
+}
+
+impl Candidates {
+    const CAP: usize = 12;
+    const ALL: usize = usize::MAX;
+    const EMPTY: Candidates = Candidates {
+        ids: [0; Candidates::CAP],
+        len: 0,
+    };
+
+    fn from_slice(s: &[u32]) -> Self {
+        let mut c = Self::EMPTY;
+        if s.len() > Self::CAP {
+            c.len = Self::ALL;
+        } else {
+            c.ids[..s.len()].copy_from_slice(s);
+            c.len = s.len();
+        }
+        c
+    }
+
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// Appends `id`; past the capacity the list becomes `ALL` (a superset, still exact:
+    /// triangles that miss a cell contribute nothing to it).
+    fn push(&mut self, id: u32) {
+        if self.len == Self::ALL {
+            return;
+        }
+        if self.len == Self::CAP {
+            self.len = Self::ALL;
+            return;
+        }
+        self.ids[self.len] = id;
+        self.len += 1;
+    }
+
+    fn as_slice<'a>(&'a self, all: &'a [u32]) -> &'a [u32] {
+        if self.len == Self::ALL {
+            all
+        } else {
+            &self.ids[..self.len]
+        }
+    }
 }

@@ -38,59 +38,81 @@ impl Poly {
 }
 
 /// Clips triangle `tri` (counter-clockwise) to the square `[lo, lo + size]^2`.
+///
+/// Sutherland-Hodgman against the four sides, each side a specialised pass, and a side
+/// that the polygon lies entirely inside of is skipped (most triangles cross one or two
+/// sides of a cell).
 pub fn clip_triangle(tri: &[DVec2; 3], lo: DVec2, size: f64) -> Poly {
-    let mut buf = [[DVec2::ZERO; 8]; 2];
-    buf[0][..3].copy_from_slice(tri);
-    let mut len = 3;
     let hi = lo + DVec2::splat(size);
-    // (axis, bound, keep the side >= bound?)
-    let planes = [
-        (0, lo.x, true),
-        (0, hi.x, false),
-        (1, lo.y, true),
-        (1, hi.y, false),
-    ];
-    let mut src = 0;
-    for (axis, bound, keep_ge) in planes {
-        if len == 0 {
-            break;
-        }
-        let (a, b) = buf.split_at_mut(1);
-        let (from, to) = if src == 0 {
-            (&a[0], &mut b[0])
-        } else {
-            (&b[0], &mut a[0])
-        };
-        let mut out = 0;
-        let signed = |p: DVec2| {
-            if keep_ge {
-                p[axis] - bound
-            } else {
-                bound - p[axis]
+    let mut bufs = [[DVec2::ZERO; 8]; 2];
+    bufs[0][..3].copy_from_slice(tri);
+    let mut len = 3;
+    // Index of the buffer holding the current polygon; a pass that clips nothing
+    // leaves it in place (no copy).
+    let mut cur = 0;
+    // One pass per side: clip the current buffer into the other one and switch.
+    macro_rules! pass {
+        ($axis:literal, $ge:literal, $bound:expr) => {{
+            let [b0, b1] = &mut bufs;
+            let (from, to) = if cur == 0 { (&*b0, b1) } else { (&*b1, b0) };
+            if let Some(n) = clip_side::<$axis, $ge>(&from[..len], to, $bound) {
+                len = n;
+                cur ^= 1;
             }
-        };
-        let mut p = from[len - 1];
-        let mut dp = signed(p);
-        for &q in &from[..len] {
-            let dq = signed(q);
-            if (dp >= 0.0) != (dq >= 0.0) {
-                let t = dp / (dp - dq);
-                let mut x = p + (q - p) * t;
-                x[axis] = bound; // exact on the clipping line
-                to[out] = x;
-                out += 1;
-            }
-            if dq >= 0.0 {
-                to[out] = q;
-                out += 1;
-            }
-            p = q;
-            dp = dq;
-        }
-        len = out;
-        src ^= 1;
+        }};
     }
-    Poly { pts: buf[src], len }
+    pass!(0, true, lo.x);
+    pass!(0, false, hi.x);
+    pass!(1, true, lo.y);
+    pass!(1, false, hi.y);
+    Poly {
+        pts: bufs[cur],
+        len,
+    }
+}
+
+/// One Sutherland-Hodgman pass: keeps the part of `from` with coordinate `AXIS` at least
+/// (`GE`) or at most (`!GE`) `bound`, writing it to `to`; `None` when all of `from` is
+/// kept (nothing written).
+#[inline(always)]
+fn clip_side<const AXIS: usize, const GE: bool>(
+    from: &[DVec2],
+    to: &mut [DVec2; 8],
+    bound: f64,
+) -> Option<usize> {
+    let signed = |p: DVec2| {
+        let c = if AXIS == 0 { p.x } else { p.y };
+        if GE { c - bound } else { bound - c }
+    };
+    if from.iter().all(|&p| signed(p) >= 0.0) {
+        return None;
+    }
+    let mut out = 0;
+    let &last = from.last()?;
+    let mut p = last;
+    let mut dp = signed(p);
+    for &q in from {
+        let dq = signed(q);
+        if (dp >= 0.0) != (dq >= 0.0) && out < 8 {
+            let t = dp / (dp - dq);
+            let mut x = p + (q - p) * t;
+            // Exact on the clipping line.
+            if AXIS == 0 {
+                x.x = bound;
+            } else {
+                x.y = bound;
+            }
+            to[out] = x;
+            out += 1;
+        }
+        if dq >= 0.0 && out < 8 {
+            to[out] = q;
+            out += 1;
+        }
+        p = q;
+        dp = dq;
+    }
+    Some(out)
 }
 
 #[cfg(test)]

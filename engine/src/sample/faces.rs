@@ -1,87 +1,59 @@
-//! Per-face data packed for the per-frame path: everything needed to turn a point of a
-//! face into a [`Sample`](super::Sample), in one contiguous record per face.
+//! Turning a point of a face into the fields of a [`Sample`](super::Sample), read
+//! straight from the mesh and the field (no per-face copy: the preprocessed data stays
+//! small, and the mesh's arrays are already contiguous).
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3};
 
-use crate::field::{TensorField, tangent_frame};
+use crate::field::TensorField;
 use crate::mesh::TriMesh;
 
-/// One face's corners, normals and field, in single precision.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FaceRecord {
-    positions: [Vec3; 3],
-    normals: [Vec3; 3],
-    /// Orthonormal frame of the face's plane (`e1 x e2` = face normal).
-    e1: Vec3,
-    e2: Vec3,
-    /// Per corner, the tensor in the face frame as `(a, b, c)` of `[[a, b], [b, c]]`.
-    tensor: [Vec3; 3],
-}
-
-/// What a face contributes to a sample at barycentric coordinates `b`.
+/// What a face contributes to a sample at some barycentric coordinates.
 pub(crate) struct FacePoint {
-    pub position: Vec3,
-    pub normal: Vec3,
-    pub major: Vec3,
-    /// Eigenvalues `l1 >= l2`.
-    pub l1: f32,
-    pub l2: f32,
+    pub position: DVec3,
+    pub normal: DVec3,
+    pub major: DVec3,
+    /// Eigenvalues `l1 >= l2` of the interpolated tensor in the face's plane.
+    pub l1: f64,
+    pub l2: f64,
 }
 
-impl FaceRecord {
-    /// Packs every face of `mesh` with `field`.
-    pub(crate) fn build_all(mesh: &TriMesh, field: &TensorField) -> Vec<FaceRecord> {
-        let f32v = |v: DVec3| v.as_vec3();
-        mesh.triangles()
-            .iter()
-            .zip(mesh.face_normals())
-            .map(|(t, n)| {
-                let (e1, e2) = tangent_frame(*n);
-                let tensor = t.map(|v| {
-                    let m = field.tensors()[v as usize];
-                    let (me1, me2) = (m * e1, m * e2);
-                    let ab = 0.5 * (e2.dot(me1) + e1.dot(me2));
-                    Vec3::new(e1.dot(me1) as f32, ab as f32, e2.dot(me2) as f32)
-                });
-                FaceRecord {
-                    positions: t.map(|v| f32v(mesh.positions()[v as usize])),
-                    normals: t.map(|v| f32v(mesh.vertex_normals()[v as usize])),
-                    e1: f32v(e1),
-                    e2: f32v(e2),
-                    tensor,
-                }
-            })
-            .collect()
-    }
-
-    /// Interpolates position, normal and field at barycentric coordinates `b`.
-    ///
-    /// The major eigenvector of `[[a, b], [b, c]]` is taken without trigonometry as
-    /// `(l1 - c, b)` or `(b, l1 - a)`, whichever is the longer (both are eigenvectors;
-    /// the longer is the better conditioned); an isotropic tensor gets `e1`.
-    #[inline]
-    pub(crate) fn at(&self, b: [f32; 3]) -> FacePoint {
-        let lerp = |v: &[Vec3; 3]| v[0] * b[0] + v[1] * b[1] + v[2] * b[2];
-        let position = lerp(&self.positions);
-        let normal = lerp(&self.normals).normalize_or(self.e1.cross(self.e2));
-        let t = lerp(&self.tensor);
-        let (a, bb, c) = (t.x, t.y, t.z);
-        let mean = 0.5 * (a + c);
-        let h = 0.5 * (a - c);
-        let r = (h * h + bb * bb).sqrt();
-        let (l1, l2) = (mean + r, mean - r);
-        let v = if a >= c {
-            Vec2::new(l1 - c, bb)
-        } else {
-            Vec2::new(bb, l1 - a)
-        };
-        let v = v.try_normalize().unwrap_or(Vec2::X);
-        FacePoint {
-            position,
-            normal,
-            major: self.e1 * v.x + self.e2 * v.y,
-            l1,
-            l2,
-        }
+/// Interpolates position, normal and field on `face` at barycentric coordinates `b`.
+///
+/// The tensor is interpolated linearly (DESIGN.md: it has no sign ambiguity) and
+/// restricted to the face's plane in the frame `e1 = (p1 - p0) / |p1 - p0|`,
+/// `e2 = n x e1`. Its major eigenvector is taken without trigonometry as `(l1 - c, b)`
+/// or `(b, l1 - a)` of `[[a, b], [b, c]]`, whichever is longer (both are eigenvectors;
+/// the longer is better conditioned); an isotropic tensor gets `e1`.
+#[inline]
+pub(crate) fn face_point(mesh: &TriMesh, field: &TensorField, face: u32, b: [f64; 3]) -> FacePoint {
+    let tri = mesh.triangles()[face as usize];
+    let [i, j, k] = tri.map(|v| v as usize);
+    let p = mesh.positions();
+    let position = p[i] * b[0] + p[j] * b[1] + p[k] * b[2];
+    let n = mesh.face_normals()[face as usize];
+    let vn = mesh.vertex_normals();
+    let normal = (vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2]).normalize_or(n);
+    let e1 = (p[j] - p[i]).normalize_or(n.any_orthonormal_vector());
+    let e2 = n.cross(e1);
+    let t = field.tensors();
+    let m = t[i] * b[0] + t[j] * b[1] + t[k] * b[2];
+    let (me1, me2) = (m * e1, m * e2);
+    let (a, bb, c) = (e1.dot(me1), 0.5 * (e2.dot(me1) + e1.dot(me2)), e2.dot(me2));
+    let mean = 0.5 * (a + c);
+    let h = 0.5 * (a - c);
+    let r = (h * h + bb * bb).sqrt();
+    let (l1, l2) = (mean + r, mean - r);
+    let v = if a >= c {
+        DVec2::new(l1 - c, bb)
+    } else {
+        DVec2::new(bb, l1 - a)
+    };
+    let v = v.try_normalize().unwrap_or(DVec2::X);
+    FacePoint {
+        position,
+        normal,
+        major: e1 * v.x + e2 * v.y,
+        l1,
+        l2,
     }
 }

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::faces::FaceRecord;
+use super::faces::face_point;
 use super::stratified::{allocate, stratified_value};
 use super::types::Sample;
 use crate::curve::{DomainPoint, SegmentCurve};
@@ -55,7 +55,6 @@ pub struct Sampler {
     mesh: Arc<TriMesh>,
     field: Arc<TensorField>,
     segments: Vec<SegmentSampling>,
-    faces: Vec<FaceRecord>,
     total_measure: f64,
     /// Segments one by one: `0..t` as groups of one (order, offsets, measures).
     singles: Groups,
@@ -180,7 +179,6 @@ impl Sampler {
         if !(total_measure > 0.0) {
             return Err(SampleError::Empty);
         }
-        let faces = FaceRecord::build_all(&mesh, &field);
         let ones: Vec<Vec<u32>> = (0..segments.len() as u32).map(|i| vec![i]).collect();
         let singles = Groups::new(&ones, &segments);
         let chains = Groups::new(&link_chains(&mesh, &segments), &segments);
@@ -188,7 +186,6 @@ impl Sampler {
             mesh,
             field,
             segments,
-            faces,
             total_measure,
             singles,
             chains,
@@ -215,12 +212,20 @@ impl Sampler {
         &self.field
     }
 
-    /// Memory held by the cells, in bytes (the mesh and field are shared).
+    /// Memory held by the preprocessed data in bytes: every segment's cells, domain
+    /// triangles and face map, and the chain tables (the mesh and the field are inputs,
+    /// shared, and not counted; nothing per face is copied out of them).
     pub fn heap_bytes(&self) -> usize {
+        let groups = |g: &Groups| {
+            g.order.capacity() * 4 + g.offsets.capacity() * 4 + g.measures.capacity() * 8
+        };
         self.segments
             .iter()
             .map(|s| s.curve.heap_bytes() + s.faces.capacity() * 4)
-            .sum()
+            .sum::<usize>()
+            + self.segments.capacity() * std::mem::size_of::<SegmentSampling>()
+            + groups(&self.singles)
+            + groups(&self.chains)
     }
 
     /// Returns `n` samples for `seed` in a new vector.
@@ -348,19 +353,18 @@ impl Sampler {
         scale: f64,
     ) -> Sample {
         let face = seg.faces[p.triangle as usize];
-        let b = p.bary.map(|x| x as f32);
-        let fp = self.faces[face as usize].at(b);
-        let scale = scale as f32;
+        let fp = face_point(&self.mesh, &self.field, face, p.bary);
         let spacing = [
-            scale / fp.l1.sqrt(),
-            scale / fp.l2.max(f32::MIN_POSITIVE).sqrt(),
+            (scale / fp.l1.sqrt()) as f32,
+            (scale / fp.l2.max(f64::MIN_POSITIVE).sqrt()) as f32,
         ];
+        let b = p.bary.map(|x| x as f32);
         Sample {
-            position: fp.position.to_array(),
+            position: fp.position.as_vec3().to_array(),
             face,
-            normal: fp.normal.to_array(),
+            normal: fp.normal.as_vec3().to_array(),
             segment: seg.segment,
-            major_axis: fp.major.to_array(),
+            major_axis: fp.major.as_vec3().to_array(),
             index,
             bary: [b[1], b[2]],
             spacing,

@@ -1,0 +1,267 @@
+//! A growable GPU buffer of [`Sample`]s, refilled every frame through a ring of mapped
+//! staging chunks.
+//!
+//! Capacity policy: the buffer holds a power of two of samples, at least
+//! [`MIN_CAPACITY`]. It grows to the next power of two at or above the request, and
+//! shrinks (to the next power of two above the request) only when the request falls
+//! below a quarter of the capacity, so a count oscillating around a power of two does
+//! not reallocate every frame. Reallocating does not copy: every upload rewrites the
+//! whole prefix in use.
+//!
+//! Uploads go through a `wgpu::util::StagingBelt`: a ring of `MAP_WRITE` chunks, each
+//! re-mapped asynchronously once the GPU has consumed its copy. A frame takes a chunk
+//! that is already mapped, or allocates a new one if all are still in flight, so the CPU
+//! never waits for the GPU's previous frame; in steady state two or three chunks of the
+//! buffer's size circulate. Cost per frame: one copy of `64 N` bytes into mapped memory
+//! and one recorded buffer-to-buffer copy.
+
+use strata_engine::sample::Sample;
+use wgpu::util::StagingBelt;
+
+use super::context::{GpuError, scoped};
+
+/// The smallest capacity, in samples (64 KiB).
+pub const MIN_CAPACITY: usize = 1024;
+
+const SAMPLE_BYTES: u64 = std::mem::size_of::<Sample>() as u64;
+
+/// The device buffer of samples that the splat pipeline reads at instance rate.
+#[derive(Debug)]
+pub struct SampleBuffer {
+    buffer: wgpu::Buffer,
+    belt: StagingBelt,
+    capacity: usize,
+    len: usize,
+    reallocations: usize,
+}
+
+/// The capacity that [`SampleBuffer`] chooses for `count` samples when it currently
+/// holds `capacity` (see the module documentation).
+pub fn next_capacity(capacity: usize, count: usize) -> usize {
+    let fit = count.max(MIN_CAPACITY).next_power_of_two();
+    if count > capacity || count < capacity / 4 {
+        fit
+    } else {
+        capacity
+    }
+}
+
+/// The most samples one buffer can hold on `device` (its `max_buffer_size`, with room
+/// for the power-of-two capacity policy).
+pub fn max_samples(device: &wgpu::Device) -> usize {
+    let bytes = device.limits().max_buffer_size;
+    let fit = usize::try_from(bytes / SAMPLE_BYTES).unwrap_or(usize::MAX);
+    // Capacities are powers of two: the largest one that fits.
+    if fit == 0 {
+        0
+    } else {
+        1usize << (usize::BITS - 1 - fit.leading_zeros())
+    }
+}
+
+impl SampleBuffer {
+    /// An empty buffer of [`MIN_CAPACITY`] samples.
+    pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
+        let (buffer, belt) = Self::allocate(device, MIN_CAPACITY)?;
+        Ok(Self {
+            buffer,
+            belt,
+            capacity: MIN_CAPACITY,
+            len: 0,
+            reallocations: 0,
+        })
+    }
+
+    fn allocate(
+        device: &wgpu::Device,
+        capacity: usize,
+    ) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
+        let bytes = capacity as u64 * SAMPLE_BYTES;
+        let limit = device.limits().max_buffer_size;
+        if bytes > limit {
+            return Err(GpuError::Limit {
+                what: "sample buffer size (bytes)",
+                requested: bytes,
+                limit,
+            });
+        }
+        let buffer = scoped(device, "allocating the sample buffer", || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("strata samples"),
+                size: bytes,
+                usage: wgpu::BufferUsages::VERTEX
+                    | wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        })?;
+        // One chunk holds a whole frame's upload; a new belt per capacity drops chunks
+        // that are too small for the new size (wgpu frees them once the GPU is done).
+        let belt = StagingBelt::new(device.clone(), bytes);
+        Ok((buffer, belt))
+    }
+
+    /// Replaces the contents with `samples`, growing or shrinking the buffer first when
+    /// the capacity policy says so. Records the copy into a new command buffer and
+    /// submits it; draws submitted afterwards see the new samples.
+    pub fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        samples: &[Sample],
+    ) -> Result<(), GpuError> {
+        let capacity = next_capacity(self.capacity, samples.len());
+        if capacity != self.capacity {
+            let (buffer, belt) = Self::allocate(device, capacity)?;
+            self.buffer = buffer;
+            self.belt = belt;
+            self.capacity = capacity;
+            self.reallocations += 1;
+        }
+        self.len = samples.len();
+        let Some(size) = wgpu::BufferSize::new(samples.len() as u64 * SAMPLE_BYTES) else {
+            return Ok(());
+        };
+        // Non-blocking: runs the callbacks of staging chunks whose copies have finished,
+        // so that they return to the belt instead of new ones being allocated.
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|source| GpuError::Poll {
+                operation: "recycling staging memory",
+                source,
+            })?;
+        scoped(device, "uploading samples", || {
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("strata sample upload"),
+            });
+            {
+                let mut view = self.belt.write_buffer(&mut encoder, &self.buffer, 0, size);
+                view.copy_from_slice(bytemuck::cast_slice(samples));
+            }
+            self.belt.finish();
+            queue.submit([encoder.finish()]);
+            self.belt.recall();
+        })
+    }
+
+    /// The device buffer (capacity samples; the first [`len`](Self::len) are current).
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// Samples uploaded by the last [`upload`](Self::upload).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the last upload was empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Samples the buffer can hold without reallocating.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// How many times the buffer was reallocated (grown or shrunk) since creation.
+    pub fn reallocations(&self) -> usize {
+        self.reallocations
+    }
+
+    /// Copies the current samples back from the GPU (waits for the device; for tests and
+    /// debugging, not for the frame loop).
+    pub fn read_back(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<Sample>, GpuError> {
+        let bytes = read_buffer(device, queue, &self.buffer, self.len as u64 * SAMPLE_BYTES)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+/// Copies the first `size` bytes of `buffer` (which needs `COPY_SRC`) into a mapped
+/// readback buffer and returns them. Waits for the device.
+pub(crate) fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    size: u64,
+) -> Result<Vec<u8>, GpuError> {
+    const OP: &str = "reading a buffer back";
+    if size == 0 {
+        return Ok(Vec::new());
+    }
+    let readback = scoped(device, OP, || {
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("strata readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &readback, 0, size);
+        queue.submit([encoder.finish()]);
+        readback
+    })?;
+    map_read(device, &readback, OP)
+}
+
+/// Maps all of `buffer` (`MAP_READ`, with its copies submitted) and returns its bytes.
+pub(crate) fn map_read(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    operation: &'static str,
+) -> Result<Vec<u8>, GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        // The receiver outlives the poll below; a send error only means we gave up.
+        let _ = tx.send(r);
+    });
+    super::context::wait_idle(device, operation)?;
+    match rx.try_recv() {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => {
+            return Err(GpuError::Map {
+                operation,
+                message: e.to_string(),
+            });
+        }
+        Err(_) => {
+            return Err(GpuError::Map {
+                operation,
+                message: "the map callback did not run after waiting for the device".into(),
+            });
+        }
+    }
+    let bytes = buffer
+        .get_mapped_range(..)
+        .map_err(|e| GpuError::Map {
+            operation,
+            message: e.to_string(),
+        })?
+        .to_vec();
+    buffer.unmap();
+    Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn capacity_grows_geometrically_and_shrinks_with_hysteresis() {
+        assert_eq!(next_capacity(MIN_CAPACITY, 0), MIN_CAPACITY);
+        assert_eq!(next_capacity(MIN_CAPACITY, 1000), MIN_CAPACITY);
+        assert_eq!(next_capacity(MIN_CAPACITY, 1025), 2048);
+        assert_eq!(next_capacity(2048, 100_000), 131_072);
+        // Within [capacity / 4, capacity]: kept.
+        assert_eq!(next_capacity(131_072, 131_072), 131_072);
+        assert_eq!(next_capacity(131_072, 32_768), 131_072);
+        // Below a quarter: shrunk to fit.
+        assert_eq!(next_capacity(131_072, 32_767), 32_768);
+        assert_eq!(next_capacity(131_072, 10), MIN_CAPACITY);
+    }
+}

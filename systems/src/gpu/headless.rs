@@ -1,0 +1,218 @@
+//! Offscreen rendering: a colour and depth target without a window, read back into an
+//! RGBA image and written as PNG.
+
+use std::path::Path;
+
+use super::buffers::map_read;
+use super::camera::OrbitCamera;
+use super::context::{GpuContext, GpuError, scoped};
+use super::splat::{FrameTarget, SplatRenderer, SplatStyle, TargetFormat};
+
+/// An 8-bit sRGB RGBA image, rows top to bottom, no padding.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RgbaImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `4 * width * height` bytes.
+    pub pixels: Vec<u8>,
+}
+
+impl RgbaImage {
+    /// The pixel at column `x`, row `y` (0 at the top).
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
+        let i = 4 * (y as usize * self.width as usize + x as usize);
+        [
+            self.pixels[i],
+            self.pixels[i + 1],
+            self.pixels[i + 2],
+            self.pixels[i + 3],
+        ]
+    }
+
+    /// Writes the image as an 8-bit RGBA PNG.
+    pub fn write_png(&self, path: &Path) -> Result<(), png::EncodingError> {
+        let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+        let mut encoder = png::Encoder::new(file, self.width, self.height);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&self.pixels)?;
+        writer.finish()
+    }
+}
+
+/// The colour format of offscreen targets.
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+/// The depth format of every target.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// An offscreen colour (optionally multisampled) and depth target with a readback
+/// buffer whose rows are padded to 256 bytes.
+#[derive(Debug)]
+pub struct HeadlessTarget {
+    size: (u32, u32),
+    samples: u32,
+    multisampled: Option<wgpu::TextureView>,
+    color: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    padded_row: u32,
+}
+
+impl HeadlessTarget {
+    /// A `width` x `height` target with `samples` samples per pixel (1 or 4).
+    pub fn new(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        samples: u32,
+    ) -> Result<Self, GpuError> {
+        let limit = device.limits().max_texture_dimension_2d;
+        for v in [width, height] {
+            if v == 0 || v > limit {
+                return Err(GpuError::Limit {
+                    what: "image side (pixels, at least 1)",
+                    requested: u64::from(v),
+                    limit: u64::from(limit),
+                });
+            }
+        }
+        let padded_row = (4 * width).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        scoped(device, "creating the offscreen target", || {
+            let extent = wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            };
+            let texture = |label, format, usage, count| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: extent,
+                    mip_level_count: 1,
+                    sample_count: count,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+            };
+            let color = texture(
+                "strata colour",
+                COLOR_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                1,
+            );
+            let multisampled = (samples > 1).then(|| {
+                texture(
+                    "strata colour (multisampled)",
+                    COLOR_FORMAT,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    samples,
+                )
+                .create_view(&Default::default())
+            });
+            let depth = texture(
+                "strata depth",
+                DEPTH_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+                samples,
+            );
+            let readback = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("strata image readback"),
+                size: u64::from(padded_row) * u64::from(height),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            Self {
+                size: (width, height),
+                samples,
+                multisampled,
+                color_view: color.create_view(&Default::default()),
+                color,
+                depth_view: depth.create_view(&Default::default()),
+                readback,
+                padded_row,
+            }
+        })
+    }
+
+    /// The format a [`SplatRenderer`] must be built with to draw here.
+    pub fn format(&self) -> TargetFormat {
+        TargetFormat {
+            color: COLOR_FORMAT,
+            depth: DEPTH_FORMAT,
+            samples: self.samples,
+        }
+    }
+
+    /// Draws `renderer`'s samples (and mesh) and reads the picture back (waits for
+    /// the device).
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        renderer: &SplatRenderer,
+        camera: &OrbitCamera,
+        style: &SplatStyle,
+    ) -> Result<RgbaImage, GpuError> {
+        const OP: &str = "rendering offscreen";
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let (width, height) = self.size;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let target = match &self.multisampled {
+            Some(ms) => FrameTarget {
+                color: ms,
+                resolve: Some(&self.color_view),
+                depth: &self.depth_view,
+                size: self.size,
+            },
+            None => FrameTarget {
+                color: &self.color_view,
+                resolve: None,
+                depth: &self.depth_view,
+                size: self.size,
+            },
+        };
+        renderer.encode(device, queue, &mut encoder, target, camera, style)?;
+        scoped(device, OP, || {
+            encoder.copy_texture_to_buffer(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &self.color,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.readback,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(self.padded_row),
+                        rows_per_image: Some(height),
+                    },
+                },
+                wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+            );
+            queue.submit([encoder.finish()]);
+        })?;
+        let padded = map_read(device, &self.readback, OP)?;
+        ctx.take_uncaptured(OP)?;
+        let row = 4 * width as usize;
+        let mut pixels = Vec::with_capacity(row * height as usize);
+        for r in padded.chunks_exact(self.padded_row as usize) {
+            pixels.extend_from_slice(&r[..row]);
+        }
+        Ok(RgbaImage {
+            width,
+            height,
+            pixels,
+        })
+    }
+}

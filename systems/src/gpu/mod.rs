@@ -1,0 +1,36 @@
+//! GPU streaming and field-aligned splat rendering with wgpu (the only module that
+//! touches `wgpu::Buffer`).
+//!
+//! - [`context`]: adapter and device with typed errors; error scopes.
+//! - [`layout`]: the Pod structs shared with WGSL and their vertex layouts.
+//! - [`buffers`]: the growable sample buffer with a staging ring.
+//! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
+//! - [`headless`]: offscreen target, readback, PNG.
+//! - [`camera`]: orbit camera and framing.
+//! - [`stream`]: per-frame resampling + upload without ECS.
+//! - [`shaders`]: the WGSL sources from `shaders/`.
+//!
+//! A frame: `SampleStream::sample` (CPU, `Sampler::sample_into` into a reused vector),
+//! `SampleStream::upload` (into mapped staging memory, then a recorded copy; no wait
+//! on the GPU), `SplatRenderer::encode` (one pass: mesh, then instanced quads).
+
+pub mod buffers;
+pub mod camera;
+pub mod context;
+pub mod headless;
+pub mod layout;
+pub mod shaders;
+pub mod splat;
+pub mod stream;
+
+/// The wgpu version this module is written against, re-exported so that callers (an
+/// ECS render system, tests) name the same types.
+pub use wgpu;
+
+pub use buffers::SampleBuffer;
+pub use camera::OrbitCamera;
+pub use context::{GpuContext, GpuError, GpuOptions};
+pub use headless::{HeadlessTarget, RgbaImage};
+pub use layout::{ColorMode, Footprint, MeshMode};
+pub use splat::{SplatRenderer, SplatStyle};
+pub use stream::SampleStream;

@@ -1,0 +1,453 @@
+//! The splat renderer: field-aligned elliptical splats (paper Figs. 4f and 12), one
+//! instanced quad per sample, optionally over the mesh.
+//!
+//! Plain data in, draw commands out: [`SplatRenderer::upload`] takes `&[Sample]` (from
+//! any sampler, an ECS resource or a file) and [`SplatRenderer::encode`] records one
+//! render pass into caller-owned views, so the same renderer serves the headless
+//! target, a window and, later, an ECS render system.
+//!
+//! Each quad spans the ellipse with semi-axes `splat_scale * spacing / 2` along the
+//! sample's major axis (projected into its tangent plane) and `normal x major`; the
+//! fragment stage cuts the ellipse (disc) or weighs it (Gaussian). Depth-tested; splats
+//! facing away from the camera are dropped in the vertex stage.
+
+use glam::Vec3;
+use strata_engine::mesh::TriMesh;
+use strata_engine::sample::{Sample, Sampler};
+
+use super::buffers::SampleBuffer;
+use super::camera::OrbitCamera;
+use super::context::{GpuError, scoped};
+use super::layout::{
+    ColorMode, Footprint, FrameUniforms, MESH_ATTRIBUTES, MeshMode, MeshVertex, SAMPLE_ATTRIBUTES,
+};
+use super::shaders;
+
+/// The formats of the targets a renderer draws into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TargetFormat {
+    /// Colour format (an `*Srgb` format: shaders output linear colour).
+    pub color: wgpu::TextureFormat,
+    /// Depth format.
+    pub depth: wgpu::TextureFormat,
+    /// Samples per pixel (1 or 4).
+    pub samples: u32,
+}
+
+/// How a frame looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplatStyle {
+    /// Splat colours.
+    pub color_mode: ColorMode,
+    /// Splat shape.
+    pub footprint: Footprint,
+    /// The mesh under the splats.
+    pub mesh_mode: MeshMode,
+    /// Semi-axes as a fraction of half the spacings (1: neighbours touch on average).
+    /// Default 0.8.
+    pub splat_scale: f32,
+    /// Colour of [`ColorMode::Constant`], sRGB. Default a warm orange.
+    pub base_color: [f32; 3],
+    /// Log-density range of the colour map (see
+    /// [`log_density_range`](super::layout::log_density_range)).
+    pub log_density_range: [f32; 2],
+    /// Direction towards the key light, world space (normalized when used).
+    pub light_dir: Vec3,
+    /// Clear colour, sRGB.
+    pub background: [f32; 3],
+}
+
+impl Default for SplatStyle {
+    fn default() -> Self {
+        Self {
+            color_mode: ColorMode::Density,
+            footprint: Footprint::Disc,
+            mesh_mode: MeshMode::Plain,
+            splat_scale: 0.8,
+            base_color: [0.95, 0.55, 0.2],
+            log_density_range: [0.0, 1.0],
+            light_dir: Vec3::new(0.4, 0.8, 0.45),
+            background: [0.07, 0.075, 0.09],
+        }
+    }
+}
+
+impl SplatStyle {
+    /// The clear colour as a linear wgpu colour.
+    pub fn clear_color(&self) -> wgpu::Color {
+        let lin = |c: f32| f64::from(c.max(0.0)).powf(2.2);
+        wgpu::Color {
+            r: lin(self.background[0]),
+            g: lin(self.background[1]),
+            b: lin(self.background[2]),
+            a: 1.0,
+        }
+    }
+}
+
+/// Where one frame is drawn.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameTarget<'a> {
+    /// Colour attachment (multisampled when the format has samples > 1).
+    pub color: &'a wgpu::TextureView,
+    /// Single-sample resolve target when `color` is multisampled.
+    pub resolve: Option<&'a wgpu::TextureView>,
+    /// Depth attachment.
+    pub depth: &'a wgpu::TextureView,
+    /// Size in pixels.
+    pub size: (u32, u32),
+}
+
+/// Pipelines, uniforms, the sample buffer and the optional mesh.
+#[derive(Debug)]
+pub struct SplatRenderer {
+    format: TargetFormat,
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    disc: wgpu::RenderPipeline,
+    gaussian: wgpu::RenderPipeline,
+    mesh_pipeline: wgpu::RenderPipeline,
+    samples: SampleBuffer,
+    mesh: Option<(wgpu::Buffer, u32)>,
+}
+
+impl SplatRenderer {
+    /// Builds the pipelines for targets of `format`.
+    pub fn new(device: &wgpu::Device, format: TargetFormat) -> Result<Self, GpuError> {
+        let samples = SampleBuffer::new(device)?;
+        let (uniforms, bind_group, disc, gaussian, mesh_pipeline) =
+            scoped(device, "building the splat pipelines", || {
+                build_pipelines(device, format)
+            })?;
+        Ok(Self {
+            format,
+            uniforms,
+            bind_group,
+            disc,
+            gaussian,
+            mesh_pipeline,
+            samples,
+            mesh: None,
+        })
+    }
+
+    /// The target format the pipelines were built for.
+    pub fn format(&self) -> TargetFormat {
+        self.format
+    }
+
+    /// Replaces the samples drawn (see [`SampleBuffer::upload`]).
+    pub fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        samples: &[Sample],
+    ) -> Result<(), GpuError> {
+        self.samples.upload(device, queue, samples)
+    }
+
+    /// The sample buffer.
+    pub fn samples(&self) -> &SampleBuffer {
+        &self.samples
+    }
+
+    /// Uploads `mesh` (flat-shaded, one vertex per face corner) to draw under the
+    /// splats; `face_segments[f]` colours face `f` in [`MeshMode::Segments`].
+    pub fn set_mesh(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        mesh: &TriMesh,
+        face_segments: Option<&[u32]>,
+    ) -> Result<(), GpuError> {
+        let vertices = mesh_vertices(mesh, face_segments);
+        let count = u32::try_from(vertices.len()).map_err(|_| GpuError::Limit {
+            what: "mesh vertices",
+            requested: vertices.len() as u64,
+            limit: u64::from(u32::MAX),
+        })?;
+        let buffer = scoped(device, "uploading the mesh", || {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("strata mesh"),
+                size: (std::mem::size_of_val(vertices.as_slice()) as u64).max(32),
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            queue.write_buffer(&buffer, 0, bytemuck::cast_slice(&vertices));
+            buffer
+        })?;
+        self.mesh = Some((buffer, count));
+        Ok(())
+    }
+
+    /// Records one render pass: clear, the mesh (if set and wanted), the splats.
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: FrameTarget<'_>,
+        camera: &OrbitCamera,
+        style: &SplatStyle,
+    ) -> Result<(), GpuError> {
+        let (w, h) = target.size;
+        let aspect = w.max(1) as f32 / h.max(1) as f32;
+        let light = style.light_dir.normalize_or(Vec3::Y);
+        let uniforms = FrameUniforms {
+            view_proj: camera.view_proj(aspect).to_cols_array_2d(),
+            eye: camera.eye().extend(1.0).to_array(),
+            light_dir: light.extend(0.0).to_array(),
+            base_color: [
+                style.base_color[0],
+                style.base_color[1],
+                style.base_color[2],
+                1.0,
+            ],
+            log_density_range: style.log_density_range,
+            viewport: [w as f32, h as f32],
+            splat_scale: style.splat_scale,
+            color_mode: style.color_mode.code(),
+            footprint: match style.footprint {
+                Footprint::Disc => 0,
+                Footprint::Gaussian => 1,
+            },
+            mesh_mode: style.mesh_mode.code(),
+            // Lifted only over a mesh, where flat splats would otherwise cut into it.
+            normal_offset: if style.mesh_mode == MeshMode::None || self.mesh.is_none() {
+                0.0
+            } else {
+                0.05
+            },
+            _pad: [0; 3],
+        };
+        scoped(device, "drawing splats", || {
+            queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("strata splats"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: target.resolve,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(style.clear_color()),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: target.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            if let (Some((mesh, count)), false) = (&self.mesh, style.mesh_mode == MeshMode::None) {
+                pass.set_pipeline(&self.mesh_pipeline);
+                pass.set_vertex_buffer(0, mesh.slice(..));
+                pass.draw(0..*count, 0..1);
+            }
+            let n = self.samples.len() as u32;
+            if n > 0 {
+                pass.set_pipeline(match style.footprint {
+                    Footprint::Disc => &self.disc,
+                    Footprint::Gaussian => &self.gaussian,
+                });
+                pass.set_vertex_buffer(0, self.samples.buffer().slice(..));
+                pass.draw(0..4, 0..n);
+            }
+        })
+    }
+}
+
+/// The segment of every face of `sampler`'s mesh (`u32::MAX` for faces no segment
+/// samples), for [`MeshMode::Segments`].
+pub fn face_segments(sampler: &Sampler) -> Vec<u32> {
+    let mut out = vec![u32::MAX; sampler.mesh().face_count()];
+    for s in sampler.segments() {
+        for &f in &s.faces {
+            if let Some(slot) = out.get_mut(f as usize) {
+                *slot = s.segment;
+            }
+        }
+    }
+    out
+}
+
+fn mesh_vertices(mesh: &TriMesh, face_segments: Option<&[u32]>) -> Vec<MeshVertex> {
+    let positions = mesh.positions();
+    let normals = mesh.face_normals();
+    let mut out = Vec::with_capacity(mesh.face_count() * 3);
+    for (f, tri) in mesh.triangles().iter().enumerate() {
+        let n = normals[f].as_vec3();
+        let segment = face_segments
+            .and_then(|s| s.get(f).copied())
+            .unwrap_or(u32::MAX);
+        for &v in tri {
+            out.push(MeshVertex {
+                position: positions[v as usize].as_vec3().to_array(),
+                segment,
+                normal: n.to_array(),
+                _pad: 0,
+            });
+        }
+    }
+    out
+}
+
+type Pipelines = (
+    wgpu::Buffer,
+    wgpu::BindGroup,
+    wgpu::RenderPipeline,
+    wgpu::RenderPipeline,
+    wgpu::RenderPipeline,
+);
+
+fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
+    let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("strata frame uniforms"),
+        size: std::mem::size_of::<FrameUniforms>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let layout =
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("strata frame"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(
+                        std::mem::size_of::<FrameUniforms>() as u64
+                    ),
+                },
+                count: None,
+            }],
+        });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("strata frame"),
+        layout: &layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: uniforms.as_entire_binding(),
+        }],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("strata"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let splat_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("splat.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(shaders::SPLAT.into()),
+    });
+    let mesh_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("mesh.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(shaders::MESH.into()),
+    });
+    let sample_layout = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<Sample>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &SAMPLE_ATTRIBUTES,
+    };
+    let mesh_layout = wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<MeshVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &MESH_ATTRIBUTES,
+    };
+    let multisample = wgpu::MultisampleState {
+        count: format.samples,
+        mask: !0,
+        alpha_to_coverage_enabled: false,
+    };
+    let splat = |fs: &str, blend: Option<wgpu::BlendState>, depth_write: bool| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(fs),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &splat_module,
+                entry_point: Some("vs_splat"),
+                compilation_options: Default::default(),
+                buffers: &[Some(sample_layout.clone())],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: format.depth,
+                depth_write_enabled: Some(depth_write),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &splat_module,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: format.color,
+                    blend,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    let disc = splat("fs_disc", None, true);
+    let gaussian = splat(
+        "fs_gaussian",
+        Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+        false,
+    );
+    let mesh_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("strata mesh"),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &mesh_module,
+            entry_point: Some("vs_mesh"),
+            compilation_options: Default::default(),
+            buffers: &[Some(mesh_layout)],
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: format.depth,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            // Pushed back a little so that splats lying on a face win the depth test.
+            bias: wgpu::DepthBiasState {
+                constant: 4,
+                slope_scale: 2.0,
+                clamp: 0.0,
+            },
+        }),
+        multisample,
+        fragment: Some(wgpu::FragmentState {
+            module: &mesh_module,
+            entry_point: Some("fs_mesh"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: format.color,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    (uniforms, bind_group, disc, gaussian, mesh_pipeline)
+}
