@@ -210,6 +210,103 @@ impl Preprocessed {
     }
 }
 
+impl Preprocessed {
+    /// As [`build`](Self::build), but with a given segmentation instead of the random
+    /// walk's (for controlled experiments: a fixed number of segments, a boundary of a
+    /// chosen shape). Invalid segments are still split, so the final segments may be
+    /// more than given. Build `segmentation` with [`segmentation_from_labels`].
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use strata_engine::{field::FieldSpec, mesh::shapes, surface};
+    /// let mesh = Arc::new(shapes::plane(1.0, 8)?);
+    /// let spec = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 1.0, density: 1.0 };
+    /// let field = Arc::new(spec.build(&mesh)?);
+    /// // Left and right halves.
+    /// let labels: Vec<u32> = (0..mesh.face_count() as u32)
+    ///     .map(|f| (mesh.face_positions(f)[0].x + mesh.face_positions(f)[1].x
+    ///         + mesh.face_positions(f)[2].x > 1.5) as u32)
+    ///     .collect();
+    /// let seg = surface::segmentation_from_labels(&mesh, &labels);
+    /// let pre = surface::Preprocessed::from_segmentation(mesh, field, seg, &Default::default())?;
+    /// assert_eq!(pre.params.len(), 2);
+    /// assert_eq!(pre.sampler.sample(100, 1).len(), 100);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn from_segmentation(
+        mesh: Arc<TriMesh>,
+        field: Arc<TensorField>,
+        segmentation: Segmentation,
+        options: &SurfaceOptions,
+    ) -> Result<Self, SurfaceError> {
+        if options.min_segment_faces == 0 {
+            return Err(SurfaceError::InvalidMinSegmentFaces);
+        }
+        options
+            .curve
+            .validate()
+            .map_err(|source| SurfaceError::Curve { segment: 0, source })?;
+        options.param.validate()?;
+        let t = Instant::now();
+        let (params, mut report) =
+            parameterize_with_splitting(&mesh, &field, &segmentation, options)?;
+        report.segments_before_split = segmentation.segments.len();
+        report.segments = params.len();
+        let mut stages = vec![("parameterization", t.elapsed())];
+        let t = Instant::now();
+        let segments = build_cells(&mesh, &field, &params, &options.curve)?;
+        report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
+        stages.push(("cells", t.elapsed()));
+        let sampler = Sampler::new(mesh, field, segments)?;
+        Ok(Self {
+            segmentation,
+            params,
+            sampler,
+            report,
+            stages,
+        })
+    }
+}
+
+/// A [`Segmentation`] from a segment label per face: one segment per connected part of
+/// each label (so every segment is connected), numbered by lowest face, with its
+/// boundary loops and Euler characteristic; no singularities and no cut edges.
+pub fn segmentation_from_labels(mesh: &TriMesh, face_segment: &[u32]) -> Segmentation {
+    let no_cut = vec![false; mesh.edge_count()];
+    let parts = connected_parts(mesh, face_segment, &no_cut);
+    let mut groups: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+    for (f, &p) in parts.iter().enumerate() {
+        if p != NONE {
+            groups.entry(p).or_default().push(f as u32);
+        }
+    }
+    let mut faces: Vec<Vec<u32>> = groups.into_values().collect();
+    faces.sort_by_key(|g| g[0]);
+    let mut labels = vec![NONE; mesh.face_count()];
+    let segments = faces
+        .into_iter()
+        .enumerate()
+        .map(|(id, faces)| {
+            for &f in &faces {
+                labels[f as usize] = id as u32;
+            }
+            let top = crate::segment::patch_topology(mesh, &faces, &no_cut);
+            crate::segment::Segment {
+                faces,
+                boundary_loops: top.boundary_loops,
+                euler_characteristic: top.euler_characteristic,
+                has_singular_face: false,
+            }
+        })
+        .collect();
+    Segmentation {
+        face_segment: labels,
+        segments,
+        singularities: Vec::new(),
+        cut_edges: Vec::new(),
+    }
+}
+
 /// Parameterizes every segment of `segmentation`, splitting invalid ones (see the
 /// module docs). Returns the final segments' parameterizations, ordered by their lowest
 /// mesh face, and what happened (`segments_before_split` and `cells` are left 0).

@@ -37,6 +37,8 @@ pub enum Command {
     /// Watch a scene file: recompute what each change invalidates, print per stage what
     /// reran, rewrite the samples file atomically after each change.
     Watch(crate::watch::WatchArgs),
+    /// Measure samples: discrepancy, spectra, differential domain analysis (JSON + PNG).
+    Analyze(crate::analyze::AnalyzeArgs),
 }
 
 /// Arguments of `strata bench`.
@@ -141,6 +143,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Render(args) => crate::render::run(&args),
         Command::View(args) => crate::view::run(&args),
         Command::Watch(args) => crate::watch::run(&args),
+        Command::Analyze(args) => crate::analyze::analyze(&args),
     }
 }
 

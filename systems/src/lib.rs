@@ -6,12 +6,14 @@
 //! wgpu ([`gpu`]), and the `strata` command-line tool. The pure algorithms are in
 //! `strata-engine`.
 
+pub mod analyze;
 pub mod atlas;
 pub mod cli;
 pub mod config;
 pub mod ecs;
 pub mod gpu;
 pub mod hot_reload;
+pub mod plot;
 pub mod render;
 pub mod scene;
 pub mod view;

@@ -1,4 +1,5 @@
 //! strata integration tests: one binary, one module per stage.
+mod analysis;
 mod chains;
 mod discrepancy;
 mod ecs;

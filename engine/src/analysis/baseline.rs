@@ -12,6 +12,7 @@
 use glam::DVec2;
 
 use crate::rng::Rng;
+use crate::sample::Sample;
 
 /// Distinct RNG streams per sampler, so that equal seeds give unrelated sets.
 const STREAM_UNIFORM: u64 = 0xa11a_0001;
@@ -137,6 +138,33 @@ pub fn poisson_disk(n: usize, seed: u64) -> Vec<DVec2> {
     };
     trim_closest(&mut points, n, fitted_radius);
     points
+}
+
+/// Planar points as [`Sample`]s in the plane `z = 0`, so that analyses of samples
+/// ([`dda`](super::dda)) apply to them: normal `+z`, major axis `+x`, isotropic
+/// expected spacing `sqrt(area / n)` (`area` is the domain's, 1 for the unit square),
+/// face 0, barycentric coordinates zero, index = rank in `points`.
+///
+/// # Example
+/// ```
+/// use strata_engine::analysis::{baseline, planar_samples};
+/// let s = planar_samples(&baseline::jittered_grid(100, 1), 1.0);
+/// assert_eq!(s[0].spacing, [0.1, 0.1]);
+/// ```
+pub fn planar_samples(points: &[DVec2], area: f64) -> Vec<Sample> {
+    let spacing = (area / points.len().max(1) as f64).sqrt() as f32;
+    points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| Sample {
+            position: [p.x as f32, p.y as f32, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            major_axis: [1.0, 0.0, 0.0],
+            index: k as u32,
+            spacing: [spacing, spacing],
+            ..Sample::default()
+        })
+        .collect()
 }
 
 /// Bridson's Poisson-disk sampling of `[0, 1)^2` with minimum distance `radius`.

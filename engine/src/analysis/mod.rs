@@ -10,15 +10,26 @@
 //!   Stratified Surface Sampling") and Niederreiter, "Random Number Generation and
 //!   Quasi-Monte Carlo Methods" (SIAM 1992), chapter 2.
 //! - [`baseline`]: reference samplers of the unit square (uniform random, jittered grid,
-//!   Poisson disk) that the method is compared against; each returns exactly `n` points.
+//!   Poisson disk) that the method is compared against; each returns exactly `n` points
+//!   ([`planar_samples`] wraps them as [`Sample`](crate::sample::Sample)s).
+//! - [`mesh_baseline`]: uniform random and Poisson-disk samplers of a mesh under a field,
+//!   returning `Sample`s.
+//! - [`spectrum`]: periodogram, RAPSD and anisotropy (section 7.4).
+//! - [`dda`]: differential domain analysis of non-uniform, anisotropic and surface
+//!   samplings (section 7.5).
+//! - [`alignment`]: per-face angle between the field and the parameter axes (7.3.1).
 //!
 //! Points outside the unit square (or NaN) are a caller error: the `try_` functions
 //! return [`AnalysisError`], their twins panic with the same message.
 
+pub mod alignment;
 pub mod baseline;
+pub mod dda;
 pub mod discrepancy;
+pub mod mesh_baseline;
+pub mod spectrum;
 
-pub use baseline::{jittered_grid, poisson_disk, uniform_random};
+pub use baseline::{jittered_grid, planar_samples, poisson_disk, uniform_random};
 pub use discrepancy::{
     Discrepancy, DiscrepancyCurve, ShapeFamily, loglog_slope, star_discrepancy_l2,
     star_discrepancy_sup, try_star_discrepancy_l2, try_star_discrepancy_sup,

@@ -4,7 +4,6 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::Discrepancy;
-use super::star::star_l2_unchecked;
 use crate::analysis::{AnalysisError, check_unit_square};
 
 /// The least-squares slope of `ln(values)` against `ln(ns)`, negated, so that a curve
@@ -55,8 +54,9 @@ pub fn loglog_slope(ns: &[f64], values: &[f64]) -> f64 {
 /// Mean discrepancies of a sampler over sample counts, with their log-log slopes: the
 /// experiment of section 7.2 of the paper.
 ///
-/// For each `n` the sampler runs once per seed; the sup discrepancy (of the chosen
-/// [`Discrepancy`]) and the L2 star discrepancy of each run are averaged over the seeds.
+/// For each `n` the sampler runs once per seed; the sup and the L2 discrepancy (of the
+/// chosen [`Discrepancy`]: its shape family and metric) of each run are averaged over
+/// the seeds.
 /// Runs execute in parallel with rayon; each result lands in its own slot and means are
 /// taken in seed order, so the curve does not depend on the thread count.
 ///
@@ -80,7 +80,8 @@ pub struct DiscrepancyCurve {
     pub ns: Vec<usize>,
     /// Per count, the mean sup discrepancy over the seeds.
     pub sup: Vec<f64>,
-    /// Per count, the mean L2 star discrepancy over the seeds.
+    /// Per count, the mean L2 discrepancy over the seeds ([`Discrepancy::l2`]; for
+    /// boxes the L2 star discrepancy).
     pub l2: Vec<f64>,
 }
 
@@ -128,7 +129,7 @@ impl DiscrepancyCurve {
                     seed,
                     source: Box::new(e),
                 })?;
-                Ok((discrepancy.try_sup(&points)?, star_l2_unchecked(&points)))
+                Ok((discrepancy.try_sup(&points)?, discrepancy.try_l2(&points)?))
             })
             .collect();
         let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
@@ -158,7 +159,7 @@ impl DiscrepancyCurve {
         loglog_slope(&self.ns_f64(), &self.sup)
     }
 
-    /// [`loglog_slope`] of the mean L2 star discrepancy.
+    /// [`loglog_slope`] of the mean L2 discrepancy.
     pub fn l2_slope(&self) -> f64 {
         loglog_slope(&self.ns_f64(), &self.l2)
     }

@@ -17,6 +17,8 @@
 //! | L2 star discrepancy (Warnock) | [`star_discrepancy_l2`] | O(N^2), parallel |
 //! | sup over origin triangles | [`Discrepancy`] with [`ShapeFamily::OriginTriangles`] | O(N^2 log N), parallel |
 //! | sup over quarter discs | [`Discrepancy`] with [`ShapeFamily::QuarterDiscs`] | O(N log N) |
+//! | L2 over origin triangles | [`Discrepancy::l2`] | O(G N log N), G = 512 quadrature strata in one parameter, parallel |
+//! | L2 over quarter discs | [`Discrepancy::l2`] | O(N log N), exact |
 //! | decay rate | [`loglog_slope`], [`DiscrepancyCurve`] | |
 //!
 //! Measured on 2 cores, 10^4 uniform points: boxes sup 0.06 s, L2 0.04 s, triangles
@@ -31,6 +33,7 @@
 //! depend on the thread count.
 
 mod curve;
+mod l2;
 mod shapes;
 mod star;
 #[cfg(test)]
@@ -149,6 +152,34 @@ impl Discrepancy {
             ShapeFamily::OriginTriangles => shapes::origin_triangles_sup(points),
             ShapeFamily::QuarterDiscs => shapes::quarter_discs_sup(points, self.axis_scale),
         })
+    }
+
+    /// The averaged (L2) discrepancy of `points` over the family: the root mean square
+    /// local discrepancy over the shapes' parameters, uniformly (boxes: Warnock's exact
+    /// star L2; quarter discs: exact; triangles: a quadrature in one parameter and an
+    /// exact integral in the other, within 1%; see the module `l2`).
+    ///
+    /// # Errors
+    /// As [`Self::try_sup`].
+    pub fn try_l2(&self, points: &[DVec2]) -> Result<f64, AnalysisError> {
+        self.validate()?;
+        check_unit_square(points)?;
+        Ok(match self.family {
+            ShapeFamily::Rectangles => star::star_l2_unchecked(points),
+            ShapeFamily::OriginTriangles => l2::origin_triangles_l2(points),
+            ShapeFamily::QuarterDiscs => l2::quarter_discs_l2(points, self.axis_scale),
+        })
+    }
+
+    /// [`Self::try_l2`], panicking on invalid options or points.
+    ///
+    /// # Panics
+    /// On the errors of [`Self::try_l2`].
+    pub fn l2(&self, points: &[DVec2]) -> f64 {
+        match self.try_l2(points) {
+            Ok(d) => d,
+            Err(e) => panic!("Discrepancy::l2: {e}"),
+        }
     }
 
     /// [`Self::try_sup`], panicking on invalid options or points.
