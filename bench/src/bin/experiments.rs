@@ -887,7 +887,7 @@ fn section_7_3_3(ctx: &mut Ctx) -> Result<Section, BoxError> {
     Ok(Section {
         title: "7.3.3 Quantization error".into(),
         notes: format!(
-            "{n} samples on the unit square ({res} x {res} quads) with the 7.3.1 field, cut              into (a) a Voronoi partition of 25 to 1000 random sites and (b) k x k square              blocks, k = 5 to 32 (the paper varied gamma to get 25 to 1000 segments; a              partition fixes the count directly), then parameterized (invalid segments split,              so the final count can be higher). Each segmentation is sampled with chains              (`sample_into_linked(.., true)`) and with independent segments; box L2              discrepancy, mean of {} seeds. Independent segments still get              `floor(N share + carried remainder)` samples in segment order (section 6.2),              which already limits the quantization error when consecutive segments are              neighbours.",
+            "{n} samples on the unit square ({res} x {res} quads) with the 7.3.1 field, cut into (a) a Voronoi partition of 25 to 1000 random sites and (b) k x k square blocks, k = 5 to 32 (the paper varied gamma to get 25 to 1000 segments; a partition fixes the count directly), then parameterized (invalid segments split, so the final count can be higher). Each segmentation is sampled with chains (`sample_into_linked(.., true)`) and with independent segments; box L2 discrepancy, mean of {} seeds. Independent segments still get `floor(N share + carried remainder)` samples in segment order (section 6.2), which already limits the quantization error when consecutive segments are neighbours.",
             seeds.len()
         ),
         rows,
