@@ -1,7 +1,7 @@
 //! The per-frame ECS system that streams the engine's samples into the GPU.
 //!
 //! The engine's `sample_meshes` system ([`crate::ecs::sampling`]) fills each mesh
-//! entity's CPU-side [`SampleBuffer`](crate::ecs::SampleBuffer); [`upload_samples`],
+//! entity's CPU-side [`SampleBuffer`]; [`upload_samples`],
 //! running after it, copies the buffer of one mesh entity into the [`SplatRenderer`]'s
 //! GPU buffer whenever it was rewritten (its `generation` moved). The upload goes
 //! through the renderer's staging ring and never waits on the GPU, so the CPU does not
