@@ -204,15 +204,18 @@ impl SegmentCurve {
             list_start: 0,
         }];
         let mut kept: Vec<u32> = Vec::new();
+        let mut kept_area: Vec<(f64, u32)> = Vec::new();
         while let Some(node) = stack.pop() {
             let size = 1.0 / (1u64 << node.level) as f64;
             let lo = DVec2::new(node.x as f64, node.y as f64) * size;
             kept.clear();
+            kept_area.clear();
             let (mut measure, mut covered) = (0.0, 0.0);
             for &t in &lists[node.list_start..] {
                 let (m, a) = self.overlap(t as usize, lo, size);
                 if a > 0.0 {
                     kept.push(t);
+                    kept_area.push((a, t));
                     measure += m;
                     covered += a;
                 }
@@ -247,7 +250,10 @@ impl SegmentCurve {
                 });
                 let last = *self.cumulative.last().unwrap_or(&0.0);
                 self.cumulative.push(last + measure);
-                self.candidates.extend_from_slice(&kept);
+                // Largest overlap first: point location tries candidates in this
+                // order, so most points are found by the first one.
+                kept_area.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+                self.candidates.extend(kept_area.iter().map(|&(_, t)| t));
                 self.candidate_offsets.push(self.candidates.len() as u32);
             }
         }
@@ -317,6 +323,20 @@ impl SegmentCurve {
     /// draws `n` samples from `c` cells needs about `log4(n / c)` levels to separate
     /// them, and a few more to place them evenly.
     pub fn point_in_leaf_to(&self, leaf: usize, t: f64, levels: u32) -> DomainPoint {
+        self.point_in_leaf_with(leaf, t, levels, &mut LeafScratch::default())
+    }
+
+    /// As [`point_in_leaf_to`](Self::point_in_leaf_to), with the scratch memory of the
+    /// boundary-leaf descent given by the caller (a few kilobytes that would otherwise
+    /// be initialised per call; reuse one per thread or chunk of work). The result does
+    /// not depend on the scratch's previous contents.
+    pub fn point_in_leaf_with(
+        &self,
+        leaf: usize,
+        t: f64,
+        levels: u32,
+        scratch: &mut LeafScratch,
+    ) -> DomainPoint {
         let key = self.keys[leaf];
         let cands = &self.candidates
             [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
@@ -329,7 +349,7 @@ impl SegmentCurve {
         }
         let levels = levels.min(self.options.leaf_levels as u32);
         if cands.len() <= PIECES {
-            self.descend_pieces(leaf, key, cands, t, levels)
+            self.descend_pieces(leaf, key, cands, t, levels, scratch)
         } else {
             self.descend_partial(leaf, key, cands, t, levels)
         }
@@ -367,14 +387,16 @@ impl SegmentCurve {
         cands: &[u32],
         t: f64,
         levels: u32,
+        scratch: &mut LeafScratch,
     ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
         let mut state = key.state;
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
-        let mut bufs = [PieceSet::EMPTY; 3];
+        let bufs = &mut scratch.bufs;
         let mut cur = 0usize;
+        bufs[0].clear();
         for &tri in cands {
             let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
             bufs[0].add(self, tri, poly);
@@ -385,12 +407,12 @@ impl SegmentCurve {
             let (x1, _, _) = state.child(1);
             // Ranks 0 and 1 share a half of the node: cut between the halves first.
             let first_along_x = x0 == x1;
-            let (from, below, above) = rotate3(&mut bufs, cur);
+            let (from, below, above) = rotate3(bufs, cur);
             let first_above = if first_along_x {
-                from.split(self, 0, lo.x + half, below, above);
+                from.split::<0>(self, lo.x + half, below, above);
                 x0 == 1
             } else {
-                from.split(self, 1, lo.y + half, below, above);
+                from.split::<1>(self, lo.y + half, below, above);
                 y0 == 1
             };
             let (m_below, m_above) = (below.measure, above.measure);
@@ -406,12 +428,12 @@ impl SegmentCurve {
             cur = (cur + if first == first_above { 2 } else { 1 }) % 3;
             // Then between the two quarters of the chosen half, along the other axis.
             let (qx, qy, _) = state.child(rank0);
-            let (from, below, above) = rotate3(&mut bufs, cur);
+            let (from, below, above) = rotate3(bufs, cur);
             let first_above = if first_along_x {
-                from.split(self, 1, lo.y + half, below, above);
+                from.split::<1>(self, lo.y + half, below, above);
                 qy == 1
             } else {
-                from.split(self, 0, lo.x + half, below, above);
+                from.split::<0>(self, lo.x + half, below, above);
                 qx == 1
             };
             let (m_below, m_above) = (below.measure, above.measure);
@@ -554,6 +576,26 @@ impl SegmentCurve {
     /// Finds the candidate triangle containing `uv` (the most-inside one if round-off
     /// leaves it just outside all of them) and its barycentric coordinates.
     fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
+        // Division-free inside test first; the coordinates of the triangle found are
+        // those of `barycentric`.
+        for &t in cands {
+            let p = self.triangle_corners(t as usize);
+            let (e1, e2, d) = (p[1] - p[0], p[2] - p[0], uv - p[0]);
+            let det = e1.perp_dot(e2);
+            let (s1, s2) = (d.perp_dot(e2), e1.perp_dot(d));
+            if s1 >= 0.0 && s2 >= 0.0 && s1 + s2 <= det {
+                let inv = 1.0 / det;
+                let (b1, b2) = (s1 * inv, s2 * inv);
+                let b = [1.0 - b1 - b2, b1, b2];
+                if b[0] >= 0.0 {
+                    return DomainPoint {
+                        triangle: t,
+                        uv,
+                        bary: b,
+                    };
+                }
+            }
+        }
         let mut best = (f64::NEG_INFINITY, 0u32, [1.0, 0.0, 0.0]);
         for &t in cands {
             let b = barycentric(&self.triangle_corners(t as usize), uv);
@@ -652,6 +694,27 @@ fn validate_domain(domain: &CurveDomain<'_>) -> Result<(), CurveError> {
 /// at most 6).
 const PIECES: usize = 6;
 
+/// Scratch memory of the exact descent through boundary leaves
+/// ([`SegmentCurve::point_in_leaf_with`]).
+#[derive(Clone)]
+pub struct LeafScratch {
+    bufs: [PieceSet; 3],
+}
+
+impl Default for LeafScratch {
+    fn default() -> Self {
+        Self {
+            bufs: [PieceSet::EMPTY; 3],
+        }
+    }
+}
+
+impl std::fmt::Debug for LeafScratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("LeafScratch")
+    }
+}
+
 /// A candidate triangle's part of the current node in a boundary-leaf descent.
 #[derive(Clone, Copy)]
 struct Piece {
@@ -692,37 +755,46 @@ impl PieceSet {
     /// Adds the part `poly` of triangle `tri` if it has positive area.
     #[inline]
     fn add(&mut self, curve: &SegmentCurve, tri: u32, poly: Poly) {
-        let (area, moment) = poly.area_moment();
+        if self.len < PIECES {
+            self.pieces[self.len].poly = poly;
+            self.commit(curve, tri);
+        }
+    }
+
+    /// Keeps the polygon written into the next free piece if it has positive area.
+    #[inline]
+    fn commit(&mut self, curve: &SegmentCurve, tri: u32) {
+        let piece = &mut self.pieces[self.len];
+        let (area, moment) = piece.poly.area_moment();
         if area > 0.0 {
             let [gx, gy, h] = curve.density_planes[tri as usize];
             let measure = (gx * moment.x + gy * moment.y + h * area).max(0.0);
-            self.keep(Piece {
-                tri,
-                poly,
-                area,
-                measure,
-            });
+            piece.tri = tri;
+            piece.area = area;
+            piece.measure = measure;
+            self.len += 1;
+            self.measure += measure;
+            self.area += area;
         }
     }
 
     #[inline]
-    fn keep(&mut self, piece: Piece) {
+    fn keep(&mut self, piece: &Piece) {
         // At most one piece per candidate, and candidates are at most PIECES.
         if self.len < PIECES {
-            self.pieces[self.len] = piece;
+            self.pieces[self.len] = *piece;
             self.len += 1;
             self.measure += piece.measure;
             self.area += piece.area;
         }
     }
 
-    /// Splits every piece by the line where coordinate `axis` (0: x, 1: y) is `at`
+    /// Splits every piece by the line where coordinate `AXIS` (0: x, 1: y) is `at`
     /// into `below` and `above`; pieces on one side move whole, keeping their measure.
     #[inline]
-    fn split(
+    fn split<const AXIS: usize>(
         &self,
         curve: &SegmentCurve,
-        axis: usize,
         at: f64,
         below: &mut PieceSet,
         above: &mut PieceSet,
@@ -730,25 +802,26 @@ impl PieceSet {
         below.clear();
         above.clear();
         for piece in &self.pieces[..self.len] {
-            let pts = piece.poly.points();
-            let coord = |p: &DVec2| if axis == 0 { p.x } else { p.y };
+            let coord = |p: &DVec2| if AXIS == 0 { p.x } else { p.y };
             let (mut mn, mut mx) = (f64::INFINITY, f64::NEG_INFINITY);
-            for p in pts {
+            for p in piece.poly.points() {
                 mn = mn.min(coord(p));
                 mx = mx.max(coord(p));
             }
             if mx <= at {
-                below.keep(*piece);
+                below.keep(piece);
             } else if mn >= at {
-                above.keep(*piece);
+                above.keep(piece);
             } else {
-                let (b, a) = if axis == 0 {
-                    piece.poly.split::<0>(at)
-                } else {
-                    piece.poly.split::<1>(at)
-                };
-                below.add(curve, piece.tri, b);
-                above.add(curve, piece.tri, a);
+                // Both sets hold fewer pieces than this one: room for one more each.
+                let (b, a) = (below.len, above.len);
+                piece.poly.split_into::<AXIS>(
+                    at,
+                    &mut below.pieces[b].poly,
+                    &mut above.pieces[a].poly,
+                );
+                below.commit(curve, piece.tri);
+                above.commit(curve, piece.tri);
             }
         }
     }

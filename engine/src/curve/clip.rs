@@ -63,15 +63,21 @@ impl Poly {
     }
 
     /// Splits the polygon (convex) by the line where coordinate `AXIS` (0: x, 1: y)
-    /// equals `at`: the part at or below `at` and the part at or above it. Corners on
-    /// the line go to both; crossing points are put exactly on the line.
+    /// equals `at` into `below` (the part at or below `at`) and `above`, overwriting
+    /// both. Corners on the line go to both; crossing points are put exactly on it.
     #[inline]
-    pub(crate) fn split<const AXIS: usize>(&self, at: f64) -> (Poly, Poly) {
+    pub(crate) fn split_into<const AXIS: usize>(
+        &self,
+        at: f64,
+        below: &mut Poly,
+        above: &mut Poly,
+    ) {
         let coord = |p: DVec2| if AXIS == 0 { p.x } else { p.y };
+        below.len = 0;
+        above.len = 0;
         let p = self.points();
-        let (mut below, mut above) = (Poly::EMPTY, Poly::EMPTY);
         let Some(&last) = p.last() else {
-            return (below, above);
+            return;
         };
         let mut prev = last;
         let mut dp = coord(prev) - at;
@@ -96,7 +102,6 @@ impl Poly {
             prev = q;
             dp = dq;
         }
-        (below, above)
     }
 
     #[inline(always)]
