@@ -33,12 +33,31 @@ pub(crate) fn face_point(mesh: &TriMesh, field: &TensorField, face: u32, b: [f64
     let n = mesh.face_normals()[face as usize];
     let vn = mesh.vertex_normals();
     let normal = (vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2]).normalize_or(n);
-    let e1 = (p[j] - p[i]).normalize_or(n.any_orthonormal_vector());
+    let e1 = (p[j] - p[i])
+        .try_normalize()
+        .unwrap_or_else(|| n.any_orthonormal_vector());
     let e2 = n.cross(e1);
+    // The tensors are symmetric: interpolate the six entries of the upper triangle and
+    // evaluate the quadratic forms from them (a third fewer operations than the full
+    // matrix products).
     let t = field.tensors();
-    let m = t[i] * b[0] + t[j] * b[1] + t[k] * b[2];
-    let (me1, me2) = (m * e1, m * e2);
-    let (a, bb, c) = (e1.dot(me1), 0.5 * (e2.dot(me1) + e1.dot(me2)), e2.dot(me2));
+    let (ti, tj, tk) = (&t[i], &t[j], &t[k]);
+    let lerp = |x: f64, y: f64, z: f64| x * b[0] + y * b[1] + z * b[2];
+    let m00 = lerp(ti.x_axis.x, tj.x_axis.x, tk.x_axis.x);
+    let m11 = lerp(ti.y_axis.y, tj.y_axis.y, tk.y_axis.y);
+    let m22 = lerp(ti.z_axis.z, tj.z_axis.z, tk.z_axis.z);
+    let m01 = lerp(ti.y_axis.x, tj.y_axis.x, tk.y_axis.x);
+    let m02 = lerp(ti.z_axis.x, tj.z_axis.x, tk.z_axis.x);
+    let m12 = lerp(ti.z_axis.y, tj.z_axis.y, tk.z_axis.y);
+    let apply = |v: DVec3| {
+        DVec3::new(
+            m00 * v.x + m01 * v.y + m02 * v.z,
+            m01 * v.x + m11 * v.y + m12 * v.z,
+            m02 * v.x + m12 * v.y + m22 * v.z,
+        )
+    };
+    let me1 = apply(e1);
+    let (a, bb, c) = (e1.dot(me1), e2.dot(me1), e2.dot(apply(e2)));
     let mean = 0.5 * (a + c);
     let h = 0.5 * (a - c);
     let r = (h * h + bb * bb).sqrt();
