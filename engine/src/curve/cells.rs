@@ -41,7 +41,8 @@ impl CellKey {
     /// Side length.
     #[inline]
     pub fn size(&self) -> f64 {
-        1.0 / (1u64 << self.level) as f64
+        // 2^-level, built from its exponent (no integer conversion, no division).
+        f64::from_bits((1023 - self.level as u64) << 52)
     }
 
     /// Lower-left corner.

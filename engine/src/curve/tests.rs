@@ -376,3 +376,18 @@ fn splitting_descent_matches_the_clipping_descent() {
         );
     }
 }
+
+#[test]
+fn cell_size_is_the_power_of_two() {
+    for level in 0..=30u8 {
+        let key = CellKey {
+            x: 3,
+            y: 1,
+            level,
+            state: hilbert::State::ROOT,
+            full: true,
+        };
+        assert_eq!(key.size(), 1.0 / (1u64 << level) as f64, "level {level}");
+        assert_eq!(key.origin(), DVec2::new(3.0, 1.0) * key.size());
+    }
+}
