@@ -805,9 +805,16 @@ impl PieceSet {
         for piece in &self.pieces[..self.len] {
             let coord = |p: &DVec2| if AXIS == 0 { p.x } else { p.y };
             let (mut mn, mut mx) = (f64::INFINITY, f64::NEG_INFINITY);
+            // Plain comparisons: `f64::min`/`max` pay for NaN handling the corners
+            // (finite) do not need.
             for p in piece.poly.points() {
-                mn = mn.min(coord(p));
-                mx = mx.max(coord(p));
+                let c = coord(p);
+                if c < mn {
+                    mn = c;
+                }
+                if c > mx {
+                    mx = c;
+                }
             }
             if mx <= at {
                 below.keep(piece);
