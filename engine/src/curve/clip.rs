@@ -11,6 +11,12 @@ pub struct Poly {
 }
 
 impl Poly {
+    /// The polygon with no corners.
+    pub(crate) const EMPTY: Poly = Poly {
+        pts: [DVec2::ZERO; 8],
+        len: 0,
+    };
+
     /// The corners.
     pub fn points(&self) -> &[DVec2] {
         &self.pts[..self.len]
@@ -34,6 +40,78 @@ impl Poly {
             return (0.0, p[0]);
         }
         (0.5 * a2, c / (3.0 * a2))
+    }
+}
+
+impl Poly {
+    /// Area and first moment (integral of `p` over the polygon): the exact integral of
+    /// an affine function `g . p + h` over it is `g . moment + h area`. No division.
+    #[inline]
+    pub(crate) fn area_moment(&self) -> (f64, DVec2) {
+        let p = self.points();
+        if p.len() < 3 {
+            return (0.0, DVec2::ZERO);
+        }
+        let mut a2 = 0.0;
+        let mut c = DVec2::ZERO;
+        for k in 1..p.len() - 1 {
+            let cross = (p[k] - p[0]).perp_dot(p[k + 1] - p[0]);
+            a2 += cross;
+            c += (p[0] + p[k] + p[k + 1]) * cross;
+        }
+        (0.5 * a2, c * (1.0 / 6.0))
+    }
+
+    /// Splits the polygon (convex) by the line where coordinate `AXIS` (0: x, 1: y)
+    /// equals `at` into `below` (the part at or below `at`) and `above`, overwriting
+    /// both. Corners on the line go to both; crossing points are put exactly on it.
+    #[inline]
+    pub(crate) fn split_into<const AXIS: usize>(
+        &self,
+        at: f64,
+        below: &mut Poly,
+        above: &mut Poly,
+    ) {
+        let coord = |p: DVec2| if AXIS == 0 { p.x } else { p.y };
+        below.len = 0;
+        above.len = 0;
+        let p = self.points();
+        let Some(&last) = p.last() else {
+            return;
+        };
+        let mut prev = last;
+        let mut dp = coord(prev) - at;
+        for &q in p {
+            let dq = coord(q) - at;
+            if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+                let mut x = prev + (q - prev) * (dp / (dp - dq));
+                if AXIS == 0 {
+                    x.x = at;
+                } else {
+                    x.y = at;
+                }
+                below.push(x);
+                above.push(x);
+            }
+            if dq <= 0.0 {
+                below.push(q);
+            }
+            if dq >= 0.0 {
+                above.push(q);
+            }
+            prev = q;
+            dp = dq;
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, p: DVec2) {
+        // A convex polygon cut by a line gains at most one corner; the bound only
+        // guards against round-off duplicates.
+        if self.len < 8 {
+            self.pts[self.len] = p;
+            self.len += 1;
+        }
     }
 }
 

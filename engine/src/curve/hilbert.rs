@@ -159,34 +159,55 @@ const fn build_table2() -> [[(u8, u8, u8); 16]; 4] {
     t
 }
 
+/// Four levels at once: for each state and 8-bit group of four ranks (first rank in the
+/// high bits), packed as `dx | dy << 4 | state << 8` (4-bit column and row offsets).
+const TABLE4: [[u16; 256]; 4] = build_table4();
+
+const fn build_table4() -> [[u16; 256]; 4] {
+    let mut t = [[0u16; 256]; 4];
+    let mut s = 0;
+    while s < 4 {
+        let mut r = 0;
+        while r < 256 {
+            let (x1, y1, s1) = TABLE2[s][r >> 4];
+            let (x2, y2, s2) = TABLE2[s1 as usize][r & 15];
+            let (x, y) = ((4 * x1 + x2) as u16, (4 * y1 + y2) as u16);
+            t[s][r] = x | (y << 4) | ((s2 as u16) << 8);
+            r += 1;
+        }
+        s += 1;
+    }
+    t
+}
+
 /// Continuous Hilbert map inside a node: the point at curve parameter `t` in `[0, 1)`
 /// of the node in `state`, in the node's own unit square, resolved to `levels` levels
 /// and placed at the centre of the final sub-cell (at `2^-levels` of the node's size
 /// the remaining fraction no longer matters). Steigleder and McCool's generalized
-/// stratified sampling maps stratified 1D values through exactly this map. Walks two
-/// levels per table look-up; `levels` is at most 26 (52 bits of `t`).
+/// stratified sampling maps stratified 1D values through exactly this map. Walks four
+/// levels per table look-up (the index padded to a multiple of four levels, the
+/// padding levels dropped from the cell at the end: the curve is hierarchical);
+/// `levels` is at most 26 (52 bits of `t`).
 #[inline]
 pub fn point_in_node(state: State, t: f64, levels: u32) -> (f64, f64) {
     debug_assert!((0.0..=1.0).contains(&t) && levels <= 26);
     // The first 2 * levels bits of t, as an integer index along the sub-curve.
     let bits = 2 * levels;
-    let d = ((t * (1u64 << bits) as f64) as u64).min((1u64 << bits) - 1);
+    // Signed conversions: one instruction each on x86-64 (values stay below 2^53).
+    let d = ((t * (1i64 << bits) as f64) as i64).min((1i64 << bits) - 1) as u64;
+    let chunks = levels.div_ceil(4);
+    let pad = 4 * chunks - levels;
+    let d = d << (2 * pad);
     let mut s = state.0 as usize;
     let (mut x, mut y) = (0u64, 0u64);
-    let mut shift = bits;
-    while shift >= 4 {
-        shift -= 4;
-        let (dx, dy, next) = TABLE2[s][((d >> shift) & 15) as usize];
-        x = (x << 2) | dx as u64;
-        y = (y << 2) | dy as u64;
-        s = next as usize;
+    for c in (0..chunks).rev() {
+        let e = TABLE4[s][((d >> (8 * c)) & 255) as usize];
+        x = (x << 4) | (e & 15) as u64;
+        y = (y << 4) | ((e >> 4) & 15) as u64;
+        s = (e >> 8) as usize;
     }
-    if shift == 2 {
-        let (dx, dy, _) = TABLE[s][(d & 3) as usize];
-        x = (x << 1) | dx as u64;
-        y = (y << 1) | dy as u64;
-    }
-    let inv = 1.0 / (1u64 << levels) as f64;
+    let (x, y) = ((x >> pad) as i64, (y >> pad) as i64);
+    let inv = 1.0 / (1i64 << levels) as f64;
     ((x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv)
 }
 
@@ -274,6 +295,37 @@ mod tests {
                     "levels {levels} d {d}"
                 );
                 d += step;
+            }
+        }
+    }
+
+    #[test]
+    fn four_level_walk_matches_one_level_at_a_time() {
+        // Reference: one rank (two bits of t) per level through the state machine.
+        let reference = |state: State, t: f64, levels: u32| {
+            let bits = 2 * levels;
+            let d = ((t * (1u64 << bits) as f64) as u64).min((1u64 << bits) - 1);
+            let (mut x, mut y, mut s) = (0u64, 0u64, state);
+            for l in (0..levels).rev() {
+                let (qx, qy, next) = s.child(((d >> (2 * l)) & 3) as u8);
+                x = 2 * x + qx as u64;
+                y = 2 * y + qy as u64;
+                s = next;
+            }
+            let inv = 1.0 / (1u64 << levels) as f64;
+            ((x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv)
+        };
+        let mut rng = crate::rng::Rng::new(5, 0);
+        for state in 0..4u8 {
+            for levels in 0..=26u32 {
+                for _ in 0..200 {
+                    let t = rng.next_f64();
+                    assert_eq!(
+                        point_in_node(State(state), t, levels),
+                        reference(State(state), t, levels),
+                        "state {state} levels {levels} t {t}"
+                    );
+                }
             }
         }
     }

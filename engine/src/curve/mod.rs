@@ -11,7 +11,7 @@ mod cells;
 mod clip;
 pub mod hilbert;
 
-pub use cells::{CellKey, CurveDomain, DomainPoint, SegmentCurve, barycentric};
+pub use cells::{CellKey, CurveDomain, DomainPoint, LeafScratch, SegmentCurve, barycentric};
 pub use clip::{Poly, clip_triangle};
 
 /// Per triangle, the density per unit of parameter area at its corners: the surface

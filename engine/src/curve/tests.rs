@@ -284,3 +284,110 @@ fn bad_domains_are_rejected() {
         })
     ));
 }
+
+/// An annulus of `k` quads (two triangles each) around (0.5, 0.5), radii 0.12 and 0.45,
+/// with density `1 + 2 u + v`: boundary leaves on both circles, several triangles each.
+fn annulus(k: usize) -> (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>) {
+    let c = DVec2::splat(0.5);
+    let mut uv = Vec::new();
+    for i in 0..k {
+        let a = std::f64::consts::TAU * i as f64 / k as f64;
+        let d = DVec2::new(a.cos(), a.sin());
+        uv.push(c + d * 0.12);
+        uv.push(c + d * 0.45);
+    }
+    let k = k as u32;
+    let mut tris = Vec::new();
+    for i in 0..k {
+        let j = (i + 1) % k;
+        let (a, b, cc, d) = (2 * i, 2 * i + 1, 2 * j, 2 * j + 1);
+        tris.push([a, b, d]);
+        tris.push([a, d, cc]);
+    }
+    let dens = tris
+        .iter()
+        .map(|t| t.map(|v| 1.0 + 2.0 * uv[v as usize].x + uv[v as usize].y))
+        .collect();
+    (uv, tris, dens)
+}
+
+#[test]
+fn splitting_descent_matches_the_clipping_descent() {
+    let cases = [
+        (
+            disc(48),
+            CurveOptions {
+                max_cell_share: 1e-3,
+                boundary_level: 6,
+                ..Default::default()
+            },
+        ),
+        (
+            disc_with_slope(7, 2.0),
+            CurveOptions {
+                max_cell_share: 0.05,
+                boundary_level: 2,
+                ..Default::default()
+            },
+        ),
+        (
+            annulus(40),
+            CurveOptions {
+                max_cell_share: 2e-3,
+                boundary_level: 5,
+                ..Default::default()
+            },
+        ),
+    ];
+    for ((uv, t, d), opts) in cases {
+        let c = SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &t,
+                corner_density: &d,
+            },
+            &opts,
+        )
+        .expect("valid");
+        let (mut checked, mut differ) = (0usize, 0usize);
+        for leaf in (0..c.cell_count()).filter(|&i| !c.cells()[i].full) {
+            for k in 0..23 {
+                let f = (k as f64 + 0.37) / 23.0;
+                for levels in [1, 3, 7, 12] {
+                    let a = c.point_in_leaf_to(leaf, f, levels);
+                    let b = c.point_in_leaf_general(leaf, f, levels);
+                    let tri = t[a.triangle as usize].map(|v| uv[v as usize]);
+                    assert!(a.bary.iter().all(|&x| (0.0..=1.0).contains(&x)), "{a:?}");
+                    let back = tri[0] * a.bary[0] + tri[1] * a.bary[1] + tri[2] * a.bary[2];
+                    assert!((back - a.uv).length() < 1e-12);
+                    checked += 1;
+                    // Round-off in the measures can only move a point whose target
+                    // lies within about 1e-15 of a sub-cell's end.
+                    if (a.uv - b.uv).length() > 1e-9 {
+                        differ += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} points in boundary leaves");
+        assert!(
+            differ * 1000 <= checked,
+            "{differ} of {checked} points differ"
+        );
+    }
+}
+
+#[test]
+fn cell_size_is_the_power_of_two() {
+    for level in 0..=30u8 {
+        let key = CellKey {
+            x: 3,
+            y: 1,
+            level,
+            state: hilbert::State::ROOT,
+            full: true,
+        };
+        assert_eq!(key.size(), 1.0 / (1u64 << level) as f64, "level {level}");
+        assert_eq!(key.origin(), DVec2::new(3.0, 1.0) * key.size());
+    }
+}

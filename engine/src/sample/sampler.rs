@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::faces::face_point;
 use super::stratified::{allocate, stratified_value};
 use super::types::Sample;
-use crate::curve::{DomainPoint, SegmentCurve};
+use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
 use crate::field::TensorField;
 use crate::mesh::TriMesh;
 
@@ -278,6 +278,7 @@ impl Sampler {
         // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
+        let mut scratch = LeafScratch::default();
         allocate(n, groups.measures.iter().copied(), |i, count| {
             let (grp_lo, grp_hi) = (first, first + count);
             first = grp_hi;
@@ -316,7 +317,7 @@ impl Sampler {
                 m = (m - before).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
                 leaf = advance(cum, leaf, m);
                 let local = (m - cum[leaf]) / (cum[leaf + 1] - cum[leaf]);
-                let p = curve.point_in_leaf_to(leaf, local, levels);
+                let p = curve.point_in_leaf_with(leaf, local, levels, &mut scratch);
                 dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
             }
         });
