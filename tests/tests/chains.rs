@@ -153,3 +153,40 @@ fn section_7_3_3_linking_reduces_the_quantization_error() {
     );
     assert!(linked.0 < 0.5 * random);
 }
+
+/// Chains handed back to `Sampler::with_chains` give the same samples as linking them
+/// anew; chains that miss or repeat a segment are refused.
+#[test]
+fn given_chains_reproduce_linked_sampling_and_bad_chains_are_refused() {
+    let sampler = blocks(8);
+    let chains: Vec<Vec<u32>> = sampler.chains().iter().map(|c| c.to_vec()).collect();
+    assert!(chains.iter().map(Vec::len).sum::<usize>() == 64 && chains[0].len() > 1);
+    let rebuilt = Sampler::with_chains(
+        sampler.mesh().clone(),
+        sampler.field().clone(),
+        sampler.segments().to_vec(),
+        &chains,
+    )
+    .expect("same chains");
+    for n in [100usize, 150, 5000] {
+        assert_eq!(rebuilt.uses_chains(n), sampler.uses_chains(n));
+        assert!(rebuilt.sample(n, 3) == sampler.sample(n, 3), "n {n}");
+    }
+    let mut missing = chains.clone();
+    let dropped = missing[0].pop().expect("non-empty chain");
+    let mut repeated = chains.clone();
+    repeated[0].push(chains[0][0]);
+    for (bad, segment) in [(missing, dropped), (repeated, chains[0][0])] {
+        match Sampler::with_chains(
+            sampler.mesh().clone(),
+            sampler.field().clone(),
+            sampler.segments().to_vec(),
+            &bad,
+        ) {
+            Err(strata_engine::sample::SampleError::BadChains { segment: s, .. }) => {
+                assert_eq!(s, segment)
+            }
+            other => panic!("expected BadChains, got {:?}", other.map(|_| ())),
+        }
+    }
+}

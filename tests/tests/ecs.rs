@@ -236,7 +236,8 @@ fn each_change_reruns_only_what_it_invalidates() {
     assert!((moved[0].position[2] - first[0].position[2] - 2.0).abs() < 1e-5);
     assert_eq!(moved[0].face, first[0].face);
 
-    // Omega (cell refinement): curves of every segment, the sampler, sampling.
+    // Omega (cell refinement): curves of every segment and sampling; the chains are
+    // kept (same segments).
     engine
         .world
         .get_mut::<CurveSettings>(e)
@@ -246,7 +247,7 @@ fn each_change_reruns_only_what_it_invalidates() {
     engine.update();
     assert_eq!(
         engine.stats().stages_run(),
-        vec![Stage::Curves, Stage::Chains, Stage::Sampling]
+        vec![Stage::Curves, Stage::Sampling]
     );
     assert_eq!(engine.stats().items_of(Stage::Curves), all_segments.len());
     assert_eq!(engine.segments(), all_segments, "segments kept");

@@ -43,6 +43,14 @@ pub enum SampleError {
         /// Mesh face count.
         face_count: usize,
     },
+    /// Chains given to [`Sampler::with_chains`] do not hold every segment exactly once.
+    #[error("chains must hold each of the {segments} segments exactly once (segment {segment})")]
+    BadChains {
+        /// Number of segments.
+        segments: usize,
+        /// A segment missing, repeated or out of range.
+        segment: u32,
+    },
 }
 
 /// Draws any number of stratified samples from preprocessed segments.
@@ -166,6 +174,47 @@ impl Sampler {
         field: Arc<TensorField>,
         segments: Vec<SegmentSampling>,
     ) -> Result<Self, SampleError> {
+        Self::build(mesh, field, segments, None)
+    }
+
+    /// As [`new`](Self::new), with the chains given (segment indices, every segment in
+    /// exactly one chain) instead of linked anew: for a caller that changed only the
+    /// cells of the same segments (chains follow the segments' adjacency and measures,
+    /// which cell refinement leaves as they were), such as the ECS engine after a new
+    /// omega.
+    pub fn with_chains(
+        mesh: Arc<TriMesh>,
+        field: Arc<TensorField>,
+        segments: Vec<SegmentSampling>,
+        chains: &[Vec<u32>],
+    ) -> Result<Self, SampleError> {
+        let mut seen = vec![false; segments.len()];
+        for &i in chains.iter().flatten() {
+            match seen.get_mut(i as usize) {
+                Some(s) if !*s => *s = true,
+                _ => {
+                    return Err(SampleError::BadChains {
+                        segments: segments.len(),
+                        segment: i,
+                    });
+                }
+            }
+        }
+        if let Some(missing) = seen.iter().position(|s| !s) {
+            return Err(SampleError::BadChains {
+                segments: segments.len(),
+                segment: missing as u32,
+            });
+        }
+        Self::build(mesh, field, segments, Some(chains))
+    }
+
+    fn build(
+        mesh: Arc<TriMesh>,
+        field: Arc<TensorField>,
+        segments: Vec<SegmentSampling>,
+        chains: Option<&[Vec<u32>]>,
+    ) -> Result<Self, SampleError> {
         for s in &segments {
             if let Some(&face) = s.faces.iter().find(|&&f| f as usize >= mesh.face_count()) {
                 return Err(SampleError::BadFace {
@@ -181,7 +230,10 @@ impl Sampler {
         }
         let ones: Vec<Vec<u32>> = (0..segments.len() as u32).map(|i| vec![i]).collect();
         let singles = Groups::new(&ones, &segments);
-        let chains = Groups::new(&link_chains(&mesh, &segments), &segments);
+        let chains = match chains {
+            Some(c) => Groups::new(c, &segments),
+            None => Groups::new(&link_chains(&mesh, &segments), &segments),
+        };
         Ok(Self {
             mesh,
             field,

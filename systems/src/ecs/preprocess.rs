@@ -440,7 +440,9 @@ pub fn build_curves(
 }
 
 /// Rebuilds a mesh's sampler (segments in the engine's order, linked into chains)
-/// when any of its segments' cells changed or a segment was removed.
+/// when any of its segments' cells changed or a segment was removed. When the segments
+/// are the ones the current sampler holds (only their cells changed: a new omega), its
+/// chains are kept and no [`Stage::Chains`] run is recorded.
 pub fn assemble_samplers(
     mut stats: ResMut<StageStats>,
     mut errors: ResMut<EngineErrors>,
@@ -491,16 +493,34 @@ pub fn assemble_samplers(
             })
             .collect();
         let count = segs.len();
-        match Sampler::new(mesh.0.clone(), field.0.clone(), segs) {
+        // Same segments as the current sampler (only their cells changed, e.g. a new
+        // omega): keep its chains instead of linking them again.
+        let kept_chains: Option<Vec<Vec<u32>>> = sampler.0.as_ref().and_then(|old| {
+            let same = old.segments().len() == segs.len()
+                && old
+                    .segments()
+                    .iter()
+                    .zip(&segs)
+                    .all(|(a, b)| a.faces == b.faces);
+            same.then(|| old.chains().iter().map(|c| c.to_vec()).collect())
+        });
+        let relinked = kept_chains.is_none();
+        let built = match &kept_chains {
+            Some(chains) => Sampler::with_chains(mesh.0.clone(), field.0.clone(), segs, chains),
+            None => Sampler::new(mesh.0.clone(), field.0.clone(), segs),
+        };
+        match built {
             Ok(s) => {
                 sampler.0 = Some(s);
-                stats.record(
-                    Stage::Chains,
-                    mesh_entity,
-                    count,
-                    t.elapsed(),
-                    String::new(),
-                );
+                if relinked {
+                    stats.record(
+                        Stage::Chains,
+                        mesh_entity,
+                        count,
+                        t.elapsed(),
+                        String::new(),
+                    );
+                }
             }
             Err(e) => errors.0.push(EngineError::Sample(e)),
         }
