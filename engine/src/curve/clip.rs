@@ -24,22 +24,11 @@ impl Poly {
 
     /// Area (non-negative for counter-clockwise input) and area centroid.
     pub fn area_centroid(&self) -> (f64, DVec2) {
-        let p = self.points();
-        if p.len() < 3 {
-            return (0.0, DVec2::ZERO);
+        let (area, moment) = self.area_moment();
+        if area.abs() <= 0.0 {
+            return (0.0, self.points().first().copied().unwrap_or(DVec2::ZERO));
         }
-        let mut a2 = 0.0;
-        let mut c = DVec2::ZERO;
-        // Fan from the first corner: better conditioned than the shoelace about the origin.
-        for k in 1..p.len() - 1 {
-            let cross = (p[k] - p[0]).perp_dot(p[k + 1] - p[0]);
-            a2 += cross;
-            c += (p[0] + p[k] + p[k + 1]) * cross;
-        }
-        if a2.abs() <= 0.0 {
-            return (0.0, p[0]);
-        }
-        (0.5 * a2, c / (3.0 * a2))
+        (area, moment / area)
     }
 }
 
