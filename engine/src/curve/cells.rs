@@ -406,48 +406,35 @@ impl SegmentCurve {
             let half = 0.5 * size;
             let (x0, y0, _) = state.child(0);
             let (x1, _, _) = state.child(1);
-            // Ranks 0 and 1 share a half of the node: cut between the halves first.
+            // Ranks 0 and 1 share a half of the node: cut between the halves first,
+            // then between the two quarters of the chosen half along the other axis.
             let first_along_x = x0 == x1;
-            let (from, below, above) = rotate3(bufs, cur);
-            let first_above = if first_along_x {
-                from.split::<0>(self, lo.x + half, below, above);
-                x0 == 1
-            } else {
-                from.split::<1>(self, lo.y + half, below, above);
-                y0 == 1
-            };
-            let (m_below, m_above) = (below.measure, above.measure);
-            let (m_first, m_second) = if first_above {
-                (m_above, m_below)
-            } else {
-                (m_below, m_above)
-            };
-            let Some(first) = pick(&mut target, m_first, m_second) else {
+            let at = |along_x: bool| if along_x { lo.x } else { lo.y } + half;
+            let upper_first = if first_along_x { x0 == 1 } else { y0 == 1 };
+            let Some(first) = self.split_pick(
+                bufs,
+                &mut cur,
+                first_along_x,
+                at(first_along_x),
+                upper_first,
+                &mut target,
+            ) else {
                 break;
             };
             let rank0 = if first { 0 } else { 2 };
-            cur = (cur + if first == first_above { 2 } else { 1 }) % 3;
-            // Then between the two quarters of the chosen half, along the other axis.
             let (qx, qy, _) = state.child(rank0);
-            let (from, below, above) = rotate3(bufs, cur);
-            let first_above = if first_along_x {
-                from.split::<1>(self, lo.y + half, below, above);
-                qy == 1
-            } else {
-                from.split::<0>(self, lo.x + half, below, above);
-                qx == 1
-            };
-            let (m_below, m_above) = (below.measure, above.measure);
-            let (m_first, m_second) = if first_above {
-                (m_above, m_below)
-            } else {
-                (m_below, m_above)
-            };
-            let Some(first) = pick(&mut target, m_first, m_second) else {
+            let upper_first = if first_along_x { qy == 1 } else { qx == 1 };
+            let Some(first) = self.split_pick(
+                bufs,
+                &mut cur,
+                !first_along_x,
+                at(!first_along_x),
+                upper_first,
+                &mut target,
+            ) else {
                 break;
             };
             let rank = rank0 + if first { 0 } else { 1 };
-            cur = (cur + if first == first_above { 2 } else { 1 }) % 3;
             let (qx, qy, child_state) = state.child(rank);
             lo += DVec2::new(qx as f64, qy as f64) * half;
             size = half;
@@ -481,6 +468,37 @@ impl SegmentCurve {
                 lo + DVec2::splat(0.5 * size)
             },
         )
+    }
+
+    /// One step of [`descend_pieces`](Self::descend_pieces): splits the pieces in
+    /// `bufs[*cur]` at the midline `x = at` (`along_x`) or `y = at`, picks the half
+    /// holding `target` (`upper_first`: the half above the midline comes first in
+    /// curve order) and makes it current. `Some(true)` when the first half in curve
+    /// order was taken; `None` when both halves are empty.
+    #[inline]
+    fn split_pick(
+        &self,
+        bufs: &mut [PieceSet; 3],
+        cur: &mut usize,
+        along_x: bool,
+        at: f64,
+        upper_first: bool,
+        target: &mut f64,
+    ) -> Option<bool> {
+        let (from, below, above) = rotate3(bufs, *cur);
+        if along_x {
+            from.split::<0>(self, at, below, above);
+        } else {
+            from.split::<1>(self, at, below, above);
+        }
+        let (m_first, m_second) = if upper_first {
+            (above.measure, below.measure)
+        } else {
+            (below.measure, above.measure)
+        };
+        let first = pick(target, m_first, m_second)?;
+        *cur = (*cur + if first == upper_first { 2 } else { 1 }) % 3;
+        Some(first)
     }
 
     /// Exact descent through the sub-cells of a boundary leaf.
