@@ -1303,36 +1303,33 @@ fn section_7_5(ctx: &mut Ctx) -> Result<Section, BoxError> {
             density: 1.0,
         }
         .build(&mesh)?;
-        let pd: Vec<Vec<Sample>> = (1..=runs(8))
-            .map(|s| mesh_baseline::mesh_poisson_disk(&mesh, &flat, 3000, s))
-            .collect();
-        add(
-            &format!("Poisson disk {mesh_name} uniform (3000)"),
-            &format!("{mesh_name}_poisson_uniform"),
-            10.0,
-            pd,
-            None,
-        )?;
-        let jit: Vec<Vec<Sample>> = (1..=runs(8))
-            .map(|s| mesh_baseline::mesh_uniform_random(&mesh, &flat, 3000, s))
-            .collect();
-        add(
-            &format!("uniform random {mesh_name} (3000)"),
-            &format!("{mesh_name}_random"),
-            10.0,
-            jit,
-            None,
-        )?;
-        let pd: Vec<Vec<Sample>> = (1..=runs(8))
-            .map(|s| mesh_baseline::mesh_poisson_disk(&mesh, &field, 3000, s))
-            .collect();
-        add(
-            &format!("Poisson disk {mesh_name} curvature (3000)"),
-            &format!("{mesh_name}_poisson"),
-            10.0,
-            pd,
-            None,
-        )?;
+        // Baselines on the same mesh, uniform density and curvature-driven.
+        type MeshSampler = fn(&TriMesh, &TensorField, usize, u64) -> Vec<Sample>;
+        let baselines: [(String, String, &TensorField, MeshSampler); 3] = [
+            (
+                format!("Poisson disk {mesh_name} uniform (3000)"),
+                format!("{mesh_name}_poisson_uniform"),
+                &flat,
+                mesh_baseline::mesh_poisson_disk,
+            ),
+            (
+                format!("uniform random {mesh_name} (3000)"),
+                format!("{mesh_name}_random"),
+                &flat,
+                mesh_baseline::mesh_uniform_random,
+            ),
+            (
+                format!("Poisson disk {mesh_name} curvature (3000)"),
+                format!("{mesh_name}_poisson"),
+                &field,
+                mesh_baseline::mesh_poisson_disk,
+            ),
+        ];
+        for (label, key, f, sampler) in baselines {
+            let sets: Vec<Vec<Sample>> =
+                (1..=runs(8)).map(|s| sampler(&mesh, f, 3000, s)).collect();
+            add(&label, &key, 10.0, sets, None)?;
+        }
     }
     // Consistency with the uniform isotropic case: RMS difference of the RAPSD over
     // 0.2 <= f <= 2.5 (beyond the kernel's low-frequency bump), and the anisotropy.
