@@ -3,6 +3,18 @@
 
 use std::path::PathBuf;
 
+/// The shared meshes (`<name>.obj` in [`shared_mesh_dir`]) the tests run on.
+pub const SHARED_MESHES: [&str; 8] = [
+    "spot",
+    "two-torus",
+    "stanford-bunny",
+    "rocker-arm",
+    "fandisk",
+    "homer",
+    "cow",
+    "wing",
+];
+
 /// The folder of real test meshes (`shared/meshes` beside the project, see its
 /// README), or `None` where it is absent so that tests can skip.
 ///

@@ -138,16 +138,7 @@ fn every_shared_mesh_segments_into_discs() {
         eprintln!("shared meshes not found: skipping");
         return;
     };
-    for name in [
-        "spot",
-        "two-torus",
-        "stanford-bunny",
-        "rocker-arm",
-        "fandisk",
-        "homer",
-        "cow",
-        "wing",
-    ] {
+    for name in strata_tests::SHARED_MESHES {
         let mesh = strata_engine::io::load(&dir.join(format!("{name}.obj"))).expect("mesh");
         let field = projected().build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");

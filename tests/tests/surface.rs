@@ -145,16 +145,7 @@ fn every_shared_mesh_preprocesses_into_valid_segments() {
         eprintln!("shared meshes not found: skipping");
         return;
     };
-    for name in [
-        "spot",
-        "two-torus",
-        "stanford-bunny",
-        "rocker-arm",
-        "fandisk",
-        "homer",
-        "cow",
-        "wing",
-    ] {
+    for name in strata_tests::SHARED_MESHES {
         let mesh = strata_engine::io::load(&dir.join(format!("{name}.obj"))).expect("mesh");
         let faces = mesh.face_count();
         let pre = check(mesh, &projected(), name);
