@@ -439,26 +439,29 @@ pub fn parameterize_segment_with_splitting(
             .collect::<Result<_, _>>()?;
         pending = halves.into_iter().flatten().collect();
     }
-    if !small.is_empty() {
-        // Isotropic fallback: the same density, no anisotropy.
+    // Isotropic fallback: the same density, no anisotropy. A piece whose fallback
+    // parameterization still flips or overlaps (around a sharp cone, say) is halved
+    // again; a single triangle is always valid.
+    while !small.is_empty() {
         let iso = context.isotropic(mesh, field)?;
         let results = parameterize_all(mesh, iso, &small, cut, &options.param);
+        let mut again = Vec::new();
         for (faces, result) in small.into_iter().zip(results) {
             match result {
-                Ok(mut p) if p.report.flipped == 0 && !p.report.overlaps => {
+                Ok(mut p) if faces.len() == 1 || (p.report.flipped == 0 && !p.report.overlaps) => {
                     p.report.isotropic_fallback = true;
-                    report.isotropic_segments += 1;
+                    if faces.len() == 1 {
+                        report.single_face_segments += 1;
+                    } else {
+                        report.isotropic_segments += 1;
+                    }
                     accepted.push(p);
                 }
-                _ => {
-                    for f in faces {
-                        let p = crate::param::parameterize(mesh, iso, &[f], cut, &options.param)?;
-                        report.single_face_segments += 1;
-                        accepted.push(p);
-                    }
-                }
+                Err(e) if faces.len() == 1 => return Err(e.into()),
+                _ => again.extend(halve(mesh, cut, &faces)),
             }
         }
+        small = again;
     }
     accepted.sort_by_key(lowest_face);
     Ok((accepted, report))
@@ -474,8 +477,22 @@ fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
     }
 }
 
-/// Splits a segment in two by the random walk seeded at its two most different face
-/// directions (as lines); returns the connected parts.
+/// A split is accepted when every part is a disc (the parameterization needs one) and
+/// the smallest part holds at least this share of the faces. Without the balance
+/// test, seeds at outlier faces (next to a singularity, say) peel off a few faces per
+/// round, often leaving a hole, and splitting a large segment takes hundreds of
+/// rounds instead of about log2 of its size.
+const MIN_SPLIT_SHARE: usize = 8;
+
+/// Splits a segment in two by the random walk (section 5.2) and returns the connected
+/// parts.
+///
+/// The walk is first seeded at the segment's two most different face directions (as
+/// lines), as in the paper. If that split is unbalanced (a part under
+/// 1/[`MIN_SPLIT_SHARE`] of the faces) or leaves a part that is not a disc, the walk is
+/// seeded again at two faces far apart in the segment (a double sweep of
+/// breadth-first search), which halves the segment; failing that too, the faces are
+/// given to the nearer of those two seeds, and as a last resort halved by face order.
 fn split_in_two(
     mesh: &TriMesh,
     frames: &crate::segment::FaceField,
@@ -483,8 +500,88 @@ fn split_in_two(
     cut: &[bool],
     faces: &[u32],
 ) -> Result<Vec<Vec<u32>>, SurfaceError> {
-    // The face whose direction is farthest from the segment's mean line direction
-    // (mean of m m^T), then the face farthest from that one.
+    let [a, b] = most_different_faces(frames, faces);
+    if a == b {
+        return Ok(vec![faces.to_vec()]); // a single face: nothing to split
+    }
+    let mut mask = vec![false; mesh.face_count()];
+    for &f in faces {
+        mask[f as usize] = true;
+    }
+    let good = |parts: &[Vec<u32>]| {
+        parts.len() > 1
+            && parts
+                .iter()
+                .all(|p| p.len() * MIN_SPLIT_SHARE >= faces.len() && is_disc(mesh, p, cut))
+    };
+    let walk = |seeds: [u32; 2]| -> Result<Option<Vec<Vec<u32>>>, SurfaceError> {
+        match random_walk(mesh, weights, &mask, &seeds) {
+            Ok(labels) => Ok(Some(parts_of(mesh, faces, &labels, cut))),
+            // Parts of the segment unreachable from both seeds (cut off by cut edges).
+            Err(SegmentError::Unseeded { .. }) => Ok(None),
+            Err(e) => Err(e.into()),
+        }
+    };
+    let first = match walk([a, b])? {
+        Some(parts) if good(&parts) => return Ok(parts),
+        other => other,
+    };
+    let [far_a, far_b] = far_apart(mesh, &mask, cut, faces);
+    if far_a != far_b
+        && let Some(parts) = walk([far_a, far_b])?
+        && good(&parts)
+    {
+        return Ok(parts);
+    }
+    let parts = halve(mesh, cut, faces);
+    if good(&parts) {
+        return Ok(parts);
+    }
+    // Keep the paper's split if it split at all (it makes progress).
+    match first {
+        Some(first) if first.len() > 1 => Ok(first),
+        _ => Ok(parts),
+    }
+}
+
+/// Two faces far apart in the patch `mask` (a double sweep of breadth-first search
+/// from the lowest face of `faces`).
+fn far_apart(mesh: &TriMesh, mask: &[bool], cut: &[bool], faces: &[u32]) -> [u32; 2] {
+    let start = faces.iter().copied().min().unwrap_or(0);
+    let (a, _) = hop_distances(mesh, mask, cut, start);
+    let (b, _) = hop_distances(mesh, mask, cut, a);
+    [a, b]
+}
+
+/// Splits `faces` (two or more) into the connected parts of the faces nearer (in
+/// hops) to one or the other of two faces far apart; by face order if that does not
+/// split them (faces unreachable from each other).
+fn halve(mesh: &TriMesh, cut: &[bool], faces: &[u32]) -> Vec<Vec<u32>> {
+    let mut mask = vec![false; mesh.face_count()];
+    for &f in faces {
+        mask[f as usize] = true;
+    }
+    let [a, b] = far_apart(mesh, &mask, cut, faces);
+    if a != b {
+        let (_, from_a) = hop_distances(mesh, &mask, cut, a);
+        let (_, from_b) = hop_distances(mesh, &mask, cut, b);
+        let labels = mask_labels(mesh, faces, |i| {
+            let f = faces[i] as usize;
+            (from_b[f] < from_a[f]) as u32
+        });
+        let parts = parts_of(mesh, faces, &labels, cut);
+        if parts.len() > 1 {
+            return parts;
+        }
+    }
+    let half = faces.len() / 2;
+    let labels = mask_labels(mesh, faces, |i| (i >= half) as u32);
+    parts_of(mesh, faces, &labels, cut)
+}
+
+/// The face whose direction is farthest from the segment's mean line direction (mean
+/// of `m m^T`), then the face farthest from that one (ties to the lower face id).
+fn most_different_faces(frames: &crate::segment::FaceField, faces: &[u32]) -> [u32; 2] {
     let mut mean = glam::DMat3::ZERO;
     for &f in faces {
         let m = frames.major[f as usize];
@@ -507,29 +604,34 @@ fn split_in_two(
     if a == b {
         b = faces.iter().copied().find(|&f| f != a).unwrap_or(a);
     }
-    if a == b {
-        return Ok(vec![faces.to_vec()]); // a single face: nothing to split
+    [a, b]
+}
+
+/// Whether `faces`, cut open along `cut`, form a topological disc.
+fn is_disc(mesh: &TriMesh, faces: &[u32], cut: &[bool]) -> bool {
+    let top = crate::segment::patch_topology(mesh, faces, cut);
+    top.euler_characteristic == 1 && top.boundary_loops.len() == 1
+}
+
+/// Breadth-first hop distances over the faces of `mask` (through manifold edges not
+/// in `cut`) from `start`: the last face reached (farthest; ties to the first found)
+/// and the distance per mesh face (`u32::MAX` where unreached).
+fn hop_distances(mesh: &TriMesh, mask: &[bool], cut: &[bool], start: u32) -> (u32, Vec<u32>) {
+    let mut dist = vec![u32::MAX; mesh.face_count()];
+    let mut queue = std::collections::VecDeque::from([start]);
+    dist[start as usize] = 0;
+    let mut last = start;
+    while let Some(f) = queue.pop_front() {
+        last = f;
+        for (k, &g) in mesh.face_neighbors()[f as usize].iter().enumerate() {
+            let e = mesh.face_edges()[f as usize][k] as usize;
+            if g != NONE && !cut[e] && mask[g as usize] && dist[g as usize] == u32::MAX {
+                dist[g as usize] = dist[f as usize] + 1;
+                queue.push_back(g);
+            }
+        }
     }
-    let mut mask = vec![false; mesh.face_count()];
-    for &f in faces {
-        mask[f as usize] = true;
-    }
-    let labels = match random_walk(mesh, weights, &mask, &[a, b]) {
-        Ok(l) => l,
-        // Parts of the segment unreachable from both seeds (cut off by cut edges):
-        // split by connectivity alone.
-        Err(SegmentError::Unseeded { .. }) => mask_labels(mesh, faces, |_| 0),
-        Err(e) => return Err(e.into()),
-    };
-    let out = parts_of(mesh, faces, &labels, cut);
-    if out.len() > 1 {
-        return Ok(out);
-    }
-    // The walk gave everything to one seed: halve by face order as a last resort,
-    // which always makes progress.
-    let half = faces.len() / 2;
-    let labels = mask_labels(mesh, faces, |i| (i >= half) as u32);
-    Ok(parts_of(mesh, faces, &labels, cut))
+    (last, dist)
 }
 
 /// Per mesh face, `label(i)` for the `i`-th face of `faces` and `NONE` elsewhere.
@@ -735,5 +837,76 @@ mod tests {
             assert_eq!(curve.cell_count(), s.curve.cell_count());
             assert_eq!(curve.measure(), s.curve.measure());
         }
+    }
+
+    /// A plane whose field is constant except in a small disc in the middle, where it
+    /// is turned by 90 degrees: the paper's seeds (the two most different directions)
+    /// include a face of that disc, and the walk gives that seed just the disc, a hole
+    /// in the rest of the plane. The split must still give discs of balanced size.
+    #[test]
+    fn an_outlier_direction_does_not_peel_a_hole_out_of_the_segment() {
+        let mesh = shapes::plane(1.0, 16).expect("plane");
+        let dirs: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .map(|p| {
+                let r = (p.truncate() - glam::DVec2::splat(0.5)).length();
+                if r < 0.1 { DVec3::Y } else { DVec3::X }
+            })
+            .collect();
+        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
+            .expect("field");
+        let options = SurfaceOptions::default();
+        let context = SplitContext::new(&mesh, &field, &[], &options);
+        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        // The paper's seeds alone: one seed region is a small island.
+        let [a, b] = most_different_faces(&context.frames, &faces);
+        let mask = vec![true; mesh.face_count()];
+        let labels = random_walk(&mesh, &context.weights, &mask, &[a, b]).expect("walk");
+        let paper = parts_of(&mesh, &faces, &labels, &context.cut);
+        let smallest = paper.iter().map(Vec::len).min().unwrap_or(0);
+        assert!(
+            smallest * MIN_SPLIT_SHARE < faces.len()
+                || paper.iter().any(|p| !is_disc(&mesh, p, &context.cut)),
+            "the case must exercise the fallback: parts {:?}",
+            paper.iter().map(Vec::len).collect::<Vec<_>>()
+        );
+        let parts = split_in_two(
+            &mesh,
+            &context.frames,
+            &context.weights,
+            &context.cut,
+            &faces,
+        )
+        .expect("split");
+        assert!(parts.len() >= 2);
+        assert_eq!(parts.iter().map(Vec::len).sum::<usize>(), faces.len());
+        for p in &parts {
+            assert!(
+                p.len() * MIN_SPLIT_SHARE >= faces.len(),
+                "part of {} faces",
+                p.len()
+            );
+            assert!(is_disc(&mesh, p, &context.cut));
+        }
+    }
+
+    #[test]
+    fn halving_always_makes_progress_and_keeps_every_face() {
+        let mesh = shapes::plane(1.0, 6).expect("plane");
+        let cut = vec![false; mesh.edge_count()];
+        let mut pending = vec![(0..mesh.face_count() as u32).collect::<Vec<_>>()];
+        let mut singles = 0;
+        while let Some(faces) = pending.pop() {
+            if faces.len() == 1 {
+                singles += 1;
+                continue;
+            }
+            let parts = halve(&mesh, &cut, &faces);
+            assert!(parts.len() >= 2, "{} faces not split", faces.len());
+            assert_eq!(parts.iter().map(Vec::len).sum::<usize>(), faces.len());
+            pending.extend(parts);
+        }
+        assert_eq!(singles, mesh.face_count());
     }
 }
