@@ -46,6 +46,28 @@ fn every_bundled_config_samples_exactly_its_count() {
     }
 }
 
+/// Issue 5: an isotropic, a 3:1 anisotropic and a curvature-driven scene for every
+/// shared mesh and every built-in shape, named `<mesh>-<field>.ron`.
+#[test]
+fn every_mesh_has_its_three_bundled_scenes() {
+    let files = config_files();
+    let names: Vec<String> = files
+        .iter()
+        .filter_map(|p| p.file_name()?.to_str().map(str::to_owned))
+        .collect();
+    let built_ins = ["plane", "sphere", "cylinder", "torus", "genus2"];
+    let mut missing = Vec::new();
+    for mesh in strata_tests::SHARED_MESHES.iter().chain(&built_ins) {
+        for field in ["isotropic", "anisotropic", "curvature"] {
+            let name = format!("{mesh}-{field}.ron");
+            if !names.contains(&name) {
+                missing.push(name);
+            }
+        }
+    }
+    assert!(missing.is_empty(), "configs/ lacks {missing:?}");
+}
+
 #[test]
 fn cli_writes_ply_and_csv_that_read_back() {
     let dir = tempfile::tempdir().expect("tempdir");

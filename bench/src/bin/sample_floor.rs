@@ -1,0 +1,100 @@
+//! The floor under per-frame sampling on this machine: how long it takes only to
+//! write 10^6 64-byte `Sample` records into a reused buffer, with the same rayon
+//! chunking as `Sampler::sample_into` and almost no work per record, beside the real
+//! sampler on the bunny. As a Markdown table:
+//! `cargo run --release -p strata-bench --bin sample_floor [-- repeats]`.
+//!
+//! `write only`: each record gets values derived from its index with a handful of
+//! integer and float operations (so the stores cannot be turned into a memset).
+//! `rng + write`: the same plus the counter-based random value and the stratified
+//! value that the sampler draws per record. The difference between these rows and the
+//! sampler is the cost of the curve, point location and face interpolation.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use strata_engine::sample::{Sample, stratified_value};
+use strata_systems::config::SceneConfig;
+use strata_systems::scene::Scene;
+
+const N: usize = 1_000_000;
+const CHUNK: usize = 4096;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn time(repeats: usize, mut f: impl FnMut()) -> f64 {
+    f(); // warm-up: pages touched, pool started
+    median(
+        (0..repeats)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .collect(),
+    )
+}
+
+fn trivial(i: usize, v: f64) -> Sample {
+    let x = i as f32;
+    Sample {
+        position: [x, v as f32, -x],
+        face: i as u32,
+        normal: [0.0, 0.0, 1.0],
+        segment: (i >> 12) as u32,
+        major_axis: [1.0, 0.0, 0.0],
+        index: i as u32,
+        bary: [0.25, 0.5],
+        spacing: [x * 1e-6, x * 2e-6],
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let repeats = strata_bench::repeats_arg(21)?.max(1);
+    let mut out = vec![Sample::default(); N];
+    let write = time(repeats, || {
+        out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, dst)| {
+            for (j, s) in dst.iter_mut().enumerate() {
+                *s = trivial(c * CHUNK + j, 0.5);
+            }
+        });
+    });
+    let rng = time(repeats, || {
+        out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, dst)| {
+            for (j, s) in dst.iter_mut().enumerate() {
+                let k = (c * CHUNK + j) as u64;
+                *s = trivial(k as usize, stratified_value(1, 0, k, N as u64));
+            }
+        });
+    });
+    let config = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/stanford-bunny-anisotropic.ron");
+    let mut rows = vec![("write only", write), ("rng + write", rng)];
+    match strata_bench::shared_mesh_dir() {
+        Ok(_) => {
+            let scene = Scene::build(&SceneConfig::load(&config)?)?;
+            let real = time(repeats, || scene.sampler.sample_into(1, &mut out));
+            rows.push(("sampler, bunny 3:1", real));
+        }
+        Err(e) => eprintln!("skipping the bunny: {e}"),
+    }
+    println!(
+        "{} threads, 10^6 records of {} bytes, medians of {repeats}\n",
+        rayon::current_num_threads(),
+        std::mem::size_of::<Sample>()
+    );
+    println!("| path | ms | GB/s written | M records/s |");
+    println!("| --- | --- | --- | --- |");
+    for (name, ms) in rows {
+        let bytes = (N * std::mem::size_of::<Sample>()) as f64;
+        println!(
+            "| {name} | {ms:.2} | {:.1} | {:.0} |",
+            bytes / ms / 1e6,
+            N as f64 / ms / 1e3
+        );
+    }
+    Ok(())
+}
