@@ -62,8 +62,10 @@ fn section_7_3_1_angular_error_is_bounded_and_gamma_controls_segmentation() {
     println!("gamma 2: {segments_2} segments, max angle {max_2:.2}, worst mean {mean_2:.2}");
     assert!(mean_5 < 5.0 && mean_2 < 2.0);
     // The per-face criterion bounds the largest angle by gamma. The paper measured
-    // under 4.5 degrees for gamma = 5; we measure 4.99 (the bound is met, that figure
-    // is not: our splitting stops as soon as every face is under gamma).
+    // under 4.5 degrees for gamma = 5; we measure 4.84 here, and 4.55 to 4.99 over
+    // segmentation seeds 1 to 12 (the bound is met, that figure is not: splitting
+    // stops as soon as every face of a segment is under gamma, so the worst of some 20
+    // segments lands just under gamma).
     assert!(
         max_5 < 5.0,
         "largest angle between field and parameter axes {max_5}"
