@@ -126,7 +126,7 @@ pub fn sampler(
         vec![SegmentSampling {
             segment: 0,
             faces,
-            curve,
+            curve: std::sync::Arc::new(curve),
         }],
     )?;
     Ok((sampler, map))

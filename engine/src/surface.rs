@@ -709,7 +709,7 @@ fn build_cells(
             Ok(SegmentSampling {
                 segment: id as u32,
                 faces: p.faces.clone(),
-                curve,
+                curve: Arc::new(curve),
             })
         })
         .collect()

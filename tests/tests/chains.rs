@@ -78,7 +78,7 @@ fn blocks(k: u32) -> Sampler {
             SegmentSampling {
                 segment: id as u32,
                 faces: faces.clone(),
-                curve,
+                curve: std::sync::Arc::new(curve),
             }
         })
         .collect();

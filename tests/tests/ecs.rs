@@ -150,6 +150,25 @@ fn ecs_result_equals_the_engine_stages_called_directly() {
     let got = engine.samples();
     assert_eq!(got.len(), count);
     assert!(got == expected, "ECS samples differ from the engine's");
+    // The sampler shares the segment entities' cells instead of holding copies.
+    let mut cells = engine.world.query::<&ecs::SegmentCells>();
+    let owned: Vec<*const strata_engine::curve::SegmentCurve> = cells
+        .iter(&engine.world)
+        .flat_map(|c| c.curves.iter().map(Arc::as_ptr))
+        .collect();
+    let sampler = engine
+        .world
+        .get::<ecs::MeshSampler>(engine.mesh)
+        .expect("sampler");
+    let segments = sampler.0.as_ref().expect("assembled").segments();
+    assert_eq!(segments.len(), owned.len());
+    for s in segments {
+        assert!(
+            owned.contains(&Arc::as_ptr(&s.curve)),
+            "segment {} copied",
+            s.segment
+        );
+    }
     // And the same number of final segments.
     let stats = engine.stats();
     assert_eq!(

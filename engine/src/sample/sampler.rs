@@ -22,8 +22,9 @@ pub struct SegmentSampling {
     pub segment: u32,
     /// Mesh face of each triangle of the curve's domain.
     pub faces: Vec<u32>,
-    /// The segment's adaptive Hilbert cells.
-    pub curve: SegmentCurve,
+    /// The segment's adaptive Hilbert cells, shared (an engine that keeps them per
+    /// segment, like the ECS layer, hands the sampler a reference instead of a copy).
+    pub curve: Arc<SegmentCurve>,
 }
 
 /// Errors building a [`Sampler`].

@@ -177,8 +177,8 @@ pub struct SegmentParams {
 pub struct SegmentCells {
     /// Per piece: unit-square layout, corner densities and measure.
     pub inputs: Vec<CellInput>,
-    /// Per piece: the adaptive Hilbert cells.
-    pub curves: Vec<SegmentCurve>,
+    /// Per piece: the adaptive Hilbert cells (shared with the mesh's sampler).
+    pub curves: Vec<Arc<SegmentCurve>>,
 }
 
 /// The components a segment entity starts with.

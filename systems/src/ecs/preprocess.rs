@@ -421,7 +421,7 @@ pub fn build_curves(
                     .pieces
                     .iter()
                     .zip(&cells.inputs)
-                    .map(|(p, c)| segment_cells(p, c, total, &options))
+                    .map(|(p, c)| segment_cells(p, c, total, &options).map(Arc::new))
                     .collect::<Result<Vec<_>, _>>()?;
                 cells.curves = curves;
                 Ok(())
@@ -470,12 +470,12 @@ pub fn assemble_samplers(
             continue;
         }
         let t = Instant::now();
-        let mut pieces: Vec<(u32, Vec<u32>, strata_engine::curve::SegmentCurve)> = Vec::new();
+        let mut pieces: Vec<(u32, Vec<u32>, Arc<strata_engine::curve::SegmentCurve>)> = Vec::new();
         let mut complete = true;
         for (_, params, cells) in &mine {
             complete &= cells.curves.len() == params.pieces.len() && !params.pieces.is_empty();
             for (p, c) in params.pieces.iter().zip(&cells.curves) {
-                pieces.push((lowest_face(p), p.faces.clone(), c.clone()));
+                pieces.push((lowest_face(p), p.faces.clone(), Arc::clone(c)));
             }
         }
         if !complete {
