@@ -8,10 +8,14 @@
 //! or overlapping, or the mapped field off the u axis by more than `gamma` on average),
 //! or that cannot be parameterized, is split in two by the random walk restricted to
 //! it, seeded at its two most different directions, and both halves are parameterized
-//! again. Below `min_segment_faces` a segment is parameterized with an isotropic field
-//! (flagged `isotropic_fallback`; it is sampled with the right density but without
-//! anisotropy), and if even that fails, each of its triangles becomes a segment of its
-//! own, which is always valid. So preprocessing always covers every face.
+//! again. A split whose parts are not discs or are badly unbalanced (an outlier
+//! direction next to a singularity seeds a region of a few faces) is redone from two
+//! faces far apart, so a segment needs about log2 of its size rounds, not one per
+//! outlier. Below `min_segment_faces` a segment is parameterized with an isotropic
+//! field (flagged `isotropic_fallback`; it is sampled with the right density but
+//! without anisotropy); a piece for which even that flips is halved again, down to
+//! single triangles, which are always valid. So preprocessing always covers every
+//! face.
 //!
 //! Cost: the segmentation, then one sparse factorization per parameterized segment
 //! (segments in parallel with rayon), then the cells.
