@@ -696,7 +696,7 @@ fn section_7_3_2(ctx: &mut Ctx) -> Result<Section, BoxError> {
     let (l04_l2, _) = per_seed_discrepancy(&pre_04.sampler, &ns, &seeds)?;
     let all = |_: usize| true;
     // ns alternates 2^l, 2^l + 2^(l-1).
-    let pow2 = |i: usize| i % 2 == 0;
+    let pow2 = |i: usize| i.is_multiple_of(2);
     let other = |i: usize| i % 2 == 1;
     let (r_l2, se_l2) = ratio_with_error(&two_l2, &one_l2, all);
     let (r_sup, se_sup) = ratio_with_error(&two_sup, &one_sup, all);
