@@ -418,7 +418,7 @@ fn alignment_map(
 fn options_json(o: &DdaOptions) -> serde_json::Value {
     serde_json::json!({"epsilon": o.epsilon, "max_frequency": o.max_frequency,
         "frequency_step": o.frequency_step, "bins_per_spacing": o.bins_per_spacing,
-        "min_normal_cos": o.min_normal_cos})
+        "min_normal_cos": o.min_normal_cos, "arc_tolerance": o.arc_tolerance})
 }
 
 fn write_json(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {

@@ -14,6 +14,14 @@ pub fn stratified_value(seed: u64, stream: u64, k: u64, n: u64) -> f64 {
 /// `floor(n * share_i + carry)`, the carry being the remainder accumulated so far
 /// (section 6.2); round-off that would leave the total short is given to the last part
 /// with a positive measure. Calls `emit(i, count)` in order; the counts add up to `n`.
+///
+/// The counts are computed from cumulative shares, `floor(n P_i / T) - floor(n P_(i-1)
+/// / T)` with `P_i` the measure of parts `0..=i` and `T` the total (the same numbers as
+/// the carried remainder), a target within `1e-9 n` (at most `1e-3`) below an integer
+/// counting as that integer: a share that is exact in theory (a part of half the
+/// measure, `n` even) is often a few ulps short in floating point, and a plain `floor`
+/// then took one sample from that part for every seed (a systematic deficit, not a
+/// random remainder).
 pub fn allocate(
     n: u64,
     measures: impl ExactSizeIterator<Item = f64> + Clone,
@@ -26,12 +34,15 @@ pub fn allocate(
         .filter(|(_, m)| *m > 0.0)
         .map(|(i, _)| i)
         .last();
-    let mut carry = 0.0;
+    // Far above the round-off of the prefix sums, far below a sample.
+    let slack = (1e-9 * n as f64).min(1e-3);
+    let mut prefix = 0.0;
     let mut given = 0u64;
     for (i, m) in measures.enumerate() {
-        let exact = n as f64 * (m / total) + carry;
-        let mut count = (exact.floor().max(0.0) as u64).min(n - given);
-        carry = exact - count as f64;
+        prefix += m;
+        let target = n as f64 * (prefix / total) + slack;
+        let upto = (target.floor().max(0.0) as u64).min(n);
+        let mut count = upto.saturating_sub(given);
         if Some(i) == last_positive {
             count = n - given;
         }
@@ -53,6 +64,22 @@ mod tests {
             }
         }
         assert_ne!(stratified_value(1, 0, 3, 10), stratified_value(2, 0, 3, 10));
+    }
+
+    /// Shares that are exact in theory get their exact count although the floating
+    /// point share is a few ulps short (0.1 / (0.1 + 0.2) < 1/3).
+    #[test]
+    fn exact_shares_are_not_rounded_down() {
+        for (measures, n, want) in [
+            (vec![0.1, 0.2], 3u64, vec![1u64, 2]),
+            (vec![0.1, 0.2], 300, vec![100, 200]),
+            (vec![0.1, 0.2, 0.3], 6, vec![1, 2, 3]),
+            (vec![0.7, 0.1, 0.2], 10, vec![7, 1, 2]),
+        ] {
+            let mut counts = vec![0u64; measures.len()];
+            allocate(n, measures.iter().copied(), |i, c| counts[i] = c);
+            assert_eq!(counts, want, "{measures:?}, n {n}");
+        }
     }
 
     #[test]
