@@ -22,33 +22,87 @@ pub struct CurveDomain<'a> {
     pub corner_density: &'a [[f64; 3]],
 }
 
-/// Where a leaf cell lies and how the curve runs through it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CellKey {
-    /// Cell column at its level.
-    pub x: u32,
-    /// Cell row at its level.
-    pub y: u32,
-    /// Quadtree level (the cell's side is `2^-level`).
-    pub level: u8,
-    /// Hilbert orientation of the cell.
-    pub state: State,
-    /// Whether the domain covers the whole cell.
-    pub full: bool,
-}
+/// Where a leaf cell lies and how the curve runs through it, packed into 8 bytes (the
+/// cells are the largest per-face part of the preprocessed data).
+///
+/// Layout of the `u64`: bits 0..31 hold the column with a marker bit above it at bit
+/// `level` (so the level is the position of the highest set bit and needs no field of
+/// its own), bits 31..61 the row, bits 61..63 the Hilbert state and bit 63 whether the
+/// domain covers the whole cell. Levels go up to 30 ([`CurveOptions::max_level`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct CellKey(u64);
 
 impl CellKey {
+    /// Deepest level a key can hold.
+    pub const MAX_LEVEL: u8 = 30;
+    const LOW: u64 = (1 << 31) - 1;
+
+    /// The cell at column `x` and row `y` of level `level` (`x, y < 2^level`, `level <=`
+    /// [`MAX_LEVEL`](Self::MAX_LEVEL); out-of-range bits are dropped).
+    #[inline]
+    pub fn new(x: u32, y: u32, level: u8, state: State, full: bool) -> Self {
+        debug_assert!(level <= Self::MAX_LEVEL);
+        debug_assert!((x as u64) < 1 << level && (y as u64) < 1 << level);
+        let level = level.min(Self::MAX_LEVEL);
+        let mask = (1u64 << level) - 1;
+        let low = (x as u64 & mask) | 1 << level;
+        Self(low | (y as u64 & mask) << 31 | ((state.0 & 3) as u64) << 61 | (full as u64) << 63)
+    }
+
+    /// Quadtree level (the cell's side is `2^-level`).
+    #[inline]
+    pub fn level(&self) -> u8 {
+        (31 - ((self.0 & Self::LOW) as u32).leading_zeros()) as u8
+    }
+
+    /// Cell column at its level.
+    #[inline]
+    pub fn x(&self) -> u32 {
+        let low = (self.0 & Self::LOW) as u32;
+        low ^ (1 << self.level())
+    }
+
+    /// Cell row at its level.
+    #[inline]
+    pub fn y(&self) -> u32 {
+        ((self.0 >> 31) & ((1 << 30) - 1)) as u32
+    }
+
+    /// Hilbert orientation of the cell.
+    #[inline]
+    pub fn state(&self) -> State {
+        State(((self.0 >> 61) & 3) as u8)
+    }
+
+    /// Whether the domain covers the whole cell.
+    #[inline]
+    pub fn full(&self) -> bool {
+        self.0 >> 63 != 0
+    }
+
     /// Side length.
     #[inline]
     pub fn size(&self) -> f64 {
         // 2^-level, built from its exponent (no integer conversion, no division).
-        f64::from_bits((1023 - self.level as u64) << 52)
+        f64::from_bits((1023 - self.level() as u64) << 52)
     }
 
     /// Lower-left corner.
     #[inline]
     pub fn origin(&self) -> DVec2 {
-        DVec2::new(self.x as f64, self.y as f64) * self.size()
+        DVec2::new(self.x() as f64, self.y() as f64) * self.size()
+    }
+}
+
+impl std::fmt::Debug for CellKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CellKey")
+            .field("x", &self.x())
+            .field("y", &self.y())
+            .field("level", &self.level())
+            .field("state", &self.state())
+            .field("full", &self.full())
+            .finish()
     }
 }
 
@@ -242,13 +296,8 @@ impl SegmentCurve {
                     lists.extend_from_slice(&kept);
                 }
             } else if measure > 0.0 {
-                self.keys.push(CellKey {
-                    x: node.x,
-                    y: node.y,
-                    level: node.level,
-                    state: node.state,
-                    full,
-                });
+                self.keys
+                    .push(CellKey::new(node.x, node.y, node.level, node.state, full));
                 let last = *self.cumulative.last().unwrap_or(&0.0);
                 self.cumulative.push(last + measure);
                 // Largest overlap first: point location tries candidates in this
@@ -342,9 +391,9 @@ impl SegmentCurve {
         let cands = &self.candidates
             [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
-        if key.full {
+        if key.full() {
             let levels = levels.min(self.options.leaf_levels as u32);
-            let (x, y) = super::hilbert::point_in_node(key.state, t, levels);
+            let (x, y) = super::hilbert::point_in_node(key.state(), t, levels);
             let uv = key.origin() + DVec2::new(x, y) * key.size();
             return self.point_location(cands, uv);
         }
@@ -366,7 +415,7 @@ impl SegmentCurve {
             [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
         let levels = levels.min(self.options.leaf_levels as u32);
-        if key.full {
+        if key.full() {
             return self.point_in_leaf_to(leaf, t, levels);
         }
         self.descend_partial(leaf, key, cands, t, levels)
@@ -392,7 +441,7 @@ impl SegmentCurve {
     ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
-        let mut state = key.state;
+        let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
         let bufs = &mut scratch.bufs;
@@ -517,7 +566,7 @@ impl SegmentCurve {
     ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
-        let mut state = key.state;
+        let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
         // Candidates of the current node (`cur`) and of each child measured at this
