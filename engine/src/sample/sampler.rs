@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::faces::face_point;
+use super::faces::{FaceTensors, face_point};
 use super::stratified::{allocate, stratified_value};
 use super::types::Sample;
 use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
@@ -63,6 +63,8 @@ pub enum SampleError {
 pub struct Sampler {
     mesh: Arc<TriMesh>,
     field: Arc<TensorField>,
+    /// The field's corner tensors of every face in the face's frame.
+    face_tensors: FaceTensors,
     segments: Vec<SegmentSampling>,
     total_measure: f64,
     /// Segments one by one: `0..t` as groups of one (order, offsets, measures).
@@ -235,9 +237,11 @@ impl Sampler {
             Some(c) => Groups::new(c, &segments),
             None => Groups::new(&link_chains(&mesh, &segments), &segments),
         };
+        let face_tensors = FaceTensors::new(&mesh, &field);
         Ok(Self {
             mesh,
             field,
+            face_tensors,
             segments,
             total_measure,
             singles,
@@ -266,8 +270,8 @@ impl Sampler {
     }
 
     /// Memory held by the preprocessed data in bytes: every segment's cells, domain
-    /// triangles and face map, and the chain tables (the mesh and the field are inputs,
-    /// shared, and not counted; nothing per face is copied out of them).
+    /// triangles and face map, the chain tables and the per-face tensor table (the mesh
+    /// and the field are inputs, shared, and not counted).
     pub fn heap_bytes(&self) -> usize {
         let groups = |g: &Groups| {
             g.order.capacity() * 4 + g.offsets.capacity() * 4 + g.measures.capacity() * 8
@@ -279,6 +283,7 @@ impl Sampler {
             + self.segments.capacity() * std::mem::size_of::<SegmentSampling>()
             + groups(&self.singles)
             + groups(&self.chains)
+            + self.face_tensors.heap_bytes()
     }
 
     /// Returns `n` samples for `seed` in a new vector.
@@ -407,7 +412,7 @@ impl Sampler {
         scale: f64,
     ) -> Sample {
         let face = seg.faces[p.triangle as usize];
-        let fp = face_point(&self.mesh, &self.field, face, p.bary);
+        let fp = face_point(&self.mesh, &self.face_tensors, face, p.bary);
         let spacing = [
             (scale / fp.l1.sqrt()) as f32,
             (scale / fp.l2.max(f64::MIN_POSITIVE).sqrt()) as f32,
