@@ -124,7 +124,13 @@ pub struct SegmentCurve {
     /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
     density_planes: Vec<[f64; 3]>,
     options: CurveOptions,
+    /// Identifies these cells for the leaf cache of [`LeafScratch`]: unique per build
+    /// (a clone shares it, and the cells never change after the build).
+    id: u64,
 }
+
+/// Source of [`SegmentCurve`] ids.
+static NEXT_CURVE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// A point of the domain: its triangle (index into the domain's triangles), parameter
 /// position and barycentric coordinates in that triangle.
@@ -162,6 +168,7 @@ impl SegmentCurve {
             triangles: domain.triangles.to_vec(),
             density_planes,
             options: *options,
+            id: NEXT_CURVE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         let total: f64 = (0..curve.triangles.len())
             .map(|t| curve.triangle_measure(t))
@@ -393,9 +400,13 @@ impl SegmentCurve {
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
         if key.full() {
             let levels = levels.min(self.options.leaf_levels as u32);
-            let (x, y) = super::hilbert::point_in_node(key.state(), t, levels);
-            let uv = key.origin() + DVec2::new(x, y) * key.size();
-            return self.point_location(cands, uv);
+            let (x, y) = super::hilbert::cell_in_node(key.state(), t, levels);
+            // The sub-cell's centre on the grid of level `level + levels`: the same
+            // value as `origin + (x + 0.5) 2^-levels size`, both exact before rounding.
+            let inv = super::hilbert::pow2_neg(key.level() as u32 + levels);
+            let gx = ((key.x() as u64) << levels | x) as f64 + 0.5;
+            let gy = ((key.y() as u64) << levels | y) as f64 + 0.5;
+            return self.point_location(cands, DVec2::new(gx, gy) * inv);
         }
         let levels = levels.min(self.options.leaf_levels as u32);
         if cands.len() <= PIECES {
@@ -444,13 +455,21 @@ impl SegmentCurve {
         let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
-        let bufs = &mut scratch.bufs;
-        let mut cur = 0usize;
-        bufs[0].clear();
-        for &tri in cands {
-            let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
-            bufs[0].add(self, tri, poly);
+        // The candidates clipped to the leaf, kept in the scratch for the next sample:
+        // consecutive values often fall in the same boundary leaf.
+        if scratch.root_of != Some((self.id, leaf)) {
+            scratch.root.clear();
+            for &tri in cands {
+                let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
+                scratch.root.add(self, tri, poly);
+            }
+            scratch.root_of = Some((self.id, leaf));
         }
+        let root = &scratch.root;
+        let bufs = &mut scratch.bufs;
+        // The first split reads the leaf's pieces from `root` (bufs[0] is then free).
+        let mut cur = 0usize;
+        let mut at_root = true;
         for depth in 0..levels {
             let half = 0.5 * size;
             let (x0, y0, _) = state.child(0);
@@ -461,6 +480,7 @@ impl SegmentCurve {
             let at = |along_x: bool| if along_x { lo.x } else { lo.y } + half;
             let upper_first = if first_along_x { x0 == 1 } else { y0 == 1 };
             let Some(first) = self.split_pick(
+                at_root.then_some(root),
                 bufs,
                 &mut cur,
                 first_along_x,
@@ -473,7 +493,9 @@ impl SegmentCurve {
             let rank0 = if first { 0 } else { 2 };
             let (qx, qy, _) = state.child(rank0);
             let upper_first = if first_along_x { qy == 1 } else { qx == 1 };
+            at_root = false;
             let Some(first) = self.split_pick(
+                None,
                 bufs,
                 &mut cur,
                 !first_along_x,
@@ -499,7 +521,7 @@ impl SegmentCurve {
         }
         // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
         // piece, which lies in the domain.
-        let node = &bufs[cur];
+        let node = if at_root { root } else { &bufs[cur] };
         let mut best = (0.0, DVec2::ZERO);
         for piece in &node.pieces[..node.len] {
             let (a, c) = piece.poly.area_centroid();
@@ -527,6 +549,7 @@ impl SegmentCurve {
     #[inline]
     fn split_pick(
         &self,
+        source: Option<&PieceSet>,
         bufs: &mut [PieceSet; 3],
         cur: &mut usize,
         along_x: bool,
@@ -535,6 +558,7 @@ impl SegmentCurve {
         target: &mut f64,
     ) -> Option<bool> {
         let (from, below, above) = rotate3(bufs, *cur);
+        let from = source.unwrap_or(from);
         if along_x {
             from.split::<0>(self, at, below, above);
         } else {
@@ -767,12 +791,18 @@ const PIECES: usize = 6;
 #[derive(Clone)]
 pub struct LeafScratch {
     bufs: [PieceSet; 3],
+    /// The candidates of leaf `root_of.1` of the cells with id `root_of.0`, clipped to
+    /// the leaf.
+    root: PieceSet,
+    root_of: Option<(u64, usize)>,
 }
 
 impl Default for LeafScratch {
     fn default() -> Self {
         Self {
             bufs: [PieceSet::EMPTY; 3],
+            root: PieceSet::EMPTY,
+            root_of: None,
         }
     }
 }
@@ -825,19 +855,40 @@ impl PieceSet {
     fn add(&mut self, curve: &SegmentCurve, tri: u32, poly: Poly) {
         if self.len < PIECES {
             self.pieces[self.len].poly = poly;
-            self.commit(curve, tri);
+            let _ = self.commit(curve, tri);
         }
     }
 
-    /// Keeps the polygon written into the next free piece if it has positive area.
+    /// Keeps the polygon written into the next free piece if it has positive area;
+    /// returns the area and measure kept (zero when not kept).
     #[inline]
-    fn commit(&mut self, curve: &SegmentCurve, tri: u32) {
+    fn commit(&mut self, curve: &SegmentCurve, tri: u32) -> (f64, f64) {
         let piece = &mut self.pieces[self.len];
         let (area, moment) = piece.poly.area_moment();
         if area > 0.0 {
             let [gx, gy, h] = curve.density_planes[tri as usize];
             let measure = (gx * moment.x + gy * moment.y + h * area).max(0.0);
             piece.tri = tri;
+            piece.area = area;
+            piece.measure = measure;
+            self.len += 1;
+            self.measure += measure;
+            self.area += area;
+            (area, measure)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    /// Keeps the polygon written into the next free piece, the rest of `whole` after a
+    /// split, with the given area and measure, if both its polygon and its area are
+    /// non-degenerate.
+    #[inline]
+    fn commit_rest(&mut self, whole: &Piece, area: f64, measure: f64) {
+        let piece = &mut self.pieces[self.len];
+        if area > 0.0 && piece.poly.points().len() >= 3 {
+            let measure = measure.max(0.0);
+            piece.tri = whole.tri;
             piece.area = area;
             piece.measure = measure;
             self.len += 1;
@@ -895,8 +946,10 @@ impl PieceSet {
                     &mut below.pieces[b].poly,
                     &mut above.pieces[a].poly,
                 );
-                below.commit(curve, piece.tri);
-                above.commit(curve, piece.tri);
+                // The part above gets the rest of the piece's area and measure (the
+                // measure is linear in the polygon): one polygon integral, not two.
+                let (area, measure) = below.commit(curve, piece.tri);
+                above.commit_rest(piece, piece.area - area, piece.measure - measure);
             }
         }
     }
