@@ -441,6 +441,9 @@ impl SegmentCurve {
     /// measure of a piece is the exact integral of its triangle's affine density
     /// (`g . moment + h area`). The target measure is carried down as in
     /// [`descend_partial`](Self::descend_partial), which this equals up to round-off.
+    // Out of line: boundary leaves hold a few percent of the samples, and the full-leaf
+    // path stays small (fewer registers saved per sample).
+    #[inline(never)]
     fn descend_pieces(
         &self,
         leaf: usize,
@@ -580,6 +583,7 @@ impl SegmentCurve {
     /// children are measured in curve order only until the one holding the target (on
     /// average 2.5 of 4), and each child keeps only the candidate triangles that
     /// overlap it, so deeper levels clip fewer triangles.
+    #[inline(never)]
     fn descend_partial(
         &self,
         leaf: usize,
@@ -667,6 +671,7 @@ impl SegmentCurve {
 
     /// Finds the candidate triangle containing `uv` (the most-inside one if round-off
     /// leaves it just outside all of them) and its barycentric coordinates.
+    #[inline]
     fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         // Division-free inside test first; the coordinates of the triangle found are
         // those of `barycentric`.
@@ -688,6 +693,14 @@ impl SegmentCurve {
                 }
             }
         }
+        self.point_location_nearest(cands, uv)
+    }
+
+    /// The rest of [`point_location`](Self::point_location), out of line (rare: a point
+    /// on an edge up to round-off): the candidate with the largest smallest barycentric
+    /// coordinate, and the point clamped onto it.
+    #[inline(never)]
+    fn point_location_nearest(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         let mut best = (f64::NEG_INFINITY, 0u32, [1.0, 0.0, 0.0]);
         for &t in cands {
             let b = barycentric(&self.triangle_corners(t as usize), uv);

@@ -91,7 +91,6 @@ pub(crate) fn face_point(
     let n = mesh.face_normals()[face as usize];
     let vn = mesh.vertex_normals();
     let normal = unit3(vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2]).unwrap_or(n);
-    let (e1, e2) = face_frame(p, tri, n);
     let t = &tensors.corners[face as usize];
     let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
     let lerp = |o: usize| (t[o] * b0 + t[3 + o] * b1 + t[6 + o] * b2) as f64;
@@ -105,19 +104,37 @@ pub(crate) fn face_point(
     } else {
         DVec2::new(bb, l1 - a)
     };
+    // The frame unnormalised: `u = p1 - p0` and `n x u` have the same length, so one
+    // square root and one division normalise both the frame and `v`.
+    let u = p[j] - p[i];
     let len2 = v.length_squared();
+    let s = len2 * u.length_squared();
+    let major = if usable(s) {
+        (u * v.x + n.cross(u) * v.y) * (1.0 / s.sqrt())
+    } else {
+        major_degenerate(p, tri, n, v, len2)
+    };
+    FacePoint {
+        position,
+        normal,
+        major,
+        l1,
+        l2,
+    }
+}
+
+/// The major axis where the first edge or the eigenvector `v` (squared length `len2`)
+/// cannot be normalised: a fallback frame or the frame's first axis.
+#[cold]
+#[inline(never)]
+fn major_degenerate(p: &[DVec3], tri: &[u32; 3], n: DVec3, v: DVec2, len2: f64) -> DVec3 {
+    let (e1, e2) = face_frame(p, tri, n);
     let v = if usable(len2) {
         v * (1.0 / len2.sqrt())
     } else {
         DVec2::X
     };
-    FacePoint {
-        position,
-        normal,
-        major: e1 * v.x + e2 * v.y,
-        l1,
-        l2,
-    }
+    e1 * v.x + e2 * v.y
 }
 
 /// Whether a squared length can be normalised: positive and finite (the condition of
