@@ -387,6 +387,7 @@ impl SegmentCurve {
     /// boundary-leaf descent given by the caller (a few kilobytes that would otherwise
     /// be initialised per call; reuse one per thread or chunk of work). The result does
     /// not depend on the scratch's previous contents.
+    #[inline]
     pub fn point_in_leaf_with(
         &self,
         leaf: usize,
@@ -671,7 +672,7 @@ impl SegmentCurve {
 
     /// Finds the candidate triangle containing `uv` (the most-inside one if round-off
     /// leaves it just outside all of them) and its barycentric coordinates.
-    #[inline]
+    #[inline(always)]
     fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         // Division-free inside test first; the coordinates of the triangle found are
         // those of `barycentric`.
