@@ -396,8 +396,8 @@ impl SegmentCurve {
         scratch: &mut LeafScratch,
     ) -> DomainPoint {
         let key = self.keys[leaf];
-        let cands = &self.candidates
-            [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
+        let off = &self.candidate_offsets[leaf..leaf + 2];
+        let cands = &self.candidates[off[0] as usize..off[1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
         if key.full() {
             let levels = levels.min(self.options.leaf_levels as u32);
@@ -423,8 +423,8 @@ impl SegmentCurve {
     #[cfg(test)]
     pub(crate) fn point_in_leaf_general(&self, leaf: usize, t: f64, levels: u32) -> DomainPoint {
         let key = self.keys[leaf];
-        let cands = &self.candidates
-            [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
+        let off = &self.candidate_offsets[leaf..leaf + 2];
+        let cands = &self.candidates[off[0] as usize..off[1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
         let levels = levels.min(self.options.leaf_levels as u32);
         if key.full() {

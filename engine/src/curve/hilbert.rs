@@ -214,7 +214,8 @@ pub fn cell_in_node(state: State, t: f64, levels: u32) -> (u64, u64) {
     let mut s = state.0 as usize;
     let (mut x, mut y) = (0u64, 0u64);
     for c in (0..chunks).rev() {
-        let e = TABLE4[s][((d >> (8 * c)) & 255) as usize];
+        // States are 0..4: the mask spares the bounds check.
+        let e = TABLE4[s & 3][((d >> (8 * c)) & 255) as usize];
         x = (x << 4) | (e & 15) as u64;
         y = (y << 4) | ((e >> 4) & 15) as u64;
         s = (e >> 8) as usize;

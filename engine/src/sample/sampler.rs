@@ -374,7 +374,8 @@ impl Sampler {
                 let cum = curve.cumulative();
                 m = (m - before).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
                 leaf = advance(cum, leaf, m);
-                let local = (m - cum[leaf]) / (cum[leaf + 1] - cum[leaf]);
+                let w = &cum[leaf..leaf + 2];
+                let local = (m - w[0]) / (w[1] - w[0]);
                 let p = curve.point_in_leaf_with(leaf, local, levels, &mut scratch);
                 dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
             }
