@@ -5,7 +5,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::faces::{FaceTensors, face_point};
-use super::stratified::{allocate, stratified_value};
+use super::stratified::{allocate, stratified_value_keyed};
 use super::types::Sample;
 use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
 use crate::field::TensorField;
@@ -353,9 +353,10 @@ impl Sampler {
             let mut leaf = 0usize;
             let mut levels =
                 self.leaf_levels(&self.segments[members[0] as usize], count, group_measure);
+            let key = crate::rng::stream_key(seed, i as u64);
             for g in lo..hi {
                 let k = g - grp_lo;
-                let mut m = stratified_value(seed, i as u64, k, count) * group_measure;
+                let mut m = stratified_value_keyed(key, k, count) * group_measure;
                 // Move to the member holding m (values increase along the group).
                 while member + 1 < members.len()
                     && m >= before + self.segments[members[member] as usize].curve.measure()
