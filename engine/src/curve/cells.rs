@@ -487,8 +487,7 @@ impl SegmentCurve {
                 at_root.then_some(root),
                 bufs,
                 &mut cur,
-                first_along_x,
-                at(first_along_x),
+                (first_along_x, at(first_along_x)),
                 upper_first,
                 &mut target,
             ) else {
@@ -502,8 +501,7 @@ impl SegmentCurve {
                 None,
                 bufs,
                 &mut cur,
-                !first_along_x,
-                at(!first_along_x),
+                (!first_along_x, at(!first_along_x)),
                 upper_first,
                 &mut target,
             ) else {
@@ -546,7 +544,8 @@ impl SegmentCurve {
     }
 
     /// One step of [`descend_pieces`](Self::descend_pieces): splits the pieces in
-    /// `bufs[*cur]` at the midline `x = at` (`along_x`) or `y = at`, picks the half
+    /// `source` (if given, else `bufs[*cur]`) at the midline `cut = (along_x, at)`:
+    /// `x = at` (`along_x`) or `y = at`, picks the half
     /// holding `target` (`upper_first`: the half above the midline comes first in
     /// curve order) and makes it current. `Some(true)` when the first half in curve
     /// order was taken; `None` when both halves are empty.
@@ -556,8 +555,7 @@ impl SegmentCurve {
         source: Option<&PieceSet>,
         bufs: &mut [PieceSet; 3],
         cur: &mut usize,
-        along_x: bool,
-        at: f64,
+        (along_x, at): (bool, f64),
         upper_first: bool,
         target: &mut f64,
     ) -> Option<bool> {
