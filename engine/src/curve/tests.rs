@@ -421,3 +421,50 @@ fn cell_keys_pack_every_field() {
     }
     assert_eq!(std::mem::size_of::<CellKey>(), 8);
 }
+
+#[test]
+fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
+    // The scratch caches the last boundary leaf's clipped candidates: interleaving two
+    // curves (same leaf indices, different triangles) and revisiting leaves must give
+    // exactly the points of a fresh scratch.
+    let opts = CurveOptions {
+        max_cell_share: 0.01,
+        boundary_level: 4,
+        ..Default::default()
+    };
+    let build = |(uv, t, d): (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>)| {
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &t,
+                corner_density: &d,
+            },
+            &opts,
+        )
+        .expect("valid")
+    };
+    let curves = [
+        build(disc_with_slope(9, 1.0)),
+        build(disc_with_slope(13, 4.0)),
+    ];
+    let mut scratch = LeafScratch::default();
+    let mut checked = 0;
+    for leaf in 0..curves[0].cell_count().min(curves[1].cell_count()) {
+        // Consecutive values in one leaf (cache hits), then the curves interleaved
+        // at the same leaf index (the cache must tell them apart).
+        let visits = (0..2)
+            .flat_map(|c| (0..3).map(move |k| (c, k)))
+            .chain((0..3).flat_map(|k| (0..2).map(move |c| (c, k))));
+        for (c, k) in visits {
+            let c = &curves[c];
+            if c.cells()[leaf].full() {
+                continue;
+            }
+            let f = (k as f64 + 0.61) / 3.0;
+            let reused = c.point_in_leaf_with(leaf, f, 6, &mut scratch);
+            assert_eq!(reused, c.point_in_leaf_to(leaf, f, 6), "leaf {leaf} k {k}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} boundary points");
+}
