@@ -459,21 +459,38 @@ impl SegmentCurve {
         let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
-        // The candidates clipped to the leaf, kept in the scratch for the next sample:
-        // consecutive values often fall in the same boundary leaf.
+        // The candidates clipped to the leaf and the leaf's first cut (between its first
+        // two and last two children in curve order), kept in the scratch for the next
+        // sample: consecutive values often fall in the same boundary leaf.
         if scratch.root_of != Some((self.id, leaf)) {
             scratch.root.clear();
             for &tri in cands {
                 let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
                 scratch.root.add(self, tri, poly);
             }
+            // The same cut as the loop's first at depth 0.
+            let (x0, _, _) = state.child(0);
+            let (x1, _, _) = state.child(1);
+            let [below, above] = &mut scratch.halves;
+            if x0 == x1 {
+                scratch
+                    .root
+                    .split::<0>(self, lo.x + 0.5 * size, below, above);
+            } else {
+                scratch
+                    .root
+                    .split::<1>(self, lo.y + 0.5 * size, below, above);
+            }
             scratch.root_of = Some((self.id, leaf));
         }
         let root = &scratch.root;
+        let halves = &scratch.halves;
         let bufs = &mut scratch.bufs;
-        // The first split reads the leaf's pieces from `root` (bufs[0] is then free).
+        // The first level starts from the cached halves; its second split reads the
+        // chosen half (`from_half`), so all of `bufs` is free.
         let mut cur = 0usize;
         let mut at_root = true;
+        let mut from_half: Option<&PieceSet> = None;
         for depth in 0..levels {
             let half = 0.5 * size;
             let (x0, y0, _) = state.child(0);
@@ -483,14 +500,27 @@ impl SegmentCurve {
             let first_along_x = x0 == x1;
             let at = |along_x: bool| if along_x { lo.x } else { lo.y } + half;
             let upper_first = if first_along_x { x0 == 1 } else { y0 == 1 };
-            let Some(first) = self.split_pick(
-                at_root.then_some(root),
-                bufs,
-                &mut cur,
-                (first_along_x, at(first_along_x)),
-                upper_first,
-                &mut target,
-            ) else {
+            let first = if depth == 0 {
+                let [below, above] = halves;
+                let (m_first, m_second) = if upper_first {
+                    (above.measure, below.measure)
+                } else {
+                    (below.measure, above.measure)
+                };
+                pick(&mut target, m_first, m_second).inspect(|&first| {
+                    from_half = Some(if first == upper_first { above } else { below });
+                })
+            } else {
+                self.split_pick(
+                    None,
+                    bufs,
+                    &mut cur,
+                    (first_along_x, at(first_along_x)),
+                    upper_first,
+                    &mut target,
+                )
+            };
+            let Some(first) = first else {
                 break;
             };
             let rank0 = if first { 0 } else { 2 };
@@ -498,7 +528,7 @@ impl SegmentCurve {
             let upper_first = if first_along_x { qy == 1 } else { qx == 1 };
             at_root = false;
             let Some(first) = self.split_pick(
-                None,
+                from_half,
                 bufs,
                 &mut cur,
                 (!first_along_x, at(!first_along_x)),
@@ -507,6 +537,7 @@ impl SegmentCurve {
             ) else {
                 break;
             };
+            from_half = None;
             let rank = rank0 + if first { 0 } else { 1 };
             let (qx, qy, child_state) = state.child(rank);
             lo += DVec2::new(qx as f64, qy as f64) * half;
@@ -523,7 +554,11 @@ impl SegmentCurve {
         }
         // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
         // piece, which lies in the domain.
-        let node = if at_root { root } else { &bufs[cur] };
+        let node = match (at_root, from_half) {
+            (true, _) => root,
+            (false, Some(half)) => half,
+            (false, None) => &bufs[cur],
+        };
         let mut best = (0.0, DVec2::ZERO);
         for piece in &node.pieces[..node.len] {
             let (a, c) = piece.poly.area_centroid();
@@ -806,6 +841,8 @@ pub struct LeafScratch {
     /// The candidates of leaf `root_of.1` of the cells with id `root_of.0`, clipped to
     /// the leaf.
     root: PieceSet,
+    /// `root` split by the leaf's first cut: below and above the midline.
+    halves: [PieceSet; 2],
     root_of: Option<(u64, usize)>,
 }
 
@@ -814,6 +851,7 @@ impl Default for LeafScratch {
         Self {
             bufs: [PieceSet::EMPTY; 3],
             root: PieceSet::EMPTY,
+            halves: [PieceSet::EMPTY; 2],
             root_of: None,
         }
     }
