@@ -15,11 +15,25 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
+
 /// A random `u64` for `(seed, stream, counter)`.
 #[inline]
 pub fn hash3(seed: u64, stream: u64, counter: u64) -> u64 {
-    const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
-    mix64(mix64(seed ^ stream.wrapping_mul(GOLDEN)).wrapping_add(counter.wrapping_mul(GOLDEN)))
+    keyed_hash(stream_key(seed, stream), counter)
+}
+
+/// The part of [`hash3`] that depends only on `(seed, stream)`: a loop over counters
+/// of one stream computes it once and calls [`keyed_hash`].
+#[inline]
+pub fn stream_key(seed: u64, stream: u64) -> u64 {
+    mix64(seed ^ stream.wrapping_mul(GOLDEN))
+}
+
+/// `hash3(seed, stream, counter)` from `key = stream_key(seed, stream)`.
+#[inline]
+pub fn keyed_hash(key: u64, counter: u64) -> u64 {
+    mix64(key.wrapping_add(counter.wrapping_mul(GOLDEN)))
 }
 
 /// Converts 53 random bits to a uniform `f64` in `[0, 1)`.

@@ -22,33 +22,87 @@ pub struct CurveDomain<'a> {
     pub corner_density: &'a [[f64; 3]],
 }
 
-/// Where a leaf cell lies and how the curve runs through it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CellKey {
-    /// Cell column at its level.
-    pub x: u32,
-    /// Cell row at its level.
-    pub y: u32,
-    /// Quadtree level (the cell's side is `2^-level`).
-    pub level: u8,
-    /// Hilbert orientation of the cell.
-    pub state: State,
-    /// Whether the domain covers the whole cell.
-    pub full: bool,
-}
+/// Where a leaf cell lies and how the curve runs through it, packed into 8 bytes (the
+/// cells are the largest per-face part of the preprocessed data).
+///
+/// Layout of the `u64`: bits 0..31 hold the column with a marker bit above it at bit
+/// `level` (so the level is the position of the highest set bit and needs no field of
+/// its own), bits 31..61 the row, bits 61..63 the Hilbert state and bit 63 whether the
+/// domain covers the whole cell. Levels go up to 30 ([`CurveOptions::max_level`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct CellKey(u64);
 
 impl CellKey {
+    /// Deepest level a key can hold.
+    pub const MAX_LEVEL: u8 = 30;
+    const LOW: u64 = (1 << 31) - 1;
+
+    /// The cell at column `x` and row `y` of level `level` (`x, y < 2^level`, `level <=`
+    /// [`MAX_LEVEL`](Self::MAX_LEVEL); out-of-range bits are dropped).
+    #[inline]
+    pub fn new(x: u32, y: u32, level: u8, state: State, full: bool) -> Self {
+        debug_assert!(level <= Self::MAX_LEVEL);
+        debug_assert!((x as u64) < 1 << level && (y as u64) < 1 << level);
+        let level = level.min(Self::MAX_LEVEL);
+        let mask = (1u64 << level) - 1;
+        let low = (x as u64 & mask) | 1 << level;
+        Self(low | (y as u64 & mask) << 31 | ((state.0 & 3) as u64) << 61 | (full as u64) << 63)
+    }
+
+    /// Quadtree level (the cell's side is `2^-level`).
+    #[inline]
+    pub fn level(&self) -> u8 {
+        (31 - ((self.0 & Self::LOW) as u32).leading_zeros()) as u8
+    }
+
+    /// Cell column at its level.
+    #[inline]
+    pub fn x(&self) -> u32 {
+        let low = (self.0 & Self::LOW) as u32;
+        low ^ (1 << self.level())
+    }
+
+    /// Cell row at its level.
+    #[inline]
+    pub fn y(&self) -> u32 {
+        ((self.0 >> 31) & ((1 << 30) - 1)) as u32
+    }
+
+    /// Hilbert orientation of the cell.
+    #[inline]
+    pub fn state(&self) -> State {
+        State(((self.0 >> 61) & 3) as u8)
+    }
+
+    /// Whether the domain covers the whole cell.
+    #[inline]
+    pub fn full(&self) -> bool {
+        self.0 >> 63 != 0
+    }
+
     /// Side length.
     #[inline]
     pub fn size(&self) -> f64 {
         // 2^-level, built from its exponent (no integer conversion, no division).
-        f64::from_bits((1023 - self.level as u64) << 52)
+        f64::from_bits((1023 - self.level() as u64) << 52)
     }
 
     /// Lower-left corner.
     #[inline]
     pub fn origin(&self) -> DVec2 {
-        DVec2::new(self.x as f64, self.y as f64) * self.size()
+        DVec2::new(self.x() as f64, self.y() as f64) * self.size()
+    }
+}
+
+impl std::fmt::Debug for CellKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CellKey")
+            .field("x", &self.x())
+            .field("y", &self.y())
+            .field("level", &self.level())
+            .field("state", &self.state())
+            .field("full", &self.full())
+            .finish()
     }
 }
 
@@ -70,7 +124,13 @@ pub struct SegmentCurve {
     /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
     density_planes: Vec<[f64; 3]>,
     options: CurveOptions,
+    /// Identifies these cells for the leaf cache of [`LeafScratch`]: unique per build
+    /// (a clone shares it, and the cells never change after the build).
+    id: u64,
 }
+
+/// Source of [`SegmentCurve`] ids.
+static NEXT_CURVE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// A point of the domain: its triangle (index into the domain's triangles), parameter
 /// position and barycentric coordinates in that triangle.
@@ -108,6 +168,7 @@ impl SegmentCurve {
             triangles: domain.triangles.to_vec(),
             density_planes,
             options: *options,
+            id: NEXT_CURVE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         let total: f64 = (0..curve.triangles.len())
             .map(|t| curve.triangle_measure(t))
@@ -242,13 +303,8 @@ impl SegmentCurve {
                     lists.extend_from_slice(&kept);
                 }
             } else if measure > 0.0 {
-                self.keys.push(CellKey {
-                    x: node.x,
-                    y: node.y,
-                    level: node.level,
-                    state: node.state,
-                    full,
-                });
+                self.keys
+                    .push(CellKey::new(node.x, node.y, node.level, node.state, full));
                 let last = *self.cumulative.last().unwrap_or(&0.0);
                 self.cumulative.push(last + measure);
                 // Largest overlap first: point location tries candidates in this
@@ -331,6 +387,7 @@ impl SegmentCurve {
     /// boundary-leaf descent given by the caller (a few kilobytes that would otherwise
     /// be initialised per call; reuse one per thread or chunk of work). The result does
     /// not depend on the scratch's previous contents.
+    #[inline]
     pub fn point_in_leaf_with(
         &self,
         leaf: usize,
@@ -339,14 +396,18 @@ impl SegmentCurve {
         scratch: &mut LeafScratch,
     ) -> DomainPoint {
         let key = self.keys[leaf];
-        let cands = &self.candidates
-            [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
+        let off = &self.candidate_offsets[leaf..leaf + 2];
+        let cands = &self.candidates[off[0] as usize..off[1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
-        if key.full {
+        if key.full() {
             let levels = levels.min(self.options.leaf_levels as u32);
-            let (x, y) = super::hilbert::point_in_node(key.state, t, levels);
-            let uv = key.origin() + DVec2::new(x, y) * key.size();
-            return self.point_location(cands, uv);
+            let (x, y) = super::hilbert::cell_in_node(key.state(), t, levels);
+            // The sub-cell's centre on the grid of level `level + levels`: the same
+            // value as `origin + (x + 0.5) 2^-levels size`, both exact before rounding.
+            let inv = super::hilbert::pow2_neg(key.level() as u32 + levels);
+            let gx = ((key.x() as u64) << levels | x) as f64 + 0.5;
+            let gy = ((key.y() as u64) << levels | y) as f64 + 0.5;
+            return self.point_location(cands, DVec2::new(gx, gy) * inv);
         }
         let levels = levels.min(self.options.leaf_levels as u32);
         if cands.len() <= PIECES {
@@ -362,11 +423,11 @@ impl SegmentCurve {
     #[cfg(test)]
     pub(crate) fn point_in_leaf_general(&self, leaf: usize, t: f64, levels: u32) -> DomainPoint {
         let key = self.keys[leaf];
-        let cands = &self.candidates
-            [self.candidate_offsets[leaf] as usize..self.candidate_offsets[leaf + 1] as usize];
+        let off = &self.candidate_offsets[leaf..leaf + 2];
+        let cands = &self.candidates[off[0] as usize..off[1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
         let levels = levels.min(self.options.leaf_levels as u32);
-        if key.full {
+        if key.full() {
             return self.point_in_leaf_to(leaf, t, levels);
         }
         self.descend_partial(leaf, key, cands, t, levels)
@@ -381,6 +442,9 @@ impl SegmentCurve {
     /// measure of a piece is the exact integral of its triangle's affine density
     /// (`g . moment + h area`). The target measure is carried down as in
     /// [`descend_partial`](Self::descend_partial), which this equals up to round-off.
+    // Out of line: boundary leaves hold a few percent of the samples, and the full-leaf
+    // path stays small (fewer registers saved per sample).
+    #[inline(never)]
     fn descend_pieces(
         &self,
         leaf: usize,
@@ -392,16 +456,41 @@ impl SegmentCurve {
     ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
-        let mut state = key.state;
+        let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
-        let bufs = &mut scratch.bufs;
-        let mut cur = 0usize;
-        bufs[0].clear();
-        for &tri in cands {
-            let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
-            bufs[0].add(self, tri, poly);
+        // The candidates clipped to the leaf and the leaf's first cut (between its first
+        // two and last two children in curve order), kept in the scratch for the next
+        // sample: consecutive values often fall in the same boundary leaf.
+        if scratch.root_of != Some((self.id, leaf)) {
+            scratch.root.clear();
+            for &tri in cands {
+                let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
+                scratch.root.add(self, tri, poly);
+            }
+            // The same cut as the loop's first at depth 0.
+            let (x0, _, _) = state.child(0);
+            let (x1, _, _) = state.child(1);
+            let [below, above] = &mut scratch.halves;
+            if x0 == x1 {
+                scratch
+                    .root
+                    .split::<0>(self, lo.x + 0.5 * size, below, above);
+            } else {
+                scratch
+                    .root
+                    .split::<1>(self, lo.y + 0.5 * size, below, above);
+            }
+            scratch.root_of = Some((self.id, leaf));
         }
+        let root = &scratch.root;
+        let halves = &scratch.halves;
+        let bufs = &mut scratch.bufs;
+        // The first level starts from the cached halves; its second split reads the
+        // chosen half (`from_half`), so all of `bufs` is free.
+        let mut cur = 0usize;
+        let mut at_root = true;
+        let mut from_half: Option<&PieceSet> = None;
         for depth in 0..levels {
             let half = 0.5 * size;
             let (x0, y0, _) = state.child(0);
@@ -411,29 +500,44 @@ impl SegmentCurve {
             let first_along_x = x0 == x1;
             let at = |along_x: bool| if along_x { lo.x } else { lo.y } + half;
             let upper_first = if first_along_x { x0 == 1 } else { y0 == 1 };
-            let Some(first) = self.split_pick(
-                bufs,
-                &mut cur,
-                first_along_x,
-                at(first_along_x),
-                upper_first,
-                &mut target,
-            ) else {
+            let first = if depth == 0 {
+                let [below, above] = halves;
+                let (m_first, m_second) = if upper_first {
+                    (above.measure, below.measure)
+                } else {
+                    (below.measure, above.measure)
+                };
+                pick(&mut target, m_first, m_second).inspect(|&first| {
+                    from_half = Some(if first == upper_first { above } else { below });
+                })
+            } else {
+                self.split_pick(
+                    None,
+                    bufs,
+                    &mut cur,
+                    (first_along_x, at(first_along_x)),
+                    upper_first,
+                    &mut target,
+                )
+            };
+            let Some(first) = first else {
                 break;
             };
             let rank0 = if first { 0 } else { 2 };
             let (qx, qy, _) = state.child(rank0);
             let upper_first = if first_along_x { qy == 1 } else { qx == 1 };
+            at_root = false;
             let Some(first) = self.split_pick(
+                from_half,
                 bufs,
                 &mut cur,
-                !first_along_x,
-                at(!first_along_x),
+                (!first_along_x, at(!first_along_x)),
                 upper_first,
                 &mut target,
             ) else {
                 break;
             };
+            from_half = None;
             let rank = rank0 + if first { 0 } else { 1 };
             let (qx, qy, child_state) = state.child(rank);
             lo += DVec2::new(qx as f64, qy as f64) * half;
@@ -450,7 +554,11 @@ impl SegmentCurve {
         }
         // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
         // piece, which lies in the domain.
-        let node = &bufs[cur];
+        let node = match (at_root, from_half) {
+            (true, _) => root,
+            (false, Some(half)) => half,
+            (false, None) => &bufs[cur],
+        };
         let mut best = (0.0, DVec2::ZERO);
         for piece in &node.pieces[..node.len] {
             let (a, c) = piece.poly.area_centroid();
@@ -471,21 +579,23 @@ impl SegmentCurve {
     }
 
     /// One step of [`descend_pieces`](Self::descend_pieces): splits the pieces in
-    /// `bufs[*cur]` at the midline `x = at` (`along_x`) or `y = at`, picks the half
+    /// `source` (if given, else `bufs[*cur]`) at the midline `cut = (along_x, at)`:
+    /// `x = at` (`along_x`) or `y = at`, picks the half
     /// holding `target` (`upper_first`: the half above the midline comes first in
     /// curve order) and makes it current. `Some(true)` when the first half in curve
     /// order was taken; `None` when both halves are empty.
     #[inline]
     fn split_pick(
         &self,
+        source: Option<&PieceSet>,
         bufs: &mut [PieceSet; 3],
         cur: &mut usize,
-        along_x: bool,
-        at: f64,
+        (along_x, at): (bool, f64),
         upper_first: bool,
         target: &mut f64,
     ) -> Option<bool> {
         let (from, below, above) = rotate3(bufs, *cur);
+        let from = source.unwrap_or(from);
         if along_x {
             from.split::<0>(self, at, below, above);
         } else {
@@ -507,6 +617,7 @@ impl SegmentCurve {
     /// children are measured in curve order only until the one holding the target (on
     /// average 2.5 of 4), and each child keeps only the candidate triangles that
     /// overlap it, so deeper levels clip fewer triangles.
+    #[inline(never)]
     fn descend_partial(
         &self,
         leaf: usize,
@@ -517,7 +628,7 @@ impl SegmentCurve {
     ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
-        let mut state = key.state;
+        let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
         // Candidates of the current node (`cur`) and of each child measured at this
@@ -594,6 +705,7 @@ impl SegmentCurve {
 
     /// Finds the candidate triangle containing `uv` (the most-inside one if round-off
     /// leaves it just outside all of them) and its barycentric coordinates.
+    #[inline(always)]
     fn point_location(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         // Division-free inside test first; the coordinates of the triangle found are
         // those of `barycentric`.
@@ -615,6 +727,14 @@ impl SegmentCurve {
                 }
             }
         }
+        self.point_location_nearest(cands, uv)
+    }
+
+    /// The rest of [`point_location`](Self::point_location), out of line (rare: a point
+    /// on an edge up to round-off): the candidate with the largest smallest barycentric
+    /// coordinate, and the point clamped onto it.
+    #[inline(never)]
+    fn point_location_nearest(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
         let mut best = (f64::NEG_INFINITY, 0u32, [1.0, 0.0, 0.0]);
         for &t in cands {
             let b = barycentric(&self.triangle_corners(t as usize), uv);
@@ -718,12 +838,21 @@ const PIECES: usize = 6;
 #[derive(Clone)]
 pub struct LeafScratch {
     bufs: [PieceSet; 3],
+    /// The candidates of leaf `root_of.1` of the cells with id `root_of.0`, clipped to
+    /// the leaf.
+    root: PieceSet,
+    /// `root` split by the leaf's first cut: below and above the midline.
+    halves: [PieceSet; 2],
+    root_of: Option<(u64, usize)>,
 }
 
 impl Default for LeafScratch {
     fn default() -> Self {
         Self {
             bufs: [PieceSet::EMPTY; 3],
+            root: PieceSet::EMPTY,
+            halves: [PieceSet::EMPTY; 2],
+            root_of: None,
         }
     }
 }
@@ -776,19 +905,40 @@ impl PieceSet {
     fn add(&mut self, curve: &SegmentCurve, tri: u32, poly: Poly) {
         if self.len < PIECES {
             self.pieces[self.len].poly = poly;
-            self.commit(curve, tri);
+            let _ = self.commit(curve, tri);
         }
     }
 
-    /// Keeps the polygon written into the next free piece if it has positive area.
+    /// Keeps the polygon written into the next free piece if it has positive area;
+    /// returns the area and measure kept (zero when not kept).
     #[inline]
-    fn commit(&mut self, curve: &SegmentCurve, tri: u32) {
+    fn commit(&mut self, curve: &SegmentCurve, tri: u32) -> (f64, f64) {
         let piece = &mut self.pieces[self.len];
         let (area, moment) = piece.poly.area_moment();
         if area > 0.0 {
             let [gx, gy, h] = curve.density_planes[tri as usize];
             let measure = (gx * moment.x + gy * moment.y + h * area).max(0.0);
             piece.tri = tri;
+            piece.area = area;
+            piece.measure = measure;
+            self.len += 1;
+            self.measure += measure;
+            self.area += area;
+            (area, measure)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    /// Keeps the polygon written into the next free piece, the rest of `whole` after a
+    /// split, with the given area and measure, if both its polygon and its area are
+    /// non-degenerate.
+    #[inline]
+    fn commit_rest(&mut self, whole: &Piece, area: f64, measure: f64) {
+        let piece = &mut self.pieces[self.len];
+        if area > 0.0 && piece.poly.points().len() >= 3 {
+            let measure = measure.max(0.0);
+            piece.tri = whole.tri;
             piece.area = area;
             piece.measure = measure;
             self.len += 1;
@@ -846,8 +996,10 @@ impl PieceSet {
                     &mut below.pieces[b].poly,
                     &mut above.pieces[a].poly,
                 );
-                below.commit(curve, piece.tri);
-                above.commit(curve, piece.tri);
+                // The part above gets the rest of the piece's area and measure (the
+                // measure is linear in the polygon): one polygon integral, not two.
+                let (area, measure) = below.commit(curve, piece.tri);
+                above.commit_rest(piece, piece.area - area, piece.measure - measure);
             }
         }
     }

@@ -62,45 +62,46 @@ impl Poly {
         above: &mut Poly,
     ) {
         let coord = |p: DVec2| if AXIS == 0 { p.x } else { p.y };
-        below.len = 0;
-        above.len = 0;
-        let p = self.points();
-        let Some(&last) = p.last() else {
-            return;
-        };
-        let mut prev = last;
-        let mut dp = coord(prev) - at;
-        for &q in p {
-            let dq = coord(q) - at;
-            if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
-                let mut x = prev + (q - prev) * (dp / (dp - dq));
-                if AXIS == 0 {
-                    x.x = at;
-                } else {
-                    x.y = at;
-                }
-                below.push(x);
-                above.push(x);
-            }
-            if dq <= 0.0 {
-                below.push(q);
-            }
-            if dq >= 0.0 {
-                above.push(q);
-            }
-            prev = q;
-            dp = dq;
-        }
-    }
-
-    #[inline(always)]
-    fn push(&mut self, p: DVec2) {
-        // A convex polygon cut by a line gains at most one corner; the bound only
+        // Corner counts in locals (not through the two `&mut`), written back at the end.
+        let (mut nb, mut na) = (0usize, 0usize);
+        // A convex polygon cut by a line gains at most one corner; the bound of 8 only
         // guards against round-off duplicates.
-        if self.len < 8 {
-            self.pts[self.len] = p;
-            self.len += 1;
+        let p = self.points();
+        if let Some(&last) = p.last() {
+            let mut prev = last;
+            let mut dp = coord(prev) - at;
+            for &q in p {
+                let dq = coord(q) - at;
+                if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+                    let mut x = prev + (q - prev) * (dp / (dp - dq));
+                    if AXIS == 0 {
+                        x.x = at;
+                    } else {
+                        x.y = at;
+                    }
+                    if nb < 8 {
+                        below.pts[nb] = x;
+                        nb += 1;
+                    }
+                    if na < 8 {
+                        above.pts[na] = x;
+                        na += 1;
+                    }
+                }
+                if dq <= 0.0 && nb < 8 {
+                    below.pts[nb] = q;
+                    nb += 1;
+                }
+                if dq >= 0.0 && na < 8 {
+                    above.pts[na] = q;
+                    na += 1;
+                }
+                prev = q;
+                dp = dq;
+            }
         }
+        below.len = nb;
+        above.len = na;
     }
 }
 

@@ -185,30 +185,54 @@ const fn build_table4() -> [[u16; 256]; 4] {
 /// and placed at the centre of the final sub-cell (at `2^-levels` of the node's size
 /// the remaining fraction no longer matters). Steigleder and McCool's generalized
 /// stratified sampling maps stratified 1D values through exactly this map. Walks four
-/// levels per table look-up (the index padded to a multiple of four levels, the
-/// padding levels dropped from the cell at the end: the curve is hierarchical);
-/// `levels` is at most 26 (52 bits of `t`).
+/// levels per table look-up (see [`cell_in_node`]); `levels` is at most 26 (52 bits of
+/// `t`).
 #[inline]
 pub fn point_in_node(state: State, t: f64, levels: u32) -> (f64, f64) {
+    let (x, y) = cell_in_node(state, t, levels);
+    let inv = pow2_neg(levels);
+    ((x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv)
+}
+
+/// The sub-cell `(x, y)` (each below `2^levels`) of the node in `state` that the
+/// continuous Hilbert map reaches at `t` in `[0, 1)`, resolved to `levels` levels:
+/// [`point_in_node`] without the conversion to coordinates, for callers that place the
+/// sub-cell in a larger grid. Walks four levels per table look-up (the index padded to
+/// a multiple of four levels, the padding levels dropped from the cell at the end: the
+/// curve is hierarchical); `levels` is at most 26 (52 bits of `t`).
+#[inline]
+pub fn cell_in_node(state: State, t: f64, levels: u32) -> (u64, u64) {
     debug_assert!((0.0..=1.0).contains(&t) && levels <= 26);
     // The first 2 * levels bits of t, as an integer index along the sub-curve.
     let bits = 2 * levels;
-    // Signed conversions: one instruction each on x86-64 (values stay below 2^53).
-    let d = ((t * (1i64 << bits) as f64) as i64).min((1i64 << bits) - 1) as u64;
+    // Signed conversion: one instruction on x86-64 (values stay below 2^53); 2^bits
+    // built from its exponent.
+    let d = ((t * pow2(bits)) as i64).min((1i64 << bits) - 1) as u64;
     let chunks = levels.div_ceil(4);
     let pad = 4 * chunks - levels;
     let d = d << (2 * pad);
     let mut s = state.0 as usize;
     let (mut x, mut y) = (0u64, 0u64);
     for c in (0..chunks).rev() {
-        let e = TABLE4[s][((d >> (8 * c)) & 255) as usize];
+        // States are 0..4: the mask spares the bounds check.
+        let e = TABLE4[s & 3][((d >> (8 * c)) & 255) as usize];
         x = (x << 4) | (e & 15) as u64;
         y = (y << 4) | ((e >> 4) & 15) as u64;
         s = (e >> 8) as usize;
     }
-    let (x, y) = ((x >> pad) as i64, (y >> pad) as i64);
-    let inv = 1.0 / (1i64 << levels) as f64;
-    ((x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv)
+    (x >> pad, y >> pad)
+}
+
+/// `2^k` for `k <= 1023`, built from its exponent bits (no conversion, no division).
+#[inline(always)]
+pub(crate) fn pow2(k: u32) -> f64 {
+    f64::from_bits((1023 + k as u64) << 52)
+}
+
+/// `2^-k` for `k <= 1022`, built from its exponent bits.
+#[inline(always)]
+pub(crate) fn pow2_neg(k: u32) -> f64 {
+    f64::from_bits((1023 - k as u64) << 52)
 }
 
 #[cfg(test)]

@@ -61,11 +61,11 @@ fn uniform_square_has_a_regular_grid_of_full_cells() {
     )
     .expect("valid");
     assert_eq!(c.cell_count(), 4096);
-    assert!(c.cells().iter().all(|k| k.full && k.level == 6));
+    assert!(c.cells().iter().all(|k| k.full() && k.level() == 6));
     assert!((c.measure() - 1.0).abs() < 1e-12);
     // Leaves come in Hilbert order: their indices at level 6 are 0, 1, 2, ...
     for (i, k) in c.cells().iter().enumerate() {
-        assert_eq!(hilbert::xy2d(6, k.x, k.y), i as u64);
+        assert_eq!(hilbert::xy2d(6, k.x(), k.y()), i as u64);
     }
 }
 
@@ -92,8 +92,13 @@ fn disc_measure_is_exact_and_leaves_are_consecutive_neighbours() {
         "{} vs {exact}",
         c.measure()
     );
-    assert!(c.cells().iter().any(|k| !k.full), "boundary cells exist");
-    assert!(c.cells().iter().filter(|k| !k.full).all(|k| k.level >= 8));
+    assert!(c.cells().iter().any(|k| !k.full()), "boundary cells exist");
+    assert!(
+        c.cells()
+            .iter()
+            .filter(|k| !k.full())
+            .all(|k| k.level() >= 8)
+    );
     let cum = c.cumulative();
     assert!(cum.windows(2).all(|w| w[1] > w[0]));
 }
@@ -119,7 +124,7 @@ fn adaptive_leaves_of_a_full_square_are_consecutive_neighbours() {
         &opts,
     )
     .expect("valid");
-    let levels: std::collections::BTreeSet<u8> = c.cells().iter().map(|k| k.level).collect();
+    let levels: std::collections::BTreeSet<u8> = c.cells().iter().map(|k| k.level()).collect();
     assert!(levels.len() >= 3, "adaptive: {levels:?}");
     let area: f64 = c.cells().iter().map(|k| k.size() * k.size()).sum();
     assert!((area - 1.0).abs() < 1e-12, "leaves tile the square");
@@ -350,7 +355,7 @@ fn splitting_descent_matches_the_clipping_descent() {
         )
         .expect("valid");
         let (mut checked, mut differ) = (0usize, 0usize);
-        for leaf in (0..c.cell_count()).filter(|&i| !c.cells()[i].full) {
+        for leaf in (0..c.cell_count()).filter(|&i| !c.cells()[i].full()) {
             for k in 0..23 {
                 let f = (k as f64 + 0.37) / 23.0;
                 for levels in [1, 3, 7, 12] {
@@ -380,14 +385,86 @@ fn splitting_descent_matches_the_clipping_descent() {
 #[test]
 fn cell_size_is_the_power_of_two() {
     for level in 0..=30u8 {
-        let key = CellKey {
-            x: 3,
-            y: 1,
-            level,
-            state: hilbert::State::ROOT,
-            full: true,
+        let (x, y) = if level >= 2 {
+            (3, 1)
+        } else {
+            (level as u32, 0)
         };
+        let key = CellKey::new(x, y, level, hilbert::State::ROOT, true);
         assert_eq!(key.size(), 1.0 / (1u64 << level) as f64, "level {level}");
-        assert_eq!(key.origin(), DVec2::new(3.0, 1.0) * key.size());
+        assert_eq!(key.origin(), DVec2::new(x as f64, y as f64) * key.size());
     }
+}
+
+#[test]
+fn cell_keys_pack_every_field() {
+    let mut rng = crate::rng::Rng::new(11, 0);
+    for level in 0..=CellKey::MAX_LEVEL {
+        for state in 0..4u8 {
+            for full in [false, true] {
+                let side = 1u64 << level;
+                let corners = [(0, 0), (side - 1, side - 1), (side - 1, 0), (0, side - 1)];
+                let random = (
+                    (rng.next_f64() * side as f64) as u64 % side,
+                    (rng.next_f64() * side as f64) as u64 % side,
+                );
+                for (x, y) in corners.into_iter().chain([random]) {
+                    let key = CellKey::new(x as u32, y as u32, level, hilbert::State(state), full);
+                    assert_eq!(
+                        (key.x(), key.y(), key.level(), key.state(), key.full()),
+                        (x as u32, y as u32, level, hilbert::State(state), full),
+                        "{key:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert_eq!(std::mem::size_of::<CellKey>(), 8);
+}
+
+#[test]
+fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
+    // The scratch caches the last boundary leaf's clipped candidates: interleaving two
+    // curves (same leaf indices, different triangles) and revisiting leaves must give
+    // exactly the points of a fresh scratch.
+    let opts = CurveOptions {
+        max_cell_share: 0.01,
+        boundary_level: 4,
+        ..Default::default()
+    };
+    let build = |(uv, t, d): (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>)| {
+        SegmentCurve::build(
+            &CurveDomain {
+                uv: &uv,
+                triangles: &t,
+                corner_density: &d,
+            },
+            &opts,
+        )
+        .expect("valid")
+    };
+    let curves = [
+        build(disc_with_slope(9, 1.0)),
+        build(disc_with_slope(13, 4.0)),
+    ];
+    let mut scratch = LeafScratch::default();
+    let mut checked = 0;
+    for leaf in 0..curves[0].cell_count().min(curves[1].cell_count()) {
+        // Consecutive values in one leaf (cache hits), then the curves interleaved
+        // at the same leaf index (the cache must tell them apart).
+        let visits = (0..2)
+            .flat_map(|c| (0..3).map(move |k| (c, k)))
+            .chain((0..3).flat_map(|k| (0..2).map(move |c| (c, k))));
+        for (c, k) in visits {
+            let c = &curves[c];
+            if c.cells()[leaf].full() {
+                continue;
+            }
+            let f = (k as f64 + 0.61) / 3.0;
+            let reused = c.point_in_leaf_with(leaf, f, 6, &mut scratch);
+            assert_eq!(reused, c.point_in_leaf_to(leaf, f, 6), "leaf {leaf} k {k}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} boundary points");
 }

@@ -1,6 +1,6 @@
-//! Turning a point of a face into the fields of a [`Sample`](super::Sample), read
-//! straight from the mesh and the field (no per-face copy: the preprocessed data stays
-//! small, and the mesh's arrays are already contiguous).
+//! Turning a point of a face into the fields of a [`Sample`](super::Sample): position and
+//! normal read straight from the mesh (its arrays are already contiguous), the field's
+//! tensor from a small per-face table ([`FaceTensors`]) built once with the sampler.
 
 use glam::{DVec2, DVec3};
 
@@ -17,45 +17,84 @@ pub(crate) struct FacePoint {
     pub l2: f64,
 }
 
+/// Per mesh face, the field's tensor at each of its three corners restricted to the
+/// face's frame `e1 = (p1 - p0) / |p1 - p0|`, `e2 = n x e1`: the entries `[a, b, c]` of
+/// `[[a, b], [b, c]]` per corner, as `f32` (36 bytes per face).
+///
+/// Restriction to a fixed frame is linear, so interpolating these entries over the face
+/// equals restricting the interpolated 3D tensor (DESIGN.md: the tensor is interpolated
+/// linearly), and a sample pays nine multiply-adds instead of interpolating six entries
+/// and evaluating three quadratic forms. `f32` keeps the eigenvalues to a relative
+/// `1e-7` of the largest one, finer than the `f32` spacings written into samples.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FaceTensors {
+    corners: Vec<[f32; 9]>,
+}
+
+impl FaceTensors {
+    /// Restricts the field's corner tensors of every face of `mesh` to the face's frame.
+    pub(crate) fn new(mesh: &TriMesh, field: &TensorField) -> Self {
+        let p = mesh.positions();
+        let t = field.tensors();
+        let corners = mesh
+            .triangles()
+            .iter()
+            .zip(mesh.face_normals())
+            .map(|(tri, &n)| {
+                let (e1, e2) = face_frame(p, tri, n);
+                let mut out = [0.0f32; 9];
+                for (k, &v) in tri.iter().enumerate() {
+                    let m = &t[v as usize];
+                    let me1 = *m * e1;
+                    out[3 * k] = e1.dot(me1) as f32;
+                    out[3 * k + 1] = e2.dot(me1) as f32;
+                    out[3 * k + 2] = e2.dot(*m * e2) as f32;
+                }
+                out
+            })
+            .collect();
+        Self { corners }
+    }
+
+    /// Memory held, in bytes.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.corners.capacity() * std::mem::size_of::<[f32; 9]>()
+    }
+}
+
+/// The face frame `e1 = (p1 - p0) / |p1 - p0|` (any unit vector orthogonal to `n` for a
+/// degenerate first edge), `e2 = n x e1`.
+#[inline(always)]
+fn face_frame(p: &[DVec3], tri: &[u32; 3], n: DVec3) -> (DVec3, DVec3) {
+    let e1 = unit3(p[tri[1] as usize] - p[tri[0] as usize])
+        .unwrap_or_else(|| n.any_orthonormal_vector());
+    (e1, n.cross(e1))
+}
+
 /// Interpolates position, normal and field on `face` at barycentric coordinates `b`.
 ///
-/// The tensor is interpolated linearly (DESIGN.md: it has no sign ambiguity) and
-/// restricted to the face's plane in the frame `e1 = (p1 - p0) / |p1 - p0|`,
-/// `e2 = n x e1`. Its major eigenvector is taken without trigonometry as `(l1 - c, b)`
-/// or `(b, l1 - a)` of `[[a, b], [b, c]]`, whichever is longer (both are eigenvectors;
-/// the longer is better conditioned); an isotropic tensor gets `e1`.
+/// The tensor is interpolated linearly in the face's frame (see [`FaceTensors`]). Its
+/// major eigenvector is taken without trigonometry as `(l1 - c, b)` or `(b, l1 - a)` of
+/// `[[a, b], [b, c]]`, whichever is longer (both are eigenvectors; the longer is better
+/// conditioned); an isotropic tensor gets `e1`.
 #[inline]
-pub(crate) fn face_point(mesh: &TriMesh, field: &TensorField, face: u32, b: [f64; 3]) -> FacePoint {
-    let tri = mesh.triangles()[face as usize];
+pub(crate) fn face_point(
+    mesh: &TriMesh,
+    tensors: &FaceTensors,
+    face: u32,
+    b: [f64; 3],
+) -> FacePoint {
+    let tri = &mesh.triangles()[face as usize];
     let [i, j, k] = tri.map(|v| v as usize);
     let p = mesh.positions();
     let position = p[i] * b[0] + p[j] * b[1] + p[k] * b[2];
     let n = mesh.face_normals()[face as usize];
     let vn = mesh.vertex_normals();
     let normal = unit3(vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2]).unwrap_or(n);
-    let e1 = unit3(p[j] - p[i]).unwrap_or_else(|| n.any_orthonormal_vector());
-    let e2 = n.cross(e1);
-    // The tensors are symmetric: interpolate the six entries of the upper triangle and
-    // evaluate the quadratic forms from them (a third fewer operations than the full
-    // matrix products).
-    let t = field.tensors();
-    let (ti, tj, tk) = (&t[i], &t[j], &t[k]);
-    let lerp = |x: f64, y: f64, z: f64| x * b[0] + y * b[1] + z * b[2];
-    let m00 = lerp(ti.x_axis.x, tj.x_axis.x, tk.x_axis.x);
-    let m11 = lerp(ti.y_axis.y, tj.y_axis.y, tk.y_axis.y);
-    let m22 = lerp(ti.z_axis.z, tj.z_axis.z, tk.z_axis.z);
-    let m01 = lerp(ti.y_axis.x, tj.y_axis.x, tk.y_axis.x);
-    let m02 = lerp(ti.z_axis.x, tj.z_axis.x, tk.z_axis.x);
-    let m12 = lerp(ti.z_axis.y, tj.z_axis.y, tk.z_axis.y);
-    let apply = |v: DVec3| {
-        DVec3::new(
-            m00 * v.x + m01 * v.y + m02 * v.z,
-            m01 * v.x + m11 * v.y + m12 * v.z,
-            m02 * v.x + m12 * v.y + m22 * v.z,
-        )
-    };
-    let me1 = apply(e1);
-    let (a, bb, c) = (e1.dot(me1), e2.dot(me1), e2.dot(apply(e2)));
+    let t = &tensors.corners[face as usize];
+    let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
+    let lerp = |o: usize| (t[o] * b0 + t[3 + o] * b1 + t[6 + o] * b2) as f64;
+    let (a, bb, c) = (lerp(0), lerp(1), lerp(2));
     let mean = 0.5 * (a + c);
     let h = 0.5 * (a - c);
     let r = (h * h + bb * bb).sqrt();
@@ -65,19 +104,37 @@ pub(crate) fn face_point(mesh: &TriMesh, field: &TensorField, face: u32, b: [f64
     } else {
         DVec2::new(bb, l1 - a)
     };
+    // The frame unnormalised: `u = p1 - p0` and `n x u` have the same length, so one
+    // square root and one division normalise both the frame and `v`.
+    let u = p[j] - p[i];
     let len2 = v.length_squared();
+    let s = len2 * u.length_squared();
+    let major = if usable(s) {
+        (u * v.x + n.cross(u) * v.y) * (1.0 / s.sqrt())
+    } else {
+        major_degenerate(p, tri, n, v, len2)
+    };
+    FacePoint {
+        position,
+        normal,
+        major,
+        l1,
+        l2,
+    }
+}
+
+/// The major axis where the first edge or the eigenvector `v` (squared length `len2`)
+/// cannot be normalised: a fallback frame or the frame's first axis.
+#[cold]
+#[inline(never)]
+fn major_degenerate(p: &[DVec3], tri: &[u32; 3], n: DVec3, v: DVec2, len2: f64) -> DVec3 {
+    let (e1, e2) = face_frame(p, tri, n);
     let v = if usable(len2) {
         v * (1.0 / len2.sqrt())
     } else {
         DVec2::X
     };
-    FacePoint {
-        position,
-        normal,
-        major: e1 * v.x + e2 * v.y,
-        l1,
-        l2,
-    }
+    e1 * v.x + e2 * v.y
 }
 
 /// Whether a squared length can be normalised: positive and finite (the condition of

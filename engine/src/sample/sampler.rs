@@ -4,8 +4,8 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::faces::face_point;
-use super::stratified::{allocate, stratified_value};
+use super::faces::{FaceTensors, face_point};
+use super::stratified::{allocate, stratified_value_keyed};
 use super::types::Sample;
 use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
 use crate::field::TensorField;
@@ -63,6 +63,8 @@ pub enum SampleError {
 pub struct Sampler {
     mesh: Arc<TriMesh>,
     field: Arc<TensorField>,
+    /// The field's corner tensors of every face in the face's frame.
+    face_tensors: FaceTensors,
     segments: Vec<SegmentSampling>,
     total_measure: f64,
     /// Segments one by one: `0..t` as groups of one (order, offsets, measures).
@@ -235,9 +237,11 @@ impl Sampler {
             Some(c) => Groups::new(c, &segments),
             None => Groups::new(&link_chains(&mesh, &segments), &segments),
         };
+        let face_tensors = FaceTensors::new(&mesh, &field);
         Ok(Self {
             mesh,
             field,
+            face_tensors,
             segments,
             total_measure,
             singles,
@@ -266,8 +270,8 @@ impl Sampler {
     }
 
     /// Memory held by the preprocessed data in bytes: every segment's cells, domain
-    /// triangles and face map, and the chain tables (the mesh and the field are inputs,
-    /// shared, and not counted; nothing per face is copied out of them).
+    /// triangles and face map, the chain tables and the per-face tensor table (the mesh
+    /// and the field are inputs, shared, and not counted).
     pub fn heap_bytes(&self) -> usize {
         let groups = |g: &Groups| {
             g.order.capacity() * 4 + g.offsets.capacity() * 4 + g.measures.capacity() * 8
@@ -279,6 +283,7 @@ impl Sampler {
             + self.segments.capacity() * std::mem::size_of::<SegmentSampling>()
             + groups(&self.singles)
             + groups(&self.chains)
+            + self.face_tensors.heap_bytes()
     }
 
     /// Returns `n` samples for `seed` in a new vector.
@@ -348,9 +353,10 @@ impl Sampler {
             let mut leaf = 0usize;
             let mut levels =
                 self.leaf_levels(&self.segments[members[0] as usize], count, group_measure);
+            let key = crate::rng::stream_key(seed, i as u64);
             for g in lo..hi {
                 let k = g - grp_lo;
-                let mut m = stratified_value(seed, i as u64, k, count) * group_measure;
+                let mut m = stratified_value_keyed(key, k, count) * group_measure;
                 // Move to the member holding m (values increase along the group).
                 while member + 1 < members.len()
                     && m >= before + self.segments[members[member] as usize].curve.measure()
@@ -369,7 +375,8 @@ impl Sampler {
                 let cum = curve.cumulative();
                 m = (m - before).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
                 leaf = advance(cum, leaf, m);
-                let local = (m - cum[leaf]) / (cum[leaf + 1] - cum[leaf]);
+                let w = &cum[leaf..leaf + 2];
+                let local = (m - w[0]) / (w[1] - w[0]);
                 let p = curve.point_in_leaf_with(leaf, local, levels, &mut scratch);
                 dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
             }
@@ -407,7 +414,7 @@ impl Sampler {
         scale: f64,
     ) -> Sample {
         let face = seg.faces[p.triangle as usize];
-        let fp = face_point(&self.mesh, &self.field, face, p.bary);
+        let fp = face_point(&self.mesh, &self.face_tensors, face, p.bary);
         let spacing = [
             (scale / fp.l1.sqrt()) as f32,
             (scale / fp.l2.max(f64::MIN_POSITIVE).sqrt()) as f32,

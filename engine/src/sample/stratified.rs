@@ -7,7 +7,14 @@ use crate::rng;
 /// moved at random by up to half a stratum either way (section 6.2).
 #[inline]
 pub fn stratified_value(seed: u64, stream: u64, k: u64, n: u64) -> f64 {
-    ((k as f64 + rng::uniform(seed, stream, k)) / n as f64).min(1.0 - f64::EPSILON)
+    stratified_value_keyed(rng::stream_key(seed, stream), k, n)
+}
+
+/// [`stratified_value`] with the stream's part of the hash given
+/// (`key = rng::stream_key(seed, stream)`, computed once per stream).
+#[inline]
+pub(crate) fn stratified_value_keyed(key: u64, k: u64, n: u64) -> f64 {
+    ((k as f64 + rng::unit_f64(rng::keyed_hash(key, k))) / n as f64).min(1.0 - f64::EPSILON)
 }
 
 /// Splits `n` samples over parts with the given measures: part `i` gets
