@@ -44,6 +44,14 @@ pub enum SampleError {
         /// Mesh face count.
         face_count: usize,
     },
+    /// The field has a tensor count other than the mesh's vertex count.
+    #[error("the field has {tensors} tensors, but the mesh has {vertices} vertices")]
+    FieldMismatch {
+        /// Tensors in the field.
+        tensors: usize,
+        /// Vertices of the mesh.
+        vertices: usize,
+    },
     /// Chains given to [`Sampler::with_chains`] do not hold every segment exactly once.
     #[error("chains must hold each of the {segments} segments exactly once (segment {segment})")]
     BadChains {
@@ -218,6 +226,12 @@ impl Sampler {
         segments: Vec<SegmentSampling>,
         chains: Option<&[Vec<u32>]>,
     ) -> Result<Self, SampleError> {
+        if field.tensors().len() != mesh.vertex_count() {
+            return Err(SampleError::FieldMismatch {
+                tensors: field.tensors().len(),
+                vertices: mesh.vertex_count(),
+            });
+        }
         for s in &segments {
             if let Some(&face) = s.faces.iter().find(|&&f| f as usize >= mesh.face_count()) {
                 return Err(SampleError::BadFace {
@@ -452,6 +466,36 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::advance;
+
+    #[test]
+    fn a_field_of_another_mesh_is_an_error_not_a_panic() {
+        use crate::field::FieldSpec;
+        use crate::mesh::shapes;
+        use std::sync::Arc;
+        let spec = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        };
+        let mesh = Arc::new(shapes::plane(1.0, 4).expect("plane"));
+        let field = Arc::new(spec.build(&mesh).expect("field"));
+        let (good, _) = crate::planar::sampler(mesh.clone(), field, &Default::default())
+            .expect("planar sampler");
+        let other = shapes::plane(1.0, 8).expect("plane");
+        let wrong = Arc::new(spec.build(&other).expect("field"));
+        let err = super::Sampler::new(mesh.clone(), wrong, good.segments().to_vec())
+            .expect_err("mismatched field");
+        assert!(
+            matches!(
+                err,
+                super::SampleError::FieldMismatch {
+                    tensors: 81,
+                    vertices: 25
+                }
+            ),
+            "{err}"
+        );
+    }
 
     #[test]
     fn advance_finds_the_leaf() {
