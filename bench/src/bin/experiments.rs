@@ -619,20 +619,11 @@ fn strata_variance(
         classes: [(0, 0.0); 3],
     };
     for (seg, &c) in sampler.segments().iter().zip(&counts) {
-        let mu = seg.curve.measure();
         let per: Vec<(f64, usize)> = (0..c)
             .into_par_iter()
             .map(|k| {
-                let m = 64;
-                let pts: Vec<DVec2> = (0..m)
-                    .map(|j| {
-                        let t = (k as f64 + (j as f64 + 0.5) / m as f64) * mu / c as f64;
-                        let p = seg.curve.locate(t.min(mu * (1.0 - 1e-12)));
-                        let f = mesh.face_positions(seg.faces[p.triangle as usize]);
-                        let w = f[0] * p.bary[0] + f[1] * p.bary[1] + f[2] * p.bary[2];
-                        DVec2::new(w.x, w.y)
-                    })
-                    .collect();
+                let pts = stratum_points(mesh, seg, k as usize, c as usize);
+                let m = pts.len();
                 let var = boxes
                     .iter()
                     .map(|b| {
@@ -1127,26 +1118,38 @@ fn section_7_3_3(ctx: &mut Ctx) -> Result<Section, BoxError> {
 
 // ---------------------------------------------------------------- 7.4
 
+/// Stratum `k` of `count` equal-measure strata of `seg`'s curve, mapped to the plane
+/// by 64 points evenly spaced in measure along it.
+fn stratum_points(
+    mesh: &TriMesh,
+    seg: &strata_engine::sample::SegmentSampling,
+    k: usize,
+    count: usize,
+) -> Vec<DVec2> {
+    const M: usize = 64;
+    let mu = seg.curve.measure();
+    (0..M)
+        .map(|j| {
+            let t = (k as f64 + (j as f64 + 0.5) / M as f64) * mu / count as f64;
+            let p = seg.curve.locate(t.min(mu * (1.0 - 1e-12)));
+            let f = mesh.face_positions(seg.faces[p.triangle as usize]);
+            let w = f[0] * p.bary[0] + f[1] * p.bary[1] + f[2] * p.bary[2];
+            DVec2::new(w.x, w.y)
+        })
+        .collect()
+}
+
 /// Mean second moment of the 1D strata of a one-segment `sampler` of the unit square for
 /// `n` samples, relative to a square's of the same area: `6 N tr(Cov)`, each stratum
 /// mapped to the plane by 64 points along its stretch of the curve.
 fn strata_second_moment(sampler: &Sampler, n: usize) -> f64 {
     let seg = &sampler.segments()[0];
     let mesh = sampler.mesh();
-    let mu = seg.curve.measure();
     let total: f64 = (0..n)
         .into_par_iter()
         .map(|k| {
-            let m = 64;
-            let pts: Vec<DVec2> = (0..m)
-                .map(|j| {
-                    let t = (k as f64 + (j as f64 + 0.5) / m as f64) * mu / n as f64;
-                    let p = seg.curve.locate(t.min(mu * (1.0 - 1e-12)));
-                    let f = mesh.face_positions(seg.faces[p.triangle as usize]);
-                    let w = f[0] * p.bary[0] + f[1] * p.bary[1] + f[2] * p.bary[2];
-                    DVec2::new(w.x, w.y)
-                })
-                .collect();
+            let pts = stratum_points(mesh, seg, k, n);
+            let m = pts.len();
             let mean = pts.iter().copied().sum::<DVec2>() / m as f64;
             pts.iter()
                 .map(|p| (*p - mean).length_squared())
