@@ -1160,6 +1160,15 @@ fn strata_second_moment(sampler: &Sampler, n: usize) -> f64 {
     6.0 * total
 }
 
+/// One line of a radial plot: `value` of `radial` against its frequencies.
+fn radial_series(
+    name: &str,
+    radial: &RadialProfile,
+    value: impl Fn(&RadialProfile) -> &Vec<f64>,
+) -> Series {
+    Series::line(name, radial.frequency.clone(), value(radial).clone())
+}
+
 struct SpectrumCase {
     name: String,
     spectrum: Spectrum,
@@ -1267,13 +1276,7 @@ fn section_7_4(ctx: &mut Ctx) -> Result<Section, BoxError> {
     let mut figures = Vec::new();
     let series: Vec<Series> = results
         .iter()
-        .map(|c| {
-            Series::line(
-                c.name.clone(),
-                c.radial.frequency.clone(),
-                c.radial.rapsd.clone(),
-            )
-        })
+        .map(|c| radial_series(&c.name, &c.radial, |r| &r.rapsd))
         .collect();
     let axes = Axes {
         title: format!("RAPSD, {n} points, {runs} runs"),
@@ -1291,13 +1294,7 @@ fn section_7_4(ctx: &mut Ctx) -> Result<Section, BoxError> {
     ));
     let series: Vec<Series> = results
         .iter()
-        .map(|c| {
-            Series::line(
-                c.name.clone(),
-                c.radial.frequency.clone(),
-                c.radial.anisotropy_db.clone(),
-            )
-        })
+        .map(|c| radial_series(&c.name, &c.radial, |r| &r.anisotropy_db))
         .collect();
     let axes = Axes {
         title: "anisotropy".into(),
@@ -1729,13 +1726,7 @@ fn section_7_5(ctx: &mut Ctx) -> Result<Section, BoxError> {
         let series: Vec<Series> = cases
             .iter()
             .filter(|c| slugs.contains(&c.slug.as_str()))
-            .map(|c| {
-                Series::line(
-                    c.name.clone(),
-                    c.radial.frequency.clone(),
-                    c.radial.rapsd.clone(),
-                )
-            })
+            .map(|c| radial_series(&c.name, &c.radial, |r| &r.rapsd))
             .collect();
         let axes = Axes {
             title: "DDA radial mean".into(),
@@ -1753,13 +1744,7 @@ fn section_7_5(ctx: &mut Ctx) -> Result<Section, BoxError> {
     let series: Vec<Series> = cases
         .iter()
         .filter(|c| c.name.starts_with("strata"))
-        .map(|c| {
-            Series::line(
-                c.name.clone(),
-                c.radial.frequency.clone(),
-                c.radial.anisotropy_db.clone(),
-            )
-        })
+        .map(|c| radial_series(&c.name, &c.radial, |r| &r.anisotropy_db))
         .collect();
     let axes = Axes {
         title: "DDA anisotropy".into(),
