@@ -81,6 +81,21 @@ impl Default for SurfaceOptions {
     }
 }
 
+impl SurfaceOptions {
+    /// Checks the options that preprocessing reads before any work starts: the
+    /// minimum segment size, the cell settings and the parameterization settings.
+    pub fn validate(&self) -> Result<(), SurfaceError> {
+        if self.min_segment_faces == 0 {
+            return Err(SurfaceError::InvalidMinSegmentFaces);
+        }
+        self.curve
+            .validate()
+            .map_err(|source| SurfaceError::Curve { segment: 0, source })?;
+        self.param.validate()?;
+        Ok(())
+    }
+}
+
 /// Errors of the surface preprocessing.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -171,14 +186,7 @@ impl Preprocessed {
         options: &SurfaceOptions,
         progress: &dyn Fn(Progress),
     ) -> Result<Self, SurfaceError> {
-        if options.min_segment_faces == 0 {
-            return Err(SurfaceError::InvalidMinSegmentFaces);
-        }
-        options
-            .curve
-            .validate()
-            .map_err(|source| SurfaceError::Curve { segment: 0, source })?;
-        options.param.validate()?;
+        options.validate()?;
         let mut stages = Vec::new();
         let mut stage = |name: &'static str, t: Instant| {
             let d = t.elapsed();
@@ -243,14 +251,7 @@ impl Preprocessed {
         segmentation: Segmentation,
         options: &SurfaceOptions,
     ) -> Result<Self, SurfaceError> {
-        if options.min_segment_faces == 0 {
-            return Err(SurfaceError::InvalidMinSegmentFaces);
-        }
-        options
-            .curve
-            .validate()
-            .map_err(|source| SurfaceError::Curve { segment: 0, source })?;
-        options.param.validate()?;
+        options.validate()?;
         let t = Instant::now();
         let (params, mut report) =
             parameterize_with_splitting(&mesh, &field, &segmentation, options)?;
@@ -893,6 +894,30 @@ mod tests {
             );
             assert!(is_disc(&mesh, p, &context.cut));
         }
+    }
+
+    #[test]
+    fn bad_options_are_errors_before_any_work() {
+        let (mesh, field) = torus_case();
+        let good = SurfaceOptions::default();
+        let seg = segment(&mesh, &field, &good.segment).expect("segmentation");
+        let zero = SurfaceOptions {
+            min_segment_faces: 0,
+            ..good
+        };
+        let mut bad_gamma = good;
+        bad_gamma.param.gamma = -1.0;
+        for options in [zero, bad_gamma] {
+            assert!(Preprocessed::build(mesh.clone(), field.clone(), &options).is_err());
+            assert!(
+                Preprocessed::from_segmentation(mesh.clone(), field.clone(), seg.clone(), &options)
+                    .is_err()
+            );
+        }
+        assert!(matches!(
+            zero.validate(),
+            Err(SurfaceError::InvalidMinSegmentFaces)
+        ));
     }
 
     #[test]
