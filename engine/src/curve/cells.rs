@@ -331,6 +331,12 @@ impl SegmentCurve {
         &self.keys
     }
 
+    /// Number of domain triangles overlapping leaf `leaf` (its point-location
+    /// candidates).
+    pub fn candidate_count(&self, leaf: usize) -> usize {
+        (self.candidate_offsets[leaf + 1] - self.candidate_offsets[leaf]) as usize
+    }
+
     /// Cumulative measure: entry `i` is the measure of leaves `0..i`.
     pub fn cumulative(&self) -> &[f64] {
         &self.cumulative
@@ -370,7 +376,9 @@ impl SegmentCurve {
     /// along the continuous Hilbert curve. In a leaf the domain covers fully, density
     /// is taken as uniform (leaves hold a bounded share of the measure); in a boundary
     /// leaf the exact measures of sub-cells are followed down until a sub-cell is
-    /// fully covered, so every point lies in the domain.
+    /// fully covered or the levels run out; in a sub-cell the boundary still crosses,
+    /// the point is placed by area in the triangle piece its measure falls in
+    /// ([`Poly::point_at`]), so every point lies in the domain.
     pub fn point_in_leaf(&self, leaf: usize, t: f64) -> DomainPoint {
         self.point_in_leaf_to(leaf, t, self.options.leaf_levels as u32)
     }
@@ -459,15 +467,20 @@ impl SegmentCurve {
         let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
-        // The candidates clipped to the leaf and the leaf's first cut (between its first
-        // two and last two children in curve order), kept in the scratch for the next
-        // sample: consecutive values often fall in the same boundary leaf.
+        // The candidates clipped to the leaf and, once a descent needs it, the leaf's
+        // first cut (between its first two and last two children in curve order), kept
+        // in the scratch for the next sample: consecutive values often fall in the same
+        // boundary leaf.
         if scratch.root_of != Some((self.id, leaf)) {
             scratch.root.clear();
             for &tri in cands {
                 let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
                 scratch.root.add(self, tri, poly);
             }
+            scratch.root_of = Some((self.id, leaf));
+            scratch.halves_ready = false;
+        }
+        if levels > 0 && !scratch.halves_ready {
             // The same cut as the loop's first at depth 0.
             let (x0, _, _) = state.child(0);
             let (x1, _, _) = state.child(1);
@@ -481,7 +494,7 @@ impl SegmentCurve {
                     .root
                     .split::<1>(self, lo.y + 0.5 * size, below, above);
             }
-            scratch.root_of = Some((self.id, leaf));
+            scratch.halves_ready = true;
         }
         let root = &scratch.root;
         let halves = &scratch.halves;
@@ -552,30 +565,58 @@ impl SegmentCurve {
                 return self.point_location(&ids[..n], lo + DVec2::new(x, y) * size);
             }
         }
-        // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
-        // piece, which lies in the domain.
+        // Depth exhausted inside a boundary sub-cell: the piece holding the target,
+        // and the point at the rest of the target in it.
         let node = match (at_root, from_half) {
             (true, _) => root,
             (false, Some(half)) => half,
             (false, None) => &bufs[cur],
         };
-        let mut best = (0.0, DVec2::ZERO);
-        for piece in &node.pieces[..node.len] {
-            let (a, c) = piece.poly.area_centroid();
-            if a > best.0 {
-                best = (a, c);
-            }
+        let pieces = node.pieces[..node.len]
+            .iter()
+            .map(|p| (p.tri, p.poly, p.measure));
+        if let Some(p) = self.place_in_pieces(pieces, target) {
+            return p;
         }
         let (ids, n) = node.triangles();
         let ids = if n > 0 { &ids[..n] } else { cands };
-        self.point_location(
-            ids,
-            if best.0 > 0.0 {
-                best.1
-            } else {
-                lo + DVec2::splat(0.5 * size)
-            },
-        )
+        self.point_location(ids, lo + DVec2::splat(0.5 * size))
+    }
+
+    /// The point at `target` (in `[0, total)`) of a boundary sub-cell given as its
+    /// pieces `(triangle, part of the triangle in the sub-cell, measure of the part)`
+    /// in curve-independent but fixed order: the piece holding the target, then the
+    /// point at the rest of the target as a fraction of that piece's area
+    /// ([`Poly::point_at`]). Inside a piece the density is taken as uniform, as in a
+    /// full leaf. `None` when no piece has measure.
+    fn place_in_pieces(
+        &self,
+        pieces: impl Iterator<Item = (u32, Poly, f64)>,
+        mut target: f64,
+    ) -> Option<DomainPoint> {
+        let mut chosen = None;
+        for (tri, poly, m) in pieces {
+            if !(m > 0.0) {
+                continue;
+            }
+            chosen = Some((tri, poly, m, target));
+            if target < m {
+                break;
+            }
+            target -= m;
+        }
+        let (tri, poly, m, rest) = chosen?;
+        let uv = poly.point_at(rest / m)?;
+        // The point is in the piece, so in the triangle up to round-off: clamp it on.
+        let corners = self.triangle_corners(tri as usize);
+        let b = barycentric(&corners, uv).map(|x| x.max(0.0));
+        let sum = b[0] + b[1] + b[2];
+        let bary = b.map(|x| x / sum);
+        Some(DomainPoint {
+            triangle: tri,
+            uv: corners[0] * bary[0] + corners[1] * bary[1] + corners[2] * bary[2],
+            bary,
+        })
     }
 
     /// One step of [`descend_pieces`](Self::descend_pieces): splits the pieces in
@@ -682,25 +723,24 @@ impl SegmentCurve {
                 return self.point_location(cur.as_slice(cands), lo + DVec2::new(x, y) * size);
             }
         }
-        // Depth exhausted inside a boundary sub-cell: take the centroid of the largest
-        // covered piece, which lies in the domain.
+        // Depth exhausted inside a boundary sub-cell: the piece holding the target,
+        // and the point at the rest of the target in it.
         let cands = cur.as_slice(cands);
-        let mut best = (0.0, DVec2::ZERO);
-        for &tri in cands {
-            let (a, c) =
-                clip_triangle(&self.triangle_corners(tri as usize), lo, size).area_centroid();
-            if a > best.0 {
-                best = (a, c);
-            }
-        }
-        self.point_location(
-            cands,
-            if best.0 > 0.0 {
-                best.1
+        let pieces = cands.iter().map(|&tri| {
+            let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
+            let (area, moment) = poly.area_moment();
+            let [gx, gy, h] = self.density_planes[tri as usize];
+            let m = if area > 0.0 {
+                (gx * moment.x + gy * moment.y + h * area).max(0.0)
             } else {
-                lo + DVec2::splat(0.5 * size)
-            },
-        )
+                0.0
+            };
+            (tri, poly, m)
+        });
+        if let Some(p) = self.place_in_pieces(pieces, target) {
+            return p;
+        }
+        self.point_location(cands, lo + DVec2::splat(0.5 * size))
     }
 
     /// Finds the candidate triangle containing `uv` (the most-inside one if round-off
@@ -843,6 +883,8 @@ pub struct LeafScratch {
     root: PieceSet,
     /// `root` split by the leaf's first cut: below and above the midline.
     halves: [PieceSet; 2],
+    /// Whether `halves` holds the cut of `root`.
+    halves_ready: bool,
     root_of: Option<(u64, usize)>,
 }
 
@@ -852,6 +894,7 @@ impl Default for LeafScratch {
             bufs: [PieceSet::EMPTY; 3],
             root: PieceSet::EMPTY,
             halves: [PieceSet::EMPTY; 2],
+            halves_ready: false,
             root_of: None,
         }
     }

@@ -368,6 +368,8 @@ impl Sampler {
             let mut levels =
                 self.leaf_levels(&self.segments[members[0] as usize], count, group_measure);
             let key = crate::rng::stream_key(seed, i as u64);
+            // Samples per unit of measure in this group.
+            let per_sample = count as f64 / group_measure;
             for g in lo..hi {
                 let k = g - grp_lo;
                 let mut m = stratified_value_keyed(key, k, count) * group_measure;
@@ -391,6 +393,11 @@ impl Sampler {
                 leaf = advance(cum, leaf, m);
                 let w = &cum[leaf..leaf + 2];
                 let local = (m - w[0]) / (w[1] - w[0]);
+                let levels = if curve.cells()[leaf].full() {
+                    levels
+                } else {
+                    boundary_levels((w[1] - w[0]) * per_sample)
+                };
                 let p = curve.point_in_leaf_with(leaf, local, levels, &mut scratch);
                 dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
             }
@@ -445,6 +452,18 @@ impl Sampler {
             spacing,
         }
     }
+}
+
+/// Exact levels of the descent through a boundary leaf expected to receive
+/// `expected` samples: until a sub-cell expects at most one sample (log4 of the
+/// expectation, none for a leaf that expects at most one). There a sample is placed
+/// by area in the triangle piece of the sub-cell that its measure falls in
+/// ([`SegmentCurve::point_in_leaf_with`]), which costs one pass over the pieces
+/// instead of two polygon splits per piece and level. At 10^6 samples on the bunny,
+/// boundary leaves expect about one sample each.
+#[inline]
+fn boundary_levels(expected: f64) -> u32 {
+    (expected.max(1.0).log2() * 0.5).ceil() as u32
 }
 
 /// The leaf holding cumulative measure `m`, searching forward from `leaf`: a few
