@@ -394,8 +394,9 @@ impl SegmentCurve {
     /// As [`point_in_leaf_to`](Self::point_in_leaf_to), with the scratch memory of the
     /// boundary-leaf descent given by the caller (a few kilobytes that would otherwise
     /// be initialised per call; reuse one per thread or chunk of work). The result does
-    /// not depend on the scratch's previous contents.
-    #[inline]
+    /// not depend on the scratch's previous contents. Always inlined: it is the
+    /// sampler's per-sample path, compiled with the sampler's target features.
+    #[inline(always)]
     pub fn point_in_leaf_with(
         &self,
         leaf: usize,

@@ -77,7 +77,7 @@ fn face_frame(p: &[DVec3], tri: &[u32; 3], n: DVec3) -> (DVec3, DVec3) {
 /// major eigenvector is taken without trigonometry as `(l1 - c, b)` or `(b, l1 - a)` of
 /// `[[a, b], [b, c]]`, whichever is longer (both are eigenvectors; the longer is better
 /// conditioned); an isotropic tensor gets `e1`.
-#[inline]
+#[inline(always)]
 pub(crate) fn face_point(
     mesh: &TriMesh,
     tensors: &FaceTensors,

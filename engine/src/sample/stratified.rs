@@ -34,27 +34,63 @@ pub fn allocate(
     measures: impl ExactSizeIterator<Item = f64> + Clone,
     mut emit: impl FnMut(usize, u64),
 ) {
-    let total: f64 = measures.clone().sum();
-    let last_positive = measures
-        .clone()
-        .enumerate()
-        .filter(|(_, m)| *m > 0.0)
-        .map(|(i, _)| i)
-        .last();
-    // Far above the round-off of the prefix sums, far below a sample.
-    let slack = (1e-9 * n as f64).min(1e-3);
-    let mut prefix = 0.0;
-    let mut given = 0u64;
-    for (i, m) in measures.enumerate() {
-        prefix += m;
-        let target = n as f64 * (prefix / total) + slack;
-        let upto = (target.floor().max(0.0) as u64).min(n);
-        let mut count = upto.saturating_sub(given);
-        if Some(i) == last_positive {
-            count = n - given;
-        }
-        given += count;
+    for (i, count) in Allocation::new(n, measures) {
         emit(i, count);
+    }
+}
+
+/// [`allocate`] as an iterator of `(part, count)` in part order: what the sampler's
+/// per-chunk loop walks (a plain loop, so that it is compiled with the caller's target
+/// features rather than in a closure of its own).
+#[derive(Clone, Debug)]
+pub struct Allocation<I> {
+    measures: std::iter::Enumerate<I>,
+    n: u64,
+    total: f64,
+    last_positive: Option<usize>,
+    slack: f64,
+    prefix: f64,
+    given: u64,
+}
+
+impl<I: ExactSizeIterator<Item = f64> + Clone> Allocation<I> {
+    /// The allocation of `n` samples over parts with `measures`.
+    pub fn new(n: u64, measures: I) -> Self {
+        let total: f64 = measures.clone().sum();
+        let last_positive = measures
+            .clone()
+            .enumerate()
+            .filter(|(_, m)| *m > 0.0)
+            .map(|(i, _)| i)
+            .last();
+        Self {
+            measures: measures.enumerate(),
+            n,
+            total,
+            last_positive,
+            // Far above the round-off of the prefix sums, far below a sample.
+            slack: (1e-9 * n as f64).min(1e-3),
+            prefix: 0.0,
+            given: 0,
+        }
+    }
+}
+
+impl<I: Iterator<Item = f64>> Iterator for Allocation<I> {
+    type Item = (usize, u64);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(usize, u64)> {
+        let (i, m) = self.measures.next()?;
+        self.prefix += m;
+        let target = self.n as f64 * (self.prefix / self.total) + self.slack;
+        let upto = (target.floor().max(0.0) as u64).min(self.n);
+        let mut count = upto.saturating_sub(self.given);
+        if Some(i) == self.last_positive {
+            count = self.n - self.given;
+        }
+        self.given += count;
+        Some((i, count))
     }
 }
 
