@@ -405,24 +405,42 @@ impl SegmentCurve {
         scratch: &mut LeafScratch,
     ) -> DomainPoint {
         let key = self.keys[leaf];
+        if key.full() {
+            return self.full_leaf(leaf, levels).point(self, t);
+        }
         let off = &self.candidate_offsets[leaf..leaf + 2];
         let cands = &self.candidates[off[0] as usize..off[1] as usize];
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
-        if key.full() {
-            let levels = levels.min(self.options.leaf_levels as u32);
-            let (x, y) = super::hilbert::cell_in_node(key.state(), t, levels);
-            // The sub-cell's centre on the grid of level `level + levels`: the same
-            // value as `origin + (x + 0.5) 2^-levels size`, both exact before rounding.
-            let inv = super::hilbert::pow2_neg(key.level() as u32 + levels);
-            let gx = ((key.x() as u64) << levels | x) as f64 + 0.5;
-            let gy = ((key.y() as u64) << levels | y) as f64 + 0.5;
-            return self.point_location(cands, DVec2::new(gx, gy) * inv);
-        }
         let levels = levels.min(self.options.leaf_levels as u32);
         if cands.len() <= PIECES {
             self.descend_pieces(leaf, key, cands, t, levels, scratch)
         } else {
             self.descend_partial(leaf, key, cands, t, levels)
+        }
+    }
+
+    /// Whether leaf `leaf` lies wholly in the domain.
+    #[inline(always)]
+    pub(crate) fn leaf_is_full(&self, leaf: usize) -> bool {
+        self.keys[leaf].full()
+    }
+
+    /// The full leaf `leaf` made ready to place several points resolved to `levels`
+    /// levels ([`FullLeaf::point`]): what a caller drawing consecutive values from one
+    /// leaf computes once instead of per point.
+    #[inline(always)]
+    pub(crate) fn full_leaf(&self, leaf: usize, levels: u32) -> FullLeaf<'_> {
+        let key = self.keys[leaf];
+        debug_assert!(key.full());
+        let off = &self.candidate_offsets[leaf..leaf + 2];
+        let levels = levels.min(self.options.leaf_levels as u32);
+        FullLeaf {
+            cands: &self.candidates[off[0] as usize..off[1] as usize],
+            state: key.state(),
+            levels,
+            gx: (key.x() as u64) << levels,
+            gy: (key.y() as u64) << levels,
+            inv: super::hilbert::pow2_neg(key.level() as u32 + levels),
         }
     }
 
@@ -802,6 +820,33 @@ impl SegmentCurve {
             uv,
             bary: b,
         }
+    }
+}
+
+/// A full leaf ready to place points ([`SegmentCurve::full_leaf`]).
+pub(crate) struct FullLeaf<'a> {
+    cands: &'a [u32],
+    state: super::hilbert::State,
+    levels: u32,
+    /// The leaf's corner on the grid of level `level + levels`.
+    gx: u64,
+    gy: u64,
+    /// That grid's spacing, `2^-(level + levels)`.
+    inv: f64,
+}
+
+impl FullLeaf<'_> {
+    /// The point at fraction `t` of the leaf's measure along the continuous Hilbert
+    /// map (density taken as uniform in the leaf), located in its triangle.
+    #[inline(always)]
+    pub(crate) fn point(&self, curve: &SegmentCurve, t: f64) -> DomainPoint {
+        let t = t.clamp(0.0, 1.0 - f64::EPSILON);
+        let (x, y) = super::hilbert::cell_in_node(self.state, t, self.levels);
+        // The sub-cell's centre on the grid of level `level + levels`: the same value
+        // as `origin + (x + 0.5) 2^-levels size`, both exact before rounding.
+        let gx = (self.gx | x) as f64 + 0.5;
+        let gy = (self.gy | y) as f64 + 0.5;
+        curve.point_location(self.cands, DVec2::new(gx, gy) * self.inv)
     }
 }
 

@@ -420,9 +420,11 @@ impl Sampler {
             let key = crate::rng::stream_key(seed, i as u64);
             // Samples per unit of measure in this group.
             let per_sample = count as f64 / group_measure;
-            for g in lo..hi {
-                let k = g - grp_lo;
-                let mut m = stratified_value_keyed(key, k, count) * group_measure;
+            let value = |g: u64| stratified_value_keyed(key, g - grp_lo, count) * group_measure;
+            let mut g = lo;
+            let mut m = value(g);
+            // One pass of the outer loop per run of values in one leaf.
+            'group: loop {
                 // Move to the member holding m (values increase along the group).
                 while member + 1 < members.len()
                     && m >= before + self.segments[members[member] as usize].curve.measure()
@@ -439,17 +441,45 @@ impl Sampler {
                 let seg = &self.segments[members[member] as usize];
                 let curve = &seg.curve;
                 let cum = curve.cumulative();
-                m = (m - before).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
-                leaf = advance(cum, leaf, m);
-                let w = &cum[leaf..leaf + 2];
-                let local = (m - w[0]) / (w[1] - w[0]);
-                let levels = if curve.cells()[leaf].full() {
-                    levels
+                let top = curve.measure() * (1.0 - f64::EPSILON);
+                // The member's end, where the next member begins (none after the last).
+                let member_end = if member + 1 < members.len() {
+                    before + curve.measure()
                 } else {
-                    boundary_levels((w[1] - w[0]) * per_sample)
+                    f64::INFINITY
                 };
-                let p = curve.point_in_leaf_with(leaf, local, levels, &mut scratch);
-                dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
+                let ml = (m - before).clamp(0.0, top);
+                leaf = advance(cum, leaf, ml);
+                let w = &cum[leaf..leaf + 2];
+                let (w0, w1) = (w[0], w[1]);
+                if curve.leaf_is_full(leaf) {
+                    // Values in this leaf: the leaf's data is read once for all.
+                    let view = curve.full_leaf(leaf, levels);
+                    loop {
+                        let ml = (m - before).clamp(0.0, top);
+                        let p = view.point(curve, (ml - w0) / (w1 - w0));
+                        dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
+                        g += 1;
+                        if g >= hi {
+                            break 'group;
+                        }
+                        m = value(g);
+                        let ml = (m - before).clamp(0.0, top);
+                        if ml >= w1 || m >= member_end {
+                            break;
+                        }
+                    }
+                } else {
+                    let levels = boundary_levels((w1 - w0) * per_sample);
+                    let p =
+                        curve.point_in_leaf_with(leaf, (ml - w0) / (w1 - w0), levels, &mut scratch);
+                    dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
+                    g += 1;
+                    if g >= hi {
+                        break 'group;
+                    }
+                    m = value(g);
+                }
             }
         }
     }
