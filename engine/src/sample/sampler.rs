@@ -338,7 +338,9 @@ impl Sampler {
     /// code compiled for x86-64-v3 (AVX2, FMA, BMI) where the CPU has it: the same
     /// operations, so the same bits (no multiply-add is fused without an explicit
     /// `mul_add`, which this path does not use), in about 10% fewer instructions
-    /// (three-operand encodings, fewer register moves).
+    /// (three-operand encodings, fewer register moves). Never inlined: one symbol to
+    /// profile the sampling loop by (`valgrind --toggle-collect`), whichever path runs.
+    #[inline(never)]
     fn fill_chunk(
         &self,
         groups: &Groups,
