@@ -789,12 +789,13 @@ pub fn segment_cells(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::shapes;
 
-    fn torus_case() -> (Arc<TriMesh>, Arc<TensorField>) {
+    /// A torus with a constant 3:1 field: a small curved case with several segments.
+    pub(crate) fn torus_case() -> (Arc<TriMesh>, Arc<TensorField>) {
         let mesh = Arc::new(shapes::torus(1.0, 0.4, 20).expect("torus"));
         let field = FieldSpec::Constant {
             direction: [1.0, 0.3, 0.2],

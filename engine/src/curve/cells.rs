@@ -377,8 +377,8 @@ impl SegmentCurve {
     /// is taken as uniform (leaves hold a bounded share of the measure); in a boundary
     /// leaf the exact measures of sub-cells are followed down until a sub-cell is
     /// fully covered or the levels run out; in a sub-cell the boundary still crosses,
-    /// the point is placed by area in the triangle piece its measure falls in
-    /// ([`Poly::point_at`]), so every point lies in the domain.
+    /// the point is placed by area in the triangle piece its measure falls in (a
+    /// vertical sweep of the piece's area), so every point lies in the domain.
     pub fn point_in_leaf(&self, leaf: usize, t: f64) -> DomainPoint {
         self.point_in_leaf_to(leaf, t, self.options.leaf_levels as u32)
     }

@@ -81,6 +81,18 @@ pub struct Sampler {
     chains: Groups,
 }
 
+/// One sampling request as every chunk of it sees it.
+#[derive(Clone, Copy)]
+struct Request<'a> {
+    /// Segments one by one, or chains.
+    groups: &'a Groups,
+    seed: u64,
+    /// Samples requested in all.
+    n: u64,
+    /// `sqrt(M / n)`: the spacing scale written into samples.
+    scale: f64,
+}
+
 /// Groups of segments sampled with one stratified sequence each, in CSR form.
 #[derive(Clone, Debug, Default)]
 struct Groups {
@@ -324,14 +336,20 @@ impl Sampler {
         if n == 0 {
             return;
         }
-        let scale = (self.total_measure / n as f64).sqrt();
-        let groups = if linked { &self.chains } else { &self.singles };
+        let req = self.request(seed, n, linked);
         out.par_chunks_mut(CHUNK)
             .enumerate()
-            .for_each(|(chunk, dst)| {
-                let start = (chunk * CHUNK) as u64;
-                self.fill_chunk(groups, seed, n, start, scale, dst);
-            });
+            .for_each(|(chunk, dst)| self.fill_chunk(&req, (chunk * CHUNK) as u64, dst));
+    }
+
+    /// What every chunk of an `n`-sample request for `seed` shares.
+    fn request(&self, seed: u64, n: u64, linked: bool) -> Request<'_> {
+        Request {
+            groups: if linked { &self.chains } else { &self.singles },
+            seed,
+            n,
+            scale: (self.total_measure / n as f64).sqrt(),
+        }
     }
 
     /// Fills the outputs `start..start + dst.len()` of an `n`-sample request, with the
@@ -341,15 +359,7 @@ impl Sampler {
     /// (three-operand encodings, fewer register moves). Never inlined: one symbol to
     /// profile the sampling loop by (`valgrind --toggle-collect`), whichever path runs.
     #[inline(never)]
-    fn fill_chunk(
-        &self,
-        groups: &Groups,
-        seed: u64,
-        n: u64,
-        start: u64,
-        scale: f64,
-        dst: &mut [Sample],
-    ) {
+    fn fill_chunk(&self, req: &Request<'_>, start: u64, dst: &mut [Sample]) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("fma")
@@ -360,26 +370,18 @@ impl Sampler {
             // SAFETY: the CPU has every feature the function is compiled with.
             #[allow(unsafe_code)]
             unsafe {
-                self.fill_chunk_v3(groups, seed, n, start, scale, dst);
+                self.fill_chunk_v3(req, start, dst);
             }
             return;
         }
-        self.fill_chunk_body(groups, seed, n, start, scale, dst);
+        self.fill_chunk_body(req, start, dst);
     }
 
     /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn fill_chunk_v3(
-        &self,
-        groups: &Groups,
-        seed: u64,
-        n: u64,
-        start: u64,
-        scale: f64,
-        dst: &mut [Sample],
-    ) {
-        self.fill_chunk_body(groups, seed, n, start, scale, dst);
+    fn fill_chunk_v3(&self, req: &Request<'_>, start: u64, dst: &mut [Sample]) {
+        self.fill_chunk_body(req, start, dst);
     }
 
     /// Section 6.2: segments are sampled one by one unless they are many relative to
@@ -387,15 +389,13 @@ impl Sampler {
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body(
-        &self,
-        groups: &Groups,
-        seed: u64,
-        n: u64,
-        start: u64,
-        scale: f64,
-        dst: &mut [Sample],
-    ) {
+    fn fill_chunk_body(&self, req: &Request<'_>, start: u64, dst: &mut [Sample]) {
+        let Request {
+            groups,
+            seed,
+            n,
+            scale,
+        } = *req;
         // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
@@ -490,16 +490,9 @@ impl Sampler {
     /// code), to test that both paths give the same bits.
     #[cfg(test)]
     fn sample_into_portable(&self, seed: u64, out: &mut [Sample]) {
-        let n = out.len() as u64;
-        let scale = (self.total_measure / n as f64).sqrt();
-        let groups = if self.uses_chains(out.len()) {
-            &self.chains
-        } else {
-            &self.singles
-        };
+        let req = self.request(seed, out.len() as u64, self.uses_chains(out.len()));
         for (chunk, dst) in out.chunks_mut(CHUNK).enumerate() {
-            let start = (chunk * CHUNK) as u64;
-            self.fill_chunk_body(groups, seed, n, start, scale, dst);
+            self.fill_chunk_body(&req, (chunk * CHUNK) as u64, dst);
         }
     }
 
@@ -619,20 +612,10 @@ mod tests {
     /// same bits: a fused multiply-add or a reordered sum on either path fails this.
     #[test]
     fn both_code_paths_give_the_same_samples() {
-        use crate::field::FieldSpec;
-        use crate::mesh::shapes;
-        use std::sync::Arc;
-        let mesh = Arc::new(shapes::torus(1.0, 0.35, 24).expect("torus"));
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 3.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let (mesh, field) = crate::surface::tests::torus_case();
         let pre = crate::surface::Preprocessed::build(
             mesh,
-            Arc::new(field),
+            field,
             &crate::surface::SurfaceOptions::default(),
         )
         .expect("preprocessed");
