@@ -331,12 +331,6 @@ impl SegmentCurve {
         &self.keys
     }
 
-    /// Number of domain triangles overlapping leaf `leaf` (its point-location
-    /// candidates).
-    pub fn candidate_count(&self, leaf: usize) -> usize {
-        (self.candidate_offsets[leaf + 1] - self.candidate_offsets[leaf]) as usize
-    }
-
     /// Cumulative measure: entry `i` is the measure of leaves `0..i`.
     pub fn cumulative(&self) -> &[f64] {
         &self.cumulative
@@ -627,15 +621,8 @@ impl SegmentCurve {
         let (tri, poly, m, rest) = chosen?;
         let uv = poly.point_at(rest / m)?;
         // The point is in the piece, so in the triangle up to round-off: clamp it on.
-        let corners = self.triangle_corners(tri as usize);
-        let b = barycentric(&corners, uv).map(|x| x.max(0.0));
-        let sum = b[0] + b[1] + b[2];
-        let bary = b.map(|x| x / sum);
-        Some(DomainPoint {
-            triangle: tri,
-            uv: corners[0] * bary[0] + corners[1] * bary[1] + corners[2] * bary[2],
-            bary,
-        })
+        let b = barycentric(&self.triangle_corners(tri as usize), uv);
+        Some(self.clamped_onto(tri, b))
     }
 
     /// One step of [`descend_pieces`](Self::descend_pieces): splits the pieces in
@@ -748,13 +735,7 @@ impl SegmentCurve {
         let pieces = cands.iter().map(|&tri| {
             let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
             let (area, moment) = poly.area_moment();
-            let [gx, gy, h] = self.density_planes[tri as usize];
-            let m = if area > 0.0 {
-                (gx * moment.x + gy * moment.y + h * area).max(0.0)
-            } else {
-                0.0
-            };
-            (tri, poly, m)
+            (tri, poly, self.part_measure(tri, area, moment))
         });
         if let Some(p) = self.place_in_pieces(pieces, target) {
             return p;
@@ -810,16 +791,33 @@ impl SegmentCurve {
             }
         }
         // Clamp onto the triangle so that the barycentric coordinates are valid.
-        let mut b = best.2.map(|x| x.max(0.0));
-        let s = b[0] + b[1] + b[2];
-        b = b.map(|x| x / s);
-        let p = self.triangle_corners(best.1 as usize);
-        let uv = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
+        self.clamped_onto(best.1, best.2)
+    }
+
+    /// The point of triangle `tri` at barycentric coordinates `b` clamped onto the
+    /// triangle (negative ones set to zero, the rest renormalised), for a point that is
+    /// in it only up to round-off.
+    fn clamped_onto(&self, tri: u32, b: [f64; 3]) -> DomainPoint {
+        let b = b.map(|x| x.max(0.0));
+        let sum = b[0] + b[1] + b[2];
+        let bary = b.map(|x| x / sum);
+        let p = self.triangle_corners(tri as usize);
         DomainPoint {
-            triangle: best.1,
-            uv,
-            bary: b,
+            triangle: tri,
+            uv: p[0] * bary[0] + p[1] * bary[1] + p[2] * bary[2],
+            bary,
         }
+    }
+
+    /// The measure of the part of triangle `tri` with `area` and first `moment`: the
+    /// exact integral of the triangle's affine density over it (zero without area).
+    #[inline]
+    fn part_measure(&self, tri: u32, area: f64, moment: DVec2) -> f64 {
+        if !(area > 0.0) {
+            return 0.0;
+        }
+        let [gx, gy, h] = self.density_planes[tri as usize];
+        (gx * moment.x + gy * moment.y + h * area).max(0.0)
     }
 }
 
@@ -1005,8 +1003,7 @@ impl PieceSet {
         let piece = &mut self.pieces[self.len];
         let (area, moment) = piece.poly.area_moment();
         if area > 0.0 {
-            let [gx, gy, h] = curve.density_planes[tri as usize];
-            let measure = (gx * moment.x + gy * moment.y + h * area).max(0.0);
+            let measure = curve.part_measure(tri, area, moment);
             piece.tri = tri;
             piece.area = area;
             piece.measure = measure;
