@@ -7,8 +7,12 @@
 //! `write only`: each record gets values derived from its index with a handful of
 //! integer and float operations (so the stores cannot be turned into a memset).
 //! `rng + write`: the same plus the counter-based random value and the stratified
-//! value that the sampler draws per record. The difference between these rows and the
-//! sampler is the cost of the curve, point location and face interpolation.
+//! value that the sampler draws per record. `record + write`: the sampler's own record
+//! (position, normal, major axis, spacings interpolated on the face) rebuilt with
+//! `Sampler::record` from the face and barycentric coordinates of a previous sampler
+//! output, in that output's order: the cost of the record without the curve. The
+//! difference between that row and the sampler is the cost of the stratified values,
+//! the curve and point location.
 
 use std::time::Instant;
 
@@ -77,6 +81,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ok(_) => {
             let scene = Scene::build(&SceneConfig::load(&config)?)?;
             let real = time(repeats, || scene.sampler.sample_into(1, &mut out));
+            let points: Vec<(u32, [f64; 3], u32)> = out
+                .iter()
+                .map(|s| (s.face, s.barycentric().map(f64::from), s.segment))
+                .collect();
+            let sampler = &scene.sampler;
+            let record = time(repeats, || {
+                out.par_chunks_mut(CHUNK).enumerate().for_each(|(c, dst)| {
+                    for (j, s) in dst.iter_mut().enumerate() {
+                        let k = c * CHUNK + j;
+                        let (face, bary, segment) = points[k];
+                        *s = sampler
+                            .record(face, bary, segment, k as u32, N)
+                            .expect("a face of the mesh");
+                    }
+                });
+            });
+            rows.push(("record + write, bunny 3:1", record));
             rows.push(("sampler, bunny 3:1", real));
         }
         Err(e) => eprintln!("skipping the bunny: {e}"),

@@ -517,6 +517,26 @@ impl Sampler {
         (per_leaf.max(1.0).log2() * 0.5).ceil() as u32 + 5
     }
 
+    /// The record [`sample_into`](Self::sample_into) writes for a sample at barycentric
+    /// coordinates `bary` (corners 0, 1, 2) of mesh face `face`, with `segment` and
+    /// `index` copied in and the spacings of an `n`-sample request; `None` for a face
+    /// the mesh does not have. For callers that keep samples compactly (face and
+    /// barycentric coordinates) and expand them later, and to measure the cost of the
+    /// record alone (the `sample_floor` bench).
+    pub fn record(
+        &self,
+        face: u32,
+        bary: [f64; 3],
+        segment: u32,
+        index: u32,
+        n: usize,
+    ) -> Option<Sample> {
+        ((face as usize) < self.mesh.face_count()).then(|| {
+            let scale = (self.total_measure / n.max(1) as f64).sqrt();
+            self.record_scaled(face, bary, segment, index, scale)
+        })
+    }
+
     /// Turns a domain point of `seg` into a surface sample.
     #[inline(always)]
     fn make_sample(
@@ -527,17 +547,30 @@ impl Sampler {
         scale: f64,
     ) -> Sample {
         let face = seg.faces[p.triangle as usize];
-        let fp = face_point(&self.mesh, &self.face_tensors, face, p.bary);
+        self.record_scaled(face, p.bary, seg.segment, index, scale)
+    }
+
+    /// [`record`](Self::record) with the spacing scale `sqrt(M / n)` given.
+    #[inline(always)]
+    fn record_scaled(
+        &self,
+        face: u32,
+        bary: [f64; 3],
+        segment: u32,
+        index: u32,
+        scale: f64,
+    ) -> Sample {
+        let fp = face_point(&self.mesh, &self.face_tensors, face, bary);
         let spacing = [
             (scale / fp.l1.sqrt()) as f32,
             (scale / fp.l2.max(f64::MIN_POSITIVE).sqrt()) as f32,
         ];
-        let b = p.bary.map(|x| x as f32);
+        let b = bary.map(|x| x as f32);
         Sample {
             position: fp.position.as_vec3().to_array(),
             face,
             normal: fp.normal.as_vec3().to_array(),
-            segment: seg.segment,
+            segment,
             major_axis: fp.major.as_vec3().to_array(),
             index,
             bary: [b[1], b[2]],
@@ -625,6 +658,44 @@ mod tests {
             pre.sampler.sample_into_portable(7, &mut portable);
             assert!(fast == portable, "n {n}: the two paths differ");
         }
+    }
+
+    /// `record` rebuilds what `sample_into` wrote from the face and barycentric
+    /// coordinates (up to their rounding to f32 in the record).
+    #[test]
+    fn records_rebuild_samples() {
+        let (mesh, field) = crate::surface::tests::torus_case();
+        let pre = crate::surface::Preprocessed::build(
+            mesh,
+            field,
+            &crate::surface::SurfaceOptions::default(),
+        )
+        .expect("preprocessed");
+        let n = 3000;
+        for s in pre.sampler.sample(n, 11) {
+            let b = s.barycentric().map(f64::from);
+            let r = pre
+                .sampler
+                .record(s.face, b, s.segment, s.index, n)
+                .expect("a face of the mesh");
+            assert_eq!((r.face, r.segment, r.index), (s.face, s.segment, s.index));
+            for k in 0..3 {
+                assert!((r.position[k] - s.position[k]).abs() < 1e-5, "{r:?} {s:?}");
+                assert!((r.normal[k] - s.normal[k]).abs() < 1e-4, "{r:?} {s:?}");
+            }
+            for k in 0..2 {
+                assert!(
+                    (r.spacing[k] / s.spacing[k] - 1.0).abs() < 1e-4,
+                    "{r:?} {s:?}"
+                );
+            }
+        }
+        let faces = pre.sampler.mesh().face_count() as u32;
+        assert!(
+            pre.sampler
+                .record(faces, [1.0, 0.0, 0.0], 0, 0, n)
+                .is_none()
+        );
     }
 
     #[test]
