@@ -480,6 +480,15 @@ impl SegmentCurve {
         let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
+        if levels == 0 && scratch.root_of != Some((self.id, leaf)) {
+            // No descent and nothing cached (a leaf expecting at most one sample, the
+            // usual boundary leaf at high counts): clip candidates only up to the piece
+            // holding the target, the piece the cached path below picks from all of
+            // them, in the same order and with the same measures.
+            if let Some(p) = self.place_in_pieces(self.clipped_pieces(cands, lo, size), target) {
+                return p;
+            }
+        }
         // The candidates clipped to the leaf and, once a descent needs it, the leaf's
         // first cut (between its first two and last two children in curve order), kept
         // in the scratch for the next sample: consecutive values often fall in the same
@@ -594,6 +603,22 @@ impl SegmentCurve {
         let (ids, n) = node.triangles();
         let ids = if n > 0 { &ids[..n] } else { cands };
         self.point_location(ids, lo + DVec2::splat(0.5 * size))
+    }
+
+    /// Triangles `cands` clipped to the square `[lo, lo + size]^2`, lazily, as
+    /// `(triangle, piece, measure of the piece)` for
+    /// [`place_in_pieces`](Self::place_in_pieces).
+    fn clipped_pieces<'a>(
+        &'a self,
+        cands: &'a [u32],
+        lo: DVec2,
+        size: f64,
+    ) -> impl Iterator<Item = (u32, Poly, f64)> + 'a {
+        cands.iter().map(move |&tri| {
+            let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
+            let (area, moment) = poly.area_moment();
+            (tri, poly, self.part_measure(tri, area, moment))
+        })
     }
 
     /// The point at `target` (in `[0, total)`) of a boundary sub-cell given as its
@@ -732,12 +757,7 @@ impl SegmentCurve {
         // Depth exhausted inside a boundary sub-cell: the piece holding the target,
         // and the point at the rest of the target in it.
         let cands = cur.as_slice(cands);
-        let pieces = cands.iter().map(|&tri| {
-            let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
-            let (area, moment) = poly.area_moment();
-            (tri, poly, self.part_measure(tri, area, moment))
-        });
-        if let Some(p) = self.place_in_pieces(pieces, target) {
+        if let Some(p) = self.place_in_pieces(self.clipped_pieces(cands, lo, size), target) {
             return p;
         }
         self.point_location(cands, lo + DVec2::splat(0.5 * size))

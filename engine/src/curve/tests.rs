@@ -429,7 +429,7 @@ fn cell_keys_pack_every_field() {
 fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
     // The scratch caches the last boundary leaf's clipped candidates: interleaving two
     // curves (same leaf indices, different triangles) and revisiting leaves must give
-    // exactly the points of a fresh scratch.
+    // exactly the points of a fresh scratch, with and without exact levels.
     let opts = CurveOptions {
         max_cell_share: 0.01,
         boundary_level: 4,
@@ -464,8 +464,16 @@ fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
                 continue;
             }
             let f = (k as f64 + 0.61) / 3.0;
-            let reused = c.point_in_leaf_with(leaf, f, 6, &mut scratch);
-            assert_eq!(reused, c.point_in_leaf_to(leaf, f, 6), "leaf {leaf} k {k}");
+            // Six levels fill the cache; no levels then read the cached pieces, where
+            // a fresh scratch clips candidates only up to the chosen piece.
+            for levels in [6, 0] {
+                let reused = c.point_in_leaf_with(leaf, f, levels, &mut scratch);
+                assert_eq!(
+                    reused,
+                    c.point_in_leaf_to(leaf, f, levels),
+                    "leaf {leaf} k {k} levels {levels}"
+                );
+            }
             checked += 1;
         }
     }
