@@ -520,7 +520,8 @@ impl Sampler {
     /// The record [`sample_into`](Self::sample_into) writes for a sample at barycentric
     /// coordinates `bary` (corners 0, 1, 2) of mesh face `face`, with `segment` and
     /// `index` copied in and the spacings of an `n`-sample request; `None` for a face
-    /// the mesh does not have. For callers that keep samples compactly (face and
+    /// the mesh does not have or a non-finite coordinate (coordinates outside `[0, 1]`
+    /// extrapolate linearly). For callers that keep samples compactly (face and
     /// barycentric coordinates) and expand them later, and to measure the cost of the
     /// record alone (the `sample_floor` bench).
     pub fn record(
@@ -531,7 +532,8 @@ impl Sampler {
         index: u32,
         n: usize,
     ) -> Option<Sample> {
-        ((face as usize) < self.mesh.face_count()).then(|| {
+        let valid = (face as usize) < self.mesh.face_count() && bary.iter().all(|x| x.is_finite());
+        valid.then(|| {
             let scale = (self.total_measure / n.max(1) as f64).sqrt();
             self.record_scaled(face, bary, segment, index, scale)
         })
@@ -641,17 +643,18 @@ mod tests {
         );
     }
 
+    /// The torus fixture of `surface`, preprocessed with the default options.
+    fn torus() -> crate::surface::Preprocessed {
+        let (mesh, field) = crate::surface::tests::torus_case();
+        crate::surface::Preprocessed::build(mesh, field, &crate::surface::SurfaceOptions::default())
+            .expect("preprocessed")
+    }
+
     /// The x86-64-v3 path (taken where the CPU has it) and the portable one give the
     /// same bits: a fused multiply-add or a reordered sum on either path fails this.
     #[test]
     fn both_code_paths_give_the_same_samples() {
-        let (mesh, field) = crate::surface::tests::torus_case();
-        let pre = crate::surface::Preprocessed::build(
-            mesh,
-            field,
-            &crate::surface::SurfaceOptions::default(),
-        )
-        .expect("preprocessed");
+        let pre = torus();
         for n in [50usize, 5000, 20000] {
             let fast = pre.sampler.sample(n, 7);
             let mut portable = vec![super::Sample::default(); n];
@@ -664,13 +667,7 @@ mod tests {
     /// coordinates (up to their rounding to f32 in the record).
     #[test]
     fn records_rebuild_samples() {
-        let (mesh, field) = crate::surface::tests::torus_case();
-        let pre = crate::surface::Preprocessed::build(
-            mesh,
-            field,
-            &crate::surface::SurfaceOptions::default(),
-        )
-        .expect("preprocessed");
+        let pre = torus();
         let n = 3000;
         for s in pre.sampler.sample(n, 11) {
             let b = s.barycentric().map(f64::from);
@@ -694,6 +691,11 @@ mod tests {
         assert!(
             pre.sampler
                 .record(faces, [1.0, 0.0, 0.0], 0, 0, n)
+                .is_none()
+        );
+        assert!(
+            pre.sampler
+                .record(0, [f64::NAN, 0.5, 0.5], 0, 0, n)
                 .is_none()
         );
     }
