@@ -10,9 +10,11 @@
 //! value that the sampler draws per record. `record + write`: the sampler's own record
 //! (position, normal, major axis, spacings interpolated on the face) rebuilt with
 //! `Sampler::record` from the face and barycentric coordinates of a previous sampler
-//! output, in that output's order: the cost of the record without the curve. The
-//! difference between that row and the sampler is the cost of the stratified values,
-//! the curve and point location.
+//! output, in that output's order: the cost of the record without the curve, as an
+//! upper bound (each call also reads its 24-byte input back from memory, checks it and
+//! recomputes the spacing scale, which the sampler does once per request). The
+//! difference between that row and the sampler is, at least, the cost of the
+//! stratified values, the curve and point location.
 
 use std::time::Instant;
 
