@@ -14,12 +14,15 @@
 //! upper bound (each call also reads its 24-byte input back from memory, checks it and
 //! recomputes the spacing scale, which the sampler does once per request). The
 //! difference between that row and the sampler is, at least, the cost of the
-//! stratified values, the curve and point location.
+//! stratified values, the curve and point location. `sites only`: the sampler writing
+//! only where each sample lies (`Sampler::sample_sites_into`, 16-byte `SampleSite`s:
+//! face, segment, barycentric coordinates), which times the stratified values, the
+//! curve and point location without the record.
 
 use std::time::Instant;
 
 use rayon::prelude::*;
-use strata_engine::sample::{Sample, stratified_value};
+use strata_engine::sample::{Sample, SampleSite, stratified_value};
 use strata_systems::config::SceneConfig;
 use strata_systems::scene::Scene;
 
@@ -58,6 +61,10 @@ fn trivial(i: usize, v: f64) -> Sample {
     }
 }
 
+fn sites_size() -> usize {
+    std::mem::size_of::<SampleSite>()
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(21)?.max(1);
     let mut out = vec![Sample::default(); N];
@@ -78,7 +85,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     let config = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../configs/stanford-bunny-anisotropic.ron");
-    let mut rows = vec![("write only", write), ("rng + write", rng)];
+    let full = std::mem::size_of::<Sample>();
+    let mut rows = vec![("write only", write, full), ("rng + write", rng, full)];
     match strata_bench::shared_mesh_dir() {
         Ok(_) => {
             let scene = Scene::build(&SceneConfig::load(&config)?)?;
@@ -99,20 +107,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     }
                 });
             });
-            rows.push(("record + write, bunny 3:1", record));
-            rows.push(("sampler, bunny 3:1", real));
+            let mut sites = vec![SampleSite::default(); N];
+            let located = time(repeats, || scene.sampler.sample_sites_into(1, &mut sites));
+            rows.push(("record + write, bunny 3:1", record, full));
+            rows.push(("sites only, bunny 3:1", located, sites_size()));
+            rows.push(("sampler, bunny 3:1", real, full));
         }
         Err(e) => eprintln!("skipping the bunny: {e}"),
     }
     println!(
-        "{} threads, 10^6 records of {} bytes, medians of {repeats}\n",
+        "{} threads, 10^6 records of {full} bytes ({} for sites), medians of {repeats}\n",
         rayon::current_num_threads(),
-        std::mem::size_of::<Sample>()
+        sites_size()
     );
     println!("| path | ms | GB/s written | M records/s |");
     println!("| --- | --- | --- | --- |");
-    for (name, ms) in rows {
-        let bytes = (N * std::mem::size_of::<Sample>()) as f64;
+    for (name, ms, size) in rows {
+        let bytes = (N * size) as f64;
         println!(
             "| {name} | {ms:.2} | {:.1} | {:.0} |",
             bytes / ms / 1e6,

@@ -15,4 +15,4 @@ mod types;
 
 pub use sampler::{SampleError, Sampler, SegmentSampling};
 pub use stratified::{allocate, stratified_value};
-pub use types::Sample;
+pub use types::{Sample, SampleSite};

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::faces::{FaceTensors, face_point};
 use super::stratified::{Allocation, stratified_value_keyed};
-use super::types::Sample;
+use super::types::{Sample, SampleSite};
 use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
 use crate::field::TensorField;
 use crate::mesh::TriMesh;
@@ -332,6 +332,22 @@ impl Sampler {
     /// As [`sample_into`](Self::sample_into), choosing explicitly whether segments are
     /// linked into chains (for experiments such as the paper's section 7.3.3).
     pub fn sample_into_linked(&self, seed: u64, out: &mut [Sample], linked: bool) {
+        self.fill(seed, out, linked);
+    }
+
+    /// As [`sample_into`](Self::sample_into), writing only where each sample lies
+    /// ([`SampleSite`]: face, segment, barycentric coordinates; 16 bytes instead of 64):
+    /// the same samples, bit for bit in those fields, without interpolating position,
+    /// normal and field. For callers that expand samples later or elsewhere (a vertex
+    /// or compute shader, or [`record`](Self::record)), and to time the curve and point
+    /// location without the record.
+    pub fn sample_sites_into(&self, seed: u64, out: &mut [SampleSite]) {
+        let linked = self.uses_chains(out.len());
+        self.fill(seed, out, linked);
+    }
+
+    /// Fills `out` with the records of an `out.len()`-sample request.
+    fn fill<T: Record>(&self, seed: u64, out: &mut [T], linked: bool) {
         let n = out.len() as u64;
         if n == 0 {
             return;
@@ -359,7 +375,7 @@ impl Sampler {
     /// (three-operand encodings, fewer register moves). Never inlined: one symbol to
     /// profile the sampling loop by (`valgrind --toggle-collect`), whichever path runs.
     #[inline(never)]
-    fn fill_chunk(&self, req: &Request<'_>, start: u64, dst: &mut [Sample]) {
+    fn fill_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2")
             && std::arch::is_x86_feature_detected!("fma")
@@ -380,7 +396,7 @@ impl Sampler {
     /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn fill_chunk_v3(&self, req: &Request<'_>, start: u64, dst: &mut [Sample]) {
+    fn fill_chunk_v3<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         self.fill_chunk_body(req, start, dst);
     }
 
@@ -389,7 +405,7 @@ impl Sampler {
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body(&self, req: &Request<'_>, start: u64, dst: &mut [Sample]) {
+    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         let Request {
             groups,
             seed,
@@ -460,7 +476,7 @@ impl Sampler {
                     loop {
                         let ml = (m - before).clamp(0.0, top);
                         let p = view.point(curve, (ml - w0) / (w1 - w0));
-                        dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
+                        dst[(g - start) as usize] = T::make(self, seg, &p, g as u32, scale);
                         g += 1;
                         if g >= hi {
                             break 'group;
@@ -475,7 +491,7 @@ impl Sampler {
                     let levels = boundary_levels((w1 - w0) * per_sample);
                     let p =
                         curve.point_in_leaf_with(leaf, (ml - w0) / (w1 - w0), levels, &mut scratch);
-                    dst[(g - start) as usize] = self.make_sample(seg, &p, g as u32, scale);
+                    dst[(g - start) as usize] = T::make(self, seg, &p, g as u32, scale);
                     g += 1;
                     if g >= hi {
                         break 'group;
@@ -581,6 +597,47 @@ impl Sampler {
     }
 }
 
+/// A record the per-chunk loop writes for each sample: a full [`Sample`] or only its
+/// [`SampleSite`] (one loop, compiled once per record type).
+trait Record: Copy + Send {
+    /// The record of domain point `p` of `seg`, sample `index` of a request whose
+    /// spacing scale is `scale`.
+    fn make(
+        sampler: &Sampler,
+        seg: &SegmentSampling,
+        p: &DomainPoint,
+        index: u32,
+        scale: f64,
+    ) -> Self;
+}
+
+impl Record for Sample {
+    #[inline(always)]
+    fn make(
+        sampler: &Sampler,
+        seg: &SegmentSampling,
+        p: &DomainPoint,
+        index: u32,
+        scale: f64,
+    ) -> Self {
+        sampler.make_sample(seg, p, index, scale)
+    }
+}
+
+impl Record for SampleSite {
+    /// The fields of [`Sampler::make_sample`]'s record that say where the sample is,
+    /// computed the same way.
+    #[inline(always)]
+    fn make(_: &Sampler, seg: &SegmentSampling, p: &DomainPoint, _: u32, _: f64) -> Self {
+        let b = p.bary.map(|x| x as f32);
+        SampleSite {
+            face: seg.faces[p.triangle as usize],
+            segment: seg.segment,
+            bary: [b[1], b[2]],
+        }
+    }
+}
+
 /// Exact levels of the descent through a boundary leaf expected to receive
 /// `expected` samples: until a sub-cell expects at most one sample (log4 of the
 /// expectation, none for a leaf that expects at most one). There a sample is placed
@@ -648,6 +705,39 @@ mod tests {
         let (mesh, field) = crate::surface::tests::torus_case();
         crate::surface::Preprocessed::build(mesh, field, &crate::surface::SurfaceOptions::default())
             .expect("preprocessed")
+    }
+
+    /// Sites are the samples' face, segment and barycentric coordinates, bit for bit,
+    /// with chains (few samples) and without, and `record` expands a site back into its
+    /// sample up to the rounding of the coordinates to `f32`.
+    #[test]
+    fn sites_are_the_samples_without_their_records() {
+        let pre = torus();
+        let sampler = &pre.sampler;
+        assert!(sampler.uses_chains(5) && !sampler.uses_chains(5000));
+        for n in [5usize, 5000, 20000] {
+            let samples = sampler.sample(n, 3);
+            let mut sites = vec![super::SampleSite::default(); n];
+            sampler.sample_sites_into(3, &mut sites);
+            for (k, (s, site)) in samples.iter().zip(&sites).enumerate() {
+                assert_eq!(
+                    (site.face, site.segment, site.bary),
+                    (s.face, s.segment, s.bary),
+                    "n {n}, sample {k}"
+                );
+                assert_eq!(site.barycentric(), s.barycentric());
+                let bary = site.barycentric().map(f64::from);
+                let r = sampler
+                    .record(site.face, bary, site.segment, k as u32, n)
+                    .expect("a face of the mesh");
+                assert_eq!(r.index, s.index);
+                let d = glam::Vec3::from(r.position).distance(glam::Vec3::from(s.position));
+                assert!(d < 1e-5, "n {n}, sample {k}: expanded {d} away");
+                for (a, b) in r.spacing.iter().zip(&s.spacing) {
+                    assert!((a - b).abs() <= 1e-5 * b, "n {n}, sample {k}: {a} vs {b}");
+                }
+            }
+        }
     }
 
     /// The x86-64-v3 path (taken where the CPU has it) and the portable one give the

@@ -32,6 +32,39 @@ pub struct Sample {
     pub spacing: [f32; 2],
 }
 
+/// Where a sample lies, without the rest of its record: what
+/// [`Sampler::sample_sites_into`](super::Sampler::sample_sites_into) writes, 16 bytes
+/// (`#[repr(C)]`, a quarter of a [`Sample`]).
+///
+/// For callers that interpolate the record themselves (in a shader, say) or upload
+/// samples compactly. Site `k` of a request holds the `face`, `segment` and `bary` of
+/// sample `k` of the same request by [`Sampler::sample_into`](super::Sampler::sample_into),
+/// bit for bit, and its index is `k`; [`Sampler::record`](super::Sampler::record) expands it
+/// into that sample up to the rounding of `bary` to `f32`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleSite {
+    /// The face the sample lies on.
+    pub face: u32,
+    /// Segment id of the face.
+    pub segment: u32,
+    /// Barycentric coordinates of corners 1 and 2 of `face`; corner 0 has
+    /// `1 - bary[0] - bary[1]`.
+    pub bary: [f32; 2],
+}
+
+impl SampleSite {
+    /// The three barycentric coordinates (corner 0, 1, 2).
+    pub fn barycentric(&self) -> [f32; 3] {
+        [
+            1.0 - self.bary[0] - self.bary[1],
+            self.bary[0],
+            self.bary[1],
+        ]
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<SampleSite>() == 16);
 const _: () = assert!(std::mem::size_of::<Sample>() == 64);
 const _: () = assert!(std::mem::align_of::<Sample>() == 4);
 
