@@ -6,14 +6,14 @@
 use std::path::Path;
 
 use glam::Vec3;
-use strata_engine::sample::Sample;
+use strata_engine::sample::{Sample, SampleSite};
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::buffers::{MIN_CAPACITY, next_capacity};
 use strata_systems::gpu::context::scoped;
 use strata_systems::gpu::wgpu;
 use strata_systems::gpu::{
     ColorMode, GpuContext, GpuError, GpuOptions, HeadlessTarget, MeshMode, OrbitCamera, RgbaImage,
-    SplatRenderer, SplatStyle,
+    SiteExpander, SplatRenderer, SplatStyle,
 };
 use strata_systems::scene::Scene;
 
@@ -374,6 +374,64 @@ fn sample_buffer_reads_back_and_resizes() {
     }
     // 10 -> 1024, 5000 -> 8192, 100 -> 1024, 70000 -> 131072, kept, kept, 0 -> 1024.
     assert_eq!(reallocations, 4);
+}
+
+/// Sites expanded on the GPU are the CPU's samples up to `f32` round-off: the same
+/// face, segment, barycentric coordinates and index, positions within 1e-5 of the
+/// bounding-box diagonal, normals and spacings within 1e-4, the same major axis up to
+/// sign (where the field is anisotropic; an isotropic tensor has none), on a surface
+/// with singularities, with chains (3 samples) and without, across buffer growth.
+#[test]
+fn expanded_sites_match_the_cpu_samples() {
+    let Some(ctx) = gpu("expanded_sites_match_the_cpu_samples") else {
+        return;
+    };
+    let scene = scene(
+        "(mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
+         field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))",
+    );
+    let sampler = &scene.sampler;
+    let (lo, hi) = sampler.mesh().bounds();
+    let diagonal = (hi - lo).length() as f32;
+    let mut expander = SiteExpander::new(&ctx.device, sampler).expect("expander");
+    let mut buffer = strata_systems::gpu::SampleBuffer::new(&ctx.device).expect("buffer");
+    for n in [3usize, 20_000, 100] {
+        let cpu = sampler.sample(n, 5);
+        let mut sites = vec![SampleSite::default(); n];
+        sampler.sample_sites_into(5, &mut sites);
+        expander
+            .expand(&ctx.device, &ctx.queue, &sites, &mut buffer)
+            .expect("expand");
+        let gpu = buffer
+            .read_back(&ctx.device, &ctx.queue)
+            .expect("read back");
+        assert_eq!(gpu.len(), n);
+        let mut anisotropic = 0;
+        for (k, (g, c)) in gpu.iter().zip(&cpu).enumerate() {
+            let at = format!("n {n}, sample {k}");
+            assert_eq!(
+                (g.face, g.segment, g.bary, g.index),
+                (c.face, c.segment, c.bary, c.index),
+                "{at}"
+            );
+            let d = Vec3::from(g.position).distance(Vec3::from(c.position));
+            assert!(d <= 1e-5 * diagonal, "{at}: position {d} away");
+            let dn = Vec3::from(g.normal).distance(Vec3::from(c.normal));
+            assert!(dn <= 1e-4, "{at}: normal {dn} away");
+            for (a, b) in g.spacing.iter().zip(&c.spacing) {
+                assert!((a - b).abs() <= 1e-4 * b, "{at}: spacing {a} vs {b}");
+            }
+            if c.spacing[1] > 1.01 * c.spacing[0] {
+                anisotropic += 1;
+                let dot = Vec3::from(g.major_axis).dot(Vec3::from(c.major_axis));
+                assert!(dot.abs() >= 1.0 - 1e-4, "{at}: major axes at dot {dot}");
+            }
+        }
+        assert!(
+            anisotropic * 2 > n,
+            "n {n}: only {anisotropic} anisotropic samples"
+        );
+    }
 }
 
 /// Uploads without waiting: several frames in a row need no poll in between, and the

@@ -8,13 +8,20 @@
 //! submit and is not waited for. Between frames (outside the timing) the device is
 //! drained so each frame starts from the steady state, as behind a presented frame.
 //! Medians of `repeats` frames (default 15) after two warm-up frames.
+//!
+//! Each scene and count runs twice: `full` as above, and `sites`, where the CPU writes
+//! only 16-byte `SampleSite`s (`SampleStream::frame_sites`) and a compute pass expands
+//! them into the sample buffer. `gpu` is the time of draining the device after the
+//! frame (the copy, and for sites the expansion pass): on the software adapter this is
+//! CPU time too, on a GPU it overlaps the next frame's sampling.
 
 use std::path::PathBuf;
 use std::time::Duration;
 
+use std::time::Instant;
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::headless::HeadlessTarget;
-use strata_systems::gpu::{GpuContext, GpuOptions, SampleStream, SplatRenderer};
+use strata_systems::gpu::{GpuContext, GpuOptions, SampleStream, SiteExpander, SplatRenderer};
 use strata_systems::scene::Scene;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -43,45 +50,62 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ctx.adapter_summary()
     );
     println!(
-        "| scene | faces | segments | N | sampling | upload | sampling + upload | fastest frame | M samples/s |"
+        "| scene | faces | segments | N | mode | sampling | upload | sampling + upload | fastest frame | M samples/s | gpu |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     // A tiny target: only the pipelines' formats matter here.
     let target = HeadlessTarget::new(&ctx.device, 16, 16, 1)?;
     for (name, path) in scenes {
         let config = SceneConfig::load(&path)?;
         let scene = Scene::build(&config)?;
-        for n in [100_000usize, 1_000_000] {
+        let mut expander = SiteExpander::new(&ctx.device, &scene.sampler)?;
+        for (n, sites) in [
+            (100_000usize, false),
+            (100_000, true),
+            (1_000_000, false),
+            (1_000_000, true),
+        ] {
             let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
             let mut stream = SampleStream::new();
             let (mut sample, mut upload, mut total) = (Vec::new(), Vec::new(), Vec::new());
+            let mut gpu = Vec::new();
             for frame in 0..repeats + 2 {
-                let t = stream.frame(
-                    &scene.sampler,
-                    n,
-                    frame as u64,
-                    &mut renderer,
-                    &ctx.device,
-                    &ctx.queue,
-                )?;
+                let (sampler, seed) = (&scene.sampler, frame as u64);
+                let t = if sites {
+                    stream.frame_sites(
+                        sampler,
+                        n,
+                        seed,
+                        &mut expander,
+                        &mut renderer,
+                        &ctx.device,
+                        &ctx.queue,
+                    )?
+                } else {
+                    stream.frame(sampler, n, seed, &mut renderer, &ctx.device, &ctx.queue)?
+                };
+                let drain = Instant::now();
                 ctx.wait_idle("draining the queue between frames")?;
                 if frame >= 2 {
                     sample.push(ms(t.sample));
                     upload.push(ms(t.upload));
                     total.push(ms(t.sample + t.upload));
+                    gpu.push(ms(drain.elapsed()));
                 }
             }
             let fastest = total.iter().copied().fold(f64::INFINITY, f64::min);
             let total_median = median(total);
             println!(
-                "| {name} | {} | {} | {n} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} |",
+                "| {name} | {} | {} | {n} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {:.2} |",
                 scene.mesh.face_count(),
                 scene.sampler.segments().len(),
+                if sites { "sites" } else { "full" },
                 median(sample),
                 median(upload),
                 total_median,
                 fastest,
                 n as f64 / total_median / 1e3,
+                median(gpu),
             );
         }
     }

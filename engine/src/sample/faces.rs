@@ -56,6 +56,11 @@ impl FaceTensors {
         Self { corners }
     }
 
+    /// The table, one `[f32; 9]` per face.
+    pub(crate) fn corners(&self) -> &[[f32; 9]] {
+        &self.corners
+    }
+
     /// Memory held, in bytes.
     pub(crate) fn heap_bytes(&self) -> usize {
         self.corners.capacity() * std::mem::size_of::<[f32; 9]>()

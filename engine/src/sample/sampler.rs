@@ -295,6 +295,15 @@ impl Sampler {
         &self.field
     }
 
+    /// Per mesh face, the field's tensor at each corner restricted to the face's frame
+    /// `e1 = (p1 - p0) / |p1 - p0|`, `e2 = n x e1` (`n` the face normal): entries
+    /// `[a, b, c]` of `[[a, b], [b, c]]` for corner 0, then 1, then 2. What the record
+    /// interpolates (linearly in barycentric coordinates) and decomposes per sample;
+    /// for callers that expand [`SampleSite`]s themselves, such as a GPU pass.
+    pub fn face_tensor_corners(&self) -> &[[f32; 9]] {
+        self.face_tensors.corners()
+    }
+
     /// Memory held by the preprocessed data in bytes: every segment's cells, domain
     /// triangles and face map, the chain tables and the per-face tensor table (the mesh
     /// and the field are inputs, shared, and not counted).

@@ -111,15 +111,7 @@ impl SampleBuffer {
         queue: &wgpu::Queue,
         samples: &[Sample],
     ) -> Result<(), GpuError> {
-        let capacity = next_capacity(self.capacity, samples.len());
-        if capacity != self.capacity {
-            let (buffer, belt) = Self::allocate(device, capacity)?;
-            self.buffer = buffer;
-            self.belt = belt;
-            self.capacity = capacity;
-            self.reallocations += 1;
-        }
-        self.len = samples.len();
+        self.resize(device, samples.len())?;
         let Some(size) = wgpu::BufferSize::new(samples.len() as u64 * SAMPLE_BYTES) else {
             return Ok(());
         };
@@ -145,12 +137,30 @@ impl SampleBuffer {
         })
     }
 
+    /// Makes the buffer hold `len` samples without writing them, growing or shrinking
+    /// it first when the capacity policy says so (a reallocated buffer's contents are
+    /// undefined): for a GPU pass that writes the samples itself, such as
+    /// [`SiteExpander::expand`](super::expand::SiteExpander::expand).
+    pub fn resize(&mut self, device: &wgpu::Device, len: usize) -> Result<(), GpuError> {
+        let capacity = next_capacity(self.capacity, len);
+        if capacity != self.capacity {
+            let (buffer, belt) = Self::allocate(device, capacity)?;
+            self.buffer = buffer;
+            self.belt = belt;
+            self.capacity = capacity;
+            self.reallocations += 1;
+        }
+        self.len = len;
+        Ok(())
+    }
+
     /// The device buffer (capacity samples; the first [`len`](Self::len) are current).
     pub fn buffer(&self) -> &wgpu::Buffer {
         &self.buffer
     }
 
-    /// Samples uploaded by the last [`upload`](Self::upload).
+    /// Samples held: those of the last [`upload`](Self::upload) or
+    /// [`resize`](Self::resize).
     pub fn len(&self) -> usize {
         self.len
     }

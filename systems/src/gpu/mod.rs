@@ -4,6 +4,7 @@
 //! - [`context`]: adapter and device with typed errors; error scopes.
 //! - [`layout`]: the Pod structs shared with WGSL and their vertex layouts.
 //! - [`buffers`]: the growable sample buffer with a staging ring.
+//! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
 //! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
 //! - [`headless`]: offscreen target, readback, PNG.
 //! - [`camera`]: orbit camera and framing.
@@ -18,6 +19,7 @@
 pub mod buffers;
 pub mod camera;
 pub mod context;
+pub mod expand;
 pub mod headless;
 pub mod layout;
 pub mod shaders;
@@ -32,6 +34,7 @@ pub use wgpu;
 pub use buffers::SampleBuffer;
 pub use camera::OrbitCamera;
 pub use context::{GpuContext, GpuError, GpuOptions};
+pub use expand::SiteExpander;
 pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
 pub use splat::{SplatRenderer, SplatStyle};

@@ -11,6 +11,13 @@ pub const SPLAT: &str = concat!(
     include_str!("../../../shaders/splat.wgsl")
 );
 
+/// The sample expansion pass's module: `common.wgsl` + `expand.wgsl`.
+pub const EXPAND: &str = concat!(
+    include_str!("../../../shaders/common.wgsl"),
+    "\n",
+    include_str!("../../../shaders/expand.wgsl")
+);
+
 /// The mesh pipeline's module: `common.wgsl` + `mesh.wgsl`.
 pub const MESH: &str = concat!(
     include_str!("../../../shaders/common.wgsl"),
@@ -30,6 +37,7 @@ mod tests {
             ("common", COMMON, &[][..]),
             ("splat", SPLAT, &["vs_splat", "fs_disc", "fs_gaussian"][..]),
             ("mesh", MESH, &["vs_mesh", "fs_mesh"][..]),
+            ("expand", EXPAND, &["cs_expand"][..]),
         ] {
             let module = naga::front::wgsl::parse_str(source)
                 .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));

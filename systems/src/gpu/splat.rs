@@ -151,6 +151,12 @@ impl SplatRenderer {
         &self.samples
     }
 
+    /// The sample buffer, for a GPU pass that writes the samples itself
+    /// ([`SiteExpander`](super::expand::SiteExpander)).
+    pub fn samples_mut(&mut self) -> &mut SampleBuffer {
+        &mut self.samples
+    }
+
     /// Uploads `mesh` (flat-shaded, one vertex per face corner) to draw under the
     /// splats; `face_segments[f]` colours face `f` in [`MeshMode::Segments`].
     pub fn set_mesh(

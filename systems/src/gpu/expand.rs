@@ -1,0 +1,376 @@
+//! Expanding sample sites into full samples on the GPU: the CPU writes 16 bytes per
+//! sample ([`Sampler::sample_sites_into`]) instead of 64 and skips the record
+//! (interpolated position, normal and field, the field's eigen-decomposition), which a
+//! compute pass (`shaders/expand.wgsl`) then computes per sample in `f32`, straight
+//! into the renderer's [`SampleBuffer`].
+//!
+//! On the bunny at 10^6 samples this takes the CPU side of a frame from the full
+//! sampler's time to the sites' time (`sample_floor` in `bench/`) and the upload from
+//! 64 MB to 16 MB. The records agree with the CPU's to `f32` round-off (tested against
+//! [`Sampler::sample_into`] on whatever adapter wgpu finds).
+
+use strata_engine::sample::{SampleSite, Sampler};
+use wgpu::util::{DeviceExt, StagingBelt};
+
+use super::buffers::{SampleBuffer, next_capacity};
+use super::context::{GpuError, scoped};
+use super::shaders;
+
+/// Sites per workgroup of the expansion pass (the shader's `@workgroup_size`).
+const WORKGROUP: u32 = 64;
+
+const SITE_BYTES: u64 = std::mem::size_of::<SampleSite>() as u64;
+
+/// The expansion pass's uniforms; twin of `ExpandParams` in `shaders/expand.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ExpandParams {
+    /// Sites to expand.
+    pub count: u32,
+    /// `sqrt(M / N)`, the spacing scale of an `N`-sample request.
+    pub scale: f32,
+    /// First word of the vertex normals in the mesh table (positions start at 0).
+    pub normals_at: u32,
+    /// First word of the face normals.
+    pub face_normals_at: u32,
+    /// First word of the triangles.
+    pub triangles_at: u32,
+    /// First word of the face-frame corner tensors.
+    pub tensors_at: u32,
+    /// Invocations per row of the 2-D dispatch.
+    pub row: u32,
+    /// Padding to 32 bytes.
+    pub _pad: u32,
+}
+
+/// The expansion pipeline, the mesh table of one sampler and a growable sites buffer.
+#[derive(Debug)]
+pub struct SiteExpander {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    mesh: wgpu::Buffer,
+    offsets: ExpandParams,
+    total_measure: f64,
+    sites: wgpu::Buffer,
+    belt: StagingBelt,
+    capacity: usize,
+}
+
+/// The mesh table of `sampler` as 32-bit words (layout: `ExpandParams`), and the
+/// offsets of its parts.
+fn mesh_words(sampler: &Sampler) -> (Vec<u32>, ExpandParams) {
+    let mesh = sampler.mesh();
+    let f32s = |v: &glam::DVec3| v.as_vec3().to_array().map(f32::to_bits);
+    let mut words = Vec::with_capacity(6 * mesh.vertex_count() + 15 * mesh.face_count());
+    words.extend(mesh.positions().iter().flat_map(f32s));
+    let normals_at = words.len() as u32;
+    words.extend(mesh.vertex_normals().iter().flat_map(f32s));
+    let face_normals_at = words.len() as u32;
+    words.extend(mesh.face_normals().iter().flat_map(f32s));
+    let triangles_at = words.len() as u32;
+    words.extend(mesh.triangles().iter().flatten());
+    let tensors_at = words.len() as u32;
+    words.extend(
+        sampler
+            .face_tensor_corners()
+            .iter()
+            .flat_map(|t| t.map(f32::to_bits)),
+    );
+    let offsets = ExpandParams {
+        normals_at,
+        face_normals_at,
+        triangles_at,
+        tensors_at,
+        ..Default::default()
+    };
+    (words, offsets)
+}
+
+impl SiteExpander {
+    /// Builds the pipeline and uploads `sampler`'s mesh, normals, triangles and
+    /// face-frame tensors (24 bytes per vertex and 60 per face).
+    pub fn new(device: &wgpu::Device, sampler: &Sampler) -> Result<Self, GpuError> {
+        let (words, offsets) = mesh_words(sampler);
+        let bytes = std::mem::size_of_val(words.as_slice()) as u64;
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(GpuError::Limit {
+                what: "mesh table for sample expansion (bytes)",
+                requested: bytes,
+                limit,
+            });
+        }
+        let (sites, belt) = allocate_sites(device, super::buffers::MIN_CAPACITY)?;
+        scoped(device, "building the sample expansion pass", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("strata expand"),
+                source: wgpu::ShaderSource::Wgsl(shaders::EXPAND.into()),
+            });
+            let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("strata expand"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: None,
+                        },
+                        count: None,
+                    },
+                    storage(1, true),
+                    storage(2, true),
+                    storage(3, false),
+                ],
+            });
+            // Group 0 is the render pipelines' frame uniforms, which this pass does
+            // not use.
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("strata expand"),
+                bind_group_layouts: &[None, Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("strata expand"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("cs_expand"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let params = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("strata expand params"),
+                size: std::mem::size_of::<ExpandParams>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mesh = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("strata expand mesh"),
+                contents: bytemuck::cast_slice(&words),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            Self {
+                pipeline,
+                layout,
+                params,
+                mesh,
+                offsets,
+                total_measure: sampler.total_measure(),
+                sites,
+                belt,
+                capacity: super::buffers::MIN_CAPACITY,
+            }
+        })
+    }
+
+    /// Uploads `sites` (an `n`-sample request of the sampler this expander was built
+    /// for, `n = sites.len()`) and expands them into `samples`, which then holds the
+    /// records [`Sampler::sample_into`] would have written, up to `f32` round-off.
+    /// Records only commands and submits them; never waits on the GPU. Sites of
+    /// another mesh give records that are wrong but memory-safe (wgpu bounds every
+    /// storage access).
+    pub fn expand(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        sites: &[SampleSite],
+        samples: &mut SampleBuffer,
+    ) -> Result<(), GpuError> {
+        let n = sites.len();
+        samples.resize(device, n)?;
+        let capacity = next_capacity(self.capacity, n);
+        if capacity != self.capacity {
+            let (buffer, belt) = allocate_sites(device, capacity)?;
+            self.sites = buffer;
+            self.belt = belt;
+            self.capacity = capacity;
+        }
+        let Some(size) = wgpu::BufferSize::new(n as u64 * SITE_BYTES) else {
+            return Ok(());
+        };
+        let count = u32::try_from(n).map_err(|_| GpuError::Limit {
+            what: "sites per expansion",
+            requested: n as u64,
+            limit: u64::from(u32::MAX),
+        })?;
+        let out_bytes = n as u64 * std::mem::size_of::<strata_engine::sample::Sample>() as u64;
+        let binding_limit = device.limits().max_storage_buffer_binding_size;
+        if out_bytes > binding_limit {
+            return Err(GpuError::Limit {
+                what: "expanded samples per pass (bytes)",
+                requested: out_bytes,
+                limit: binding_limit,
+            });
+        }
+        let groups = count.div_ceil(WORKGROUP);
+        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
+        let params = ExpandParams {
+            count,
+            scale: (self.total_measure / n as f64).sqrt() as f32,
+            row: gx * WORKGROUP,
+            ..self.offsets
+        };
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|source| GpuError::Poll {
+                operation: "recycling staging memory",
+                source,
+            })?;
+        scoped(device, "expanding sample sites", || {
+            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("strata expand"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &self.sites,
+                            offset: 0,
+                            size: Some(size),
+                        }),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: self.mesh.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: samples.buffer(),
+                            offset: 0,
+                            size: wgpu::BufferSize::new(out_bytes),
+                        }),
+                    },
+                ],
+            });
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("strata expand"),
+            });
+            {
+                let mut view = self.belt.write_buffer(&mut encoder, &self.sites, 0, size);
+                view.copy_from_slice(bytemuck::cast_slice(sites));
+            }
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("strata expand"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(1, &bind_group, &[]);
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
+            self.belt.finish();
+            queue.submit([encoder.finish()]);
+            self.belt.recall();
+        })
+    }
+}
+
+/// A sites buffer of `capacity` sites and its staging ring.
+fn allocate_sites(
+    device: &wgpu::Device,
+    capacity: usize,
+) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
+    let bytes = capacity as u64 * SITE_BYTES;
+    let limit = device
+        .limits()
+        .max_buffer_size
+        .min(device.limits().max_storage_buffer_binding_size);
+    if bytes > limit {
+        return Err(GpuError::Limit {
+            what: "sites buffer size (bytes)",
+            requested: bytes,
+            limit,
+        });
+    }
+    let buffer = scoped(device, "allocating the sites buffer", || {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("strata sites"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    })?;
+    Ok((buffer, StagingBelt::new(device.clone(), bytes)))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::*;
+
+    /// Byte offsets of the members of WGSL struct `name` in `source`, and its size.
+    fn wgsl_layout(source: &str, name: &str) -> (Vec<(String, usize)>, usize) {
+        let module = naga::front::wgsl::parse_str(source).expect("expand module parses");
+        let (_, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("struct {name}"));
+        match &ty.inner {
+            naga::TypeInner::Struct { members, span } => (
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+                    .collect(),
+                *span as usize,
+            ),
+            other => panic!("{name} is not a struct: {other:?}"),
+        }
+    }
+
+    /// `Site` and `ExpandParams` in expand.wgsl have the layouts of `SampleSite` and
+    /// [`ExpandParams`] (a reordered or resized member fails this).
+    #[test]
+    fn wgsl_twins_match_rust_layouts() {
+        let named = |v: &[(&str, usize)]| {
+            v.iter()
+                .map(|(n, o)| (n.to_string(), *o))
+                .collect::<Vec<_>>()
+        };
+        let (site, span) = wgsl_layout(shaders::EXPAND, "Site");
+        assert_eq!(span, size_of::<SampleSite>());
+        assert_eq!(
+            site,
+            named(&[
+                ("face", offset_of!(SampleSite, face)),
+                ("segment", offset_of!(SampleSite, segment)),
+                ("bary", offset_of!(SampleSite, bary)),
+            ])
+        );
+        let (params, span) = wgsl_layout(shaders::EXPAND, "ExpandParams");
+        assert_eq!(span, size_of::<ExpandParams>());
+        assert_eq!(
+            params,
+            named(&[
+                ("count", offset_of!(ExpandParams, count)),
+                ("scale", offset_of!(ExpandParams, scale)),
+                ("normals_at", offset_of!(ExpandParams, normals_at)),
+                ("face_normals_at", offset_of!(ExpandParams, face_normals_at)),
+                ("triangles_at", offset_of!(ExpandParams, triangles_at)),
+                ("tensors_at", offset_of!(ExpandParams, tensors_at)),
+                ("row", offset_of!(ExpandParams, row)),
+                ("_pad", offset_of!(ExpandParams, _pad)),
+            ])
+        );
+    }
+}
