@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Parser, Subcommand};
-use strata_engine::sample::Sample;
+use strata_engine::sample::{Sample, SampleSite};
 
 use strata_engine::surface::{SurfaceOptions, parameterize_with_splitting};
 
@@ -55,6 +55,10 @@ pub struct BenchArgs {
     /// Also write the numbers as JSON (keys in the README).
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Time `Sampler::sample_sites_into` (16-byte sites: face, segment, barycentric
+    /// coordinates; no record) instead of full samples.
+    #[arg(long)]
+    pub sites: bool,
 }
 
 /// The JSON written by `strata bench --json`.
@@ -70,6 +74,8 @@ pub struct BenchReport {
     pub stages: Vec<(String, f64)>,
     /// Samples per run.
     pub count: usize,
+    /// What was timed: `"samples"` (full records) or `"sites"` (`--sites`).
+    pub mode: &'static str,
     /// Sampling runs.
     pub repeat: usize,
     /// Median sampling time, seconds.
@@ -214,13 +220,20 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
     let count = usize::try_from(args.count.unwrap_or(config.sampling.count))
         .context("sample count does not fit in memory")?;
-    let mut buf = vec![Sample::default(); count];
+    let (mut samples, mut sites) = if args.sites {
+        (Vec::new(), vec![SampleSite::default(); count])
+    } else {
+        (vec![Sample::default(); count], Vec::new())
+    };
     let mut times = Vec::with_capacity(args.repeat);
     for run in 0..args.repeat {
+        let seed = config.sampling.seed.wrapping_add(run as u64);
         let t = Instant::now();
-        scene
-            .sampler
-            .sample_into(config.sampling.seed.wrapping_add(run as u64), &mut buf);
+        if args.sites {
+            scene.sampler.sample_sites_into(seed, &mut sites);
+        } else {
+            scene.sampler.sample_into(seed, &mut samples);
+        }
         times.push(t.elapsed().as_secs_f64());
     }
     times.sort_by(f64::total_cmp);
@@ -236,6 +249,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         preprocess_s: stages.iter().map(|(_, s)| s).sum(),
         stages,
         count,
+        mode: if args.sites { "sites" } else { "samples" },
         repeat: args.repeat,
         sample_median_s: times[times.len() / 2],
         sample_min_s: times[0],
@@ -249,9 +263,10 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
     }
     println!("| preprocessing total | {:.1} |", report.preprocess_s * 1e3);
     println!(
-        "{} faces, {} segments; {count} samples: median {:.3} ms over {} runs ({:.1} M samples/s); preprocessed data {:.1} MiB ({:.0} bytes per face)",
+        "{} faces, {} segments; {count} {}: median {:.3} ms over {} runs ({:.1} M samples/s); preprocessed data {:.1} MiB ({:.0} bytes per face)",
         report.faces,
         report.segments,
+        if args.sites { "sites" } else { "samples" },
         report.sample_median_s * 1e3,
         report.repeat,
         count as f64 / report.sample_median_s / 1e6,

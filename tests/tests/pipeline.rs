@@ -199,5 +199,23 @@ fn cli_bench_reports_timings_and_memory_as_json() {
     assert_eq!(v["faces"], 8192);
     assert!(v["sample_median_s"].as_f64().expect("number") > 0.0);
     assert!(v["bytes"].as_u64().expect("number") > 0);
+    assert_eq!(v["mode"], "samples");
+    strata(&[
+        "bench",
+        config.to_str().expect("utf-8"),
+        "-n",
+        "5000",
+        "--repeat",
+        "3",
+        "--sites",
+        "--json",
+        json.to_str().expect("utf-8"),
+    ])
+    .expect("bench --sites");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse");
+    assert_eq!(v["mode"], "sites");
+    assert_eq!(v["count"], 5000);
+    assert!(v["sample_median_s"].as_f64().expect("number") > 0.0);
     assert!(strata(&["bench", config.to_str().expect("utf-8"), "--repeat", "0"]).is_err());
 }
