@@ -659,9 +659,14 @@ fn boundary_levels(expected: f64) -> u32 {
     (expected.max(1.0).log2() * 0.5).ceil() as u32
 }
 
-/// The leaf holding cumulative measure `m`, searching forward from `leaf`: a few
-/// linear steps (consecutive samples are usually in the same or the next leaf), then
-/// a binary search over the rest.
+/// The leaf holding cumulative measure `m`, searching forward from `leaf`: the first
+/// leaf `l >= leaf` with `cum[l + 1] > m` (the last leaf if none). A few linear steps
+/// first (consecutive samples are usually in the same or the next leaf), then a
+/// galloping search (probes at doubling distances, then a binary search between the
+/// last two), so that a jump of `d` leaves reads about `2 log2 d` entries near the
+/// current leaf, not `log2` of the whole segment's entries spread over it: at small
+/// counts, where consecutive samples are many leaves apart, each of those reads is a
+/// cache miss.
 #[inline]
 fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
     let last = cum.len() - 2;
@@ -671,8 +676,20 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
         }
         leaf += 1;
     }
-    let rest = &cum[leaf + 1..];
-    (leaf + rest.partition_point(|&c| c <= m)).min(last)
+    // Every leaf before `lo` ends at or below `m`.
+    let mut lo = leaf;
+    let mut step = 8;
+    let hi = loop {
+        let probe = lo + step;
+        if probe >= last || cum[probe + 1] > m {
+            break probe.min(last);
+        }
+        lo = probe + 1;
+        step *= 2;
+    };
+    // The answer is in `lo..=hi` (`hi` if no entry there exceeds `m`).
+    let ends = &cum[lo + 1..=hi + 1];
+    (lo + ends.partition_point(|&c| c <= m)).min(last)
 }
 
 #[cfg(test)]
@@ -816,5 +833,30 @@ mod tests {
         let cum: Vec<f64> = (0..1000).map(|i| i as f64).collect();
         assert_eq!(advance(&cum, 3, 700.5), 700);
         assert_eq!(advance(&cum, 3, 5000.0), 998);
+    }
+
+    proptest::proptest! {
+        /// The first leaf at or after `start` whose end exceeds `m` (the last leaf if
+        /// none), as a linear scan finds it, on cumulative sums with repeated values
+        /// (empty leaves), for targets before, inside and past the range.
+        #[test]
+        fn advance_matches_a_linear_scan(
+            widths in proptest::collection::vec(
+                proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0..2.0f64],
+                1..400,
+            ),
+            start_frac in 0.0..1.0f64,
+            m_frac in -0.1..1.1f64,
+        ) {
+            let mut cum = vec![0.0];
+            for w in &widths {
+                cum.push(cum.last().copied().unwrap_or(0.0) + w);
+            }
+            let last = cum.len() - 2;
+            let start = ((start_frac * (last + 1) as f64) as usize).min(last);
+            let m = m_frac * cum[last + 1];
+            let want = (start..=last).find(|&l| cum[l + 1] > m).unwrap_or(last);
+            proptest::prop_assert_eq!(advance(&cum, start, m), want);
+        }
     }
 }
