@@ -44,6 +44,10 @@ pub struct ExpandParams {
 }
 
 /// The expansion pipeline, the mesh table of one sampler and a growable sites buffer.
+///
+/// Bound to the sampler it was built from (its mesh, field and total measure): for a
+/// new sampler (another mesh or field, or one reassembled by the engine after a
+/// reload) build a new expander. Any count and seed of the same sampler reuse it.
 #[derive(Debug)]
 pub struct SiteExpander {
     pipeline: wgpu::ComputePipeline,
