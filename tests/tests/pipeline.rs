@@ -171,19 +171,23 @@ fn cli_bench_reports_timings_and_memory_as_json() {
         .find(|p| p.ends_with("plane-gaussian.ron"))
         .expect("bundled");
     let json = dir.path().join("bench.json");
-    strata(&[
-        "bench",
-        config.to_str().expect("utf-8"),
-        "-n",
-        "5000",
-        "--repeat",
-        "3",
-        "--json",
-        json.to_str().expect("utf-8"),
-    ])
-    .expect("bench");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse");
+    // `strata bench` on the plane with `extra` arguments; its JSON.
+    let bench = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "bench",
+            config.to_str().expect("utf-8"),
+            "-n",
+            "5000",
+            "--repeat",
+            "3",
+            "--json",
+            json.to_str().expect("utf-8"),
+        ];
+        args.extend_from_slice(extra);
+        strata(&args).expect("bench");
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse")
+    };
+    let v = bench(&[]);
     for key in [
         "faces",
         "segments",
@@ -200,20 +204,7 @@ fn cli_bench_reports_timings_and_memory_as_json() {
     assert!(v["sample_median_s"].as_f64().expect("number") > 0.0);
     assert!(v["bytes"].as_u64().expect("number") > 0);
     assert_eq!(v["mode"], "samples");
-    strata(&[
-        "bench",
-        config.to_str().expect("utf-8"),
-        "-n",
-        "5000",
-        "--repeat",
-        "3",
-        "--sites",
-        "--json",
-        json.to_str().expect("utf-8"),
-    ])
-    .expect("bench --sites");
-    let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).expect("json")).expect("parse");
+    let v = bench(&["--sites"]);
     assert_eq!(v["mode"], "sites");
     assert_eq!(v["count"], 5000);
     assert!(v["sample_median_s"].as_f64().expect("number") > 0.0);

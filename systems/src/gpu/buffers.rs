@@ -59,6 +59,60 @@ pub fn max_samples(device: &wgpu::Device) -> usize {
     }
 }
 
+/// A device buffer rewritten every frame through a staging belt: what it is for
+/// (labels and error texts), its size and limit, and its usages.
+pub(crate) struct Streamed {
+    /// wgpu label.
+    pub label: &'static str,
+    /// The limit's name in a [`GpuError::Limit`].
+    pub what: &'static str,
+    /// The operation in a [`GpuError::Device`].
+    pub operation: &'static str,
+    /// Size in bytes.
+    pub bytes: u64,
+    /// The largest size the device allows for this use.
+    pub limit: u64,
+    /// Usages (`COPY_DST` is needed for the belt's copies).
+    pub usage: wgpu::BufferUsages,
+}
+
+/// Runs, without blocking, the callbacks of staging chunks whose copies have finished,
+/// so that they return to their belts instead of new ones being allocated.
+pub(crate) fn recycle_staging(device: &wgpu::Device) -> Result<(), GpuError> {
+    device
+        .poll(wgpu::PollType::Poll)
+        .map(|_| ())
+        .map_err(|source| GpuError::Poll {
+            operation: "recycling staging memory",
+            source,
+        })
+}
+
+/// Allocates a [`Streamed`] buffer and a staging belt whose chunk holds a whole frame's
+/// upload (a new belt per size drops chunks too small for the new size; wgpu frees them
+/// once the GPU is done), or a typed error for a size over the limit.
+pub(crate) fn allocate_streamed(
+    device: &wgpu::Device,
+    spec: Streamed,
+) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
+    if spec.bytes > spec.limit {
+        return Err(GpuError::Limit {
+            what: spec.what,
+            requested: spec.bytes,
+            limit: spec.limit,
+        });
+    }
+    let buffer = scoped(device, spec.operation, || {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(spec.label),
+            size: spec.bytes,
+            usage: spec.usage,
+            mapped_at_creation: false,
+        })
+    })?;
+    Ok((buffer, StagingBelt::new(device.clone(), spec.bytes)))
+}
+
 impl SampleBuffer {
     /// An empty buffer of [`MIN_CAPACITY`] samples.
     pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
@@ -76,30 +130,20 @@ impl SampleBuffer {
         device: &wgpu::Device,
         capacity: usize,
     ) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
-        let bytes = capacity as u64 * SAMPLE_BYTES;
-        let limit = device.limits().max_buffer_size;
-        if bytes > limit {
-            return Err(GpuError::Limit {
+        allocate_streamed(
+            device,
+            Streamed {
+                label: "strata samples",
                 what: "sample buffer size (bytes)",
-                requested: bytes,
-                limit,
-            });
-        }
-        let buffer = scoped(device, "allocating the sample buffer", || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("strata samples"),
-                size: bytes,
+                operation: "allocating the sample buffer",
+                bytes: capacity as u64 * SAMPLE_BYTES,
+                limit: device.limits().max_buffer_size,
                 usage: wgpu::BufferUsages::VERTEX
                     | wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_DST
                     | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            })
-        })?;
-        // One chunk holds a whole frame's upload; a new belt per capacity drops chunks
-        // that are too small for the new size (wgpu frees them once the GPU is done).
-        let belt = StagingBelt::new(device.clone(), bytes);
-        Ok((buffer, belt))
+            },
+        )
     }
 
     /// Replaces the contents with `samples`, growing or shrinking the buffer first when
@@ -115,14 +159,7 @@ impl SampleBuffer {
         let Some(size) = wgpu::BufferSize::new(samples.len() as u64 * SAMPLE_BYTES) else {
             return Ok(());
         };
-        // Non-blocking: runs the callbacks of staging chunks whose copies have finished,
-        // so that they return to the belt instead of new ones being allocated.
-        device
-            .poll(wgpu::PollType::Poll)
-            .map_err(|source| GpuError::Poll {
-                operation: "recycling staging memory",
-                source,
-            })?;
+        recycle_staging(device)?;
         scoped(device, "uploading samples", || {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("strata sample upload"),

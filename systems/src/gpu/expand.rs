@@ -12,7 +12,7 @@
 use strata_engine::sample::{SampleSite, Sampler};
 use wgpu::util::{DeviceExt, StagingBelt};
 
-use super::buffers::{SampleBuffer, next_capacity};
+use super::buffers::{SampleBuffer, Streamed, allocate_streamed, next_capacity, recycle_staging};
 use super::context::{GpuError, scoped};
 use super::shaders;
 
@@ -227,12 +227,7 @@ impl SiteExpander {
             row: gx * WORKGROUP,
             ..self.offsets
         };
-        device
-            .poll(wgpu::PollType::Poll)
-            .map_err(|source| GpuError::Poll {
-                operation: "recycling staging memory",
-                source,
-            })?;
+        recycle_staging(device)?;
         scoped(device, "expanding sample sites", || {
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -293,54 +288,28 @@ fn allocate_sites(
     device: &wgpu::Device,
     capacity: usize,
 ) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
-    let bytes = capacity as u64 * SITE_BYTES;
-    let limit = device
-        .limits()
-        .max_buffer_size
-        .min(device.limits().max_storage_buffer_binding_size);
-    if bytes > limit {
-        return Err(GpuError::Limit {
+    let limits = device.limits();
+    allocate_streamed(
+        device,
+        Streamed {
+            label: "strata sites",
             what: "sites buffer size (bytes)",
-            requested: bytes,
-            limit,
-        });
-    }
-    let buffer = scoped(device, "allocating the sites buffer", || {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("strata sites"),
-            size: bytes,
+            operation: "allocating the sites buffer",
+            bytes: capacity as u64 * SITE_BYTES,
+            limit: limits
+                .max_buffer_size
+                .min(limits.max_storage_buffer_binding_size),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
-    })?;
-    Ok((buffer, StagingBelt::new(device.clone(), bytes)))
+        },
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use std::mem::{offset_of, size_of};
 
+    use super::super::layout::tests::wgsl_layout;
     use super::*;
-
-    /// Byte offsets of the members of WGSL struct `name` in `source`, and its size.
-    fn wgsl_layout(source: &str, name: &str) -> (Vec<(String, usize)>, usize) {
-        let module = naga::front::wgsl::parse_str(source).expect("expand module parses");
-        let (_, ty) = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("struct {name}"));
-        match &ty.inner {
-            naga::TypeInner::Struct { members, span } => (
-                members
-                    .iter()
-                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
-                    .collect(),
-                *span as usize,
-            ),
-            other => panic!("{name} is not a struct: {other:?}"),
-        }
-    }
 
     /// `Site` and `ExpandParams` in expand.wgsl have the layouts of `SampleSite` and
     /// [`ExpandParams`] (a reordered or resized member fails this).

@@ -204,31 +204,34 @@ pub fn log_density_range(samples: &[Sample]) -> [f32; 2] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// Byte offsets of the members of WGSL struct `name` in module `source`, and its
+    /// size (naga's layout, which is what the GPU sees).
+    pub(crate) fn wgsl_layout(source: &str, name: &str) -> (Vec<(String, usize)>, usize) {
+        let module = naga::front::wgsl::parse_str(source).expect("WGSL module parses");
+        let (_, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("struct {name} in the module"));
+        match &ty.inner {
+            naga::TypeInner::Struct { members, span } => (
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+                    .collect(),
+                *span as usize,
+            ),
+            other => panic!("{name} is not a struct: {other:?}"),
+        }
+    }
 
     /// The WGSL `Sample` and `Frame` structs have the Rust structs' sizes and offsets.
     #[test]
     fn wgsl_twins_match_rust_layouts() {
-        let module = naga::front::wgsl::parse_str(super::super::shaders::COMMON)
-            .expect("common.wgsl parses");
-        let layout = |name: &str| {
-            let (_, ty) = module
-                .types
-                .iter()
-                .find(|(_, t)| t.name.as_deref() == Some(name))
-                .unwrap_or_else(|| panic!("struct {name} in common.wgsl"));
-            match &ty.inner {
-                naga::TypeInner::Struct { members, span } => (
-                    members
-                        .iter()
-                        .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
-                        .collect::<Vec<_>>(),
-                    *span as usize,
-                ),
-                other => panic!("{name} is not a struct: {other:?}"),
-            }
-        };
+        let layout = |name: &str| wgsl_layout(super::super::shaders::COMMON, name);
         let (members, span) = layout("Sample");
         assert_eq!(span, size_of::<Sample>());
         let expected = [
