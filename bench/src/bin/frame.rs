@@ -13,7 +13,8 @@
 //! only 16-byte `SampleSite`s (`SampleStream::frame_sites`) and a compute pass expands
 //! them into the sample buffer. `gpu` is the time of draining the device after the
 //! frame (the copy, and for sites the expansion pass): on the software adapter this is
-//! CPU time too, on a GPU it overlaps the next frame's sampling.
+//! CPU time too; on a GPU it runs on the device after the submit (not measured here:
+//! this machine has none).
 
 use std::path::PathBuf;
 use std::time::Duration;
