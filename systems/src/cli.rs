@@ -266,7 +266,7 @@ fn bench(args: &BenchArgs) -> anyhow::Result<()> {
         "{} faces, {} segments; {count} {}: median {:.3} ms over {} runs ({:.1} M samples/s); preprocessed data {:.1} MiB ({:.0} bytes per face)",
         report.faces,
         report.segments,
-        if args.sites { "sites" } else { "samples" },
+        report.mode,
         report.sample_median_s * 1e3,
         report.repeat,
         count as f64 / report.sample_median_s / 1e6,

@@ -17,9 +17,8 @@
 //! this machine has none).
 
 use std::path::PathBuf;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use std::time::Instant;
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::headless::HeadlessTarget;
 use strata_systems::gpu::{GpuContext, GpuOptions, SampleStream, SiteExpander, SplatRenderer};

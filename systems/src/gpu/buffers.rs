@@ -1,5 +1,6 @@
-//! A growable GPU buffer of [`Sample`]s, refilled every frame through a ring of mapped
-//! staging chunks.
+//! Growable GPU buffers refilled every frame through a ring of mapped staging chunks:
+//! the buffer of [`Sample`]s the splats are drawn from ([`SampleBuffer`]) and the sites
+//! buffer of the expansion pass ([`super::expand`]), both a `StreamedBuffer`.
 //!
 //! Capacity policy: the buffer holds a power of two of samples, at least
 //! [`MIN_CAPACITY`]. It grows to the next power of two at or above the request, and
@@ -28,11 +29,7 @@ const SAMPLE_BYTES: u64 = std::mem::size_of::<Sample>() as u64;
 /// The device buffer of samples that the splat pipeline reads at instance rate.
 #[derive(Debug)]
 pub struct SampleBuffer {
-    buffer: wgpu::Buffer,
-    belt: StagingBelt,
-    capacity: usize,
-    len: usize,
-    reallocations: usize,
+    inner: StreamedBuffer,
 }
 
 /// The capacity that [`SampleBuffer`] chooses for `count` samples when it currently
@@ -59,65 +56,43 @@ pub fn max_samples(device: &wgpu::Device) -> usize {
     }
 }
 
-/// A device buffer rewritten every frame through a staging belt: what it is for
-/// (labels and error texts), its size and limit, and its usages.
+/// What a [`StreamedBuffer`] is for (labels and error texts), the size of one item,
+/// the largest size the device allows for its use, and its usages.
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct Streamed {
     /// wgpu label.
     pub label: &'static str,
     /// The limit's name in a [`GpuError::Limit`].
     pub what: &'static str,
-    /// The operation in a [`GpuError::Device`].
+    /// The operation in a [`GpuError::Device`] when allocating.
     pub operation: &'static str,
-    /// Size in bytes.
-    pub bytes: u64,
-    /// The largest size the device allows for this use.
+    /// Bytes per item.
+    pub item_bytes: u64,
+    /// The largest buffer size the device allows for this use, bytes.
     pub limit: u64,
-    /// Usages (`COPY_DST` is needed for the belt's copies).
+    /// Usages (`COPY_DST` is added for the belt's copies).
     pub usage: wgpu::BufferUsages,
 }
 
-/// Runs, without blocking, the callbacks of staging chunks whose copies have finished,
-/// so that they return to their belts instead of new ones being allocated.
-pub(crate) fn recycle_staging(device: &wgpu::Device) -> Result<(), GpuError> {
-    device
-        .poll(wgpu::PollType::Poll)
-        .map(|_| ())
-        .map_err(|source| GpuError::Poll {
-            operation: "recycling staging memory",
-            source,
-        })
-}
-
-/// Allocates a [`Streamed`] buffer and a staging belt whose chunk holds a whole frame's
-/// upload (a new belt per size drops chunks too small for the new size; wgpu frees them
-/// once the GPU is done), or a typed error for a size over the limit.
-pub(crate) fn allocate_streamed(
-    device: &wgpu::Device,
+/// A device buffer of items rewritten every frame through its own staging belt, with
+/// the capacity policy of the module documentation: the sample buffer and the sites
+/// buffer of the expansion pass.
+#[derive(Debug)]
+pub(crate) struct StreamedBuffer {
     spec: Streamed,
-) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
-    if spec.bytes > spec.limit {
-        return Err(GpuError::Limit {
-            what: spec.what,
-            requested: spec.bytes,
-            limit: spec.limit,
-        });
-    }
-    let buffer = scoped(device, spec.operation, || {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(spec.label),
-            size: spec.bytes,
-            usage: spec.usage,
-            mapped_at_creation: false,
-        })
-    })?;
-    Ok((buffer, StagingBelt::new(device.clone(), spec.bytes)))
+    buffer: wgpu::Buffer,
+    belt: StagingBelt,
+    capacity: usize,
+    len: usize,
+    reallocations: usize,
 }
 
-impl SampleBuffer {
-    /// An empty buffer of [`MIN_CAPACITY`] samples.
-    pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
-        let (buffer, belt) = Self::allocate(device, MIN_CAPACITY)?;
+impl StreamedBuffer {
+    /// An empty buffer of [`MIN_CAPACITY`] items.
+    pub(crate) fn new(device: &wgpu::Device, spec: Streamed) -> Result<Self, GpuError> {
+        let (buffer, belt) = Self::allocate(device, &spec, MIN_CAPACITY)?;
         Ok(Self {
+            spec,
             buffer,
             belt,
             capacity: MIN_CAPACITY,
@@ -126,24 +101,108 @@ impl SampleBuffer {
         })
     }
 
+    /// A buffer of `capacity` items and a staging belt whose chunk holds a whole
+    /// frame's upload (a new belt per capacity drops chunks too small for the new size;
+    /// wgpu frees them once the GPU is done), or a typed error over the limit.
     fn allocate(
         device: &wgpu::Device,
+        spec: &Streamed,
         capacity: usize,
     ) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
-        allocate_streamed(
-            device,
-            Streamed {
-                label: "strata samples",
-                what: "sample buffer size (bytes)",
-                operation: "allocating the sample buffer",
-                bytes: capacity as u64 * SAMPLE_BYTES,
-                limit: device.limits().max_buffer_size,
-                usage: wgpu::BufferUsages::VERTEX
-                    | wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-            },
-        )
+        let bytes = capacity as u64 * spec.item_bytes;
+        if bytes > spec.limit {
+            return Err(GpuError::Limit {
+                what: spec.what,
+                requested: bytes,
+                limit: spec.limit,
+            });
+        }
+        let buffer = scoped(device, spec.operation, || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(spec.label),
+                size: bytes,
+                usage: spec.usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })?;
+        Ok((buffer, StagingBelt::new(device.clone(), bytes)))
+    }
+
+    /// Makes the buffer hold `len` items without writing them, reallocating first when
+    /// the capacity policy says so (a reallocated buffer's contents are undefined).
+    pub(crate) fn resize(&mut self, device: &wgpu::Device, len: usize) -> Result<(), GpuError> {
+        let capacity = next_capacity(self.capacity, len);
+        if capacity != self.capacity {
+            let (buffer, belt) = Self::allocate(device, &self.spec, capacity)?;
+            self.buffer = buffer;
+            self.belt = belt;
+            self.capacity = capacity;
+            self.reallocations += 1;
+        }
+        self.len = len;
+        Ok(())
+    }
+
+    /// Resizes to `items.len()` items and records their copy into `encoder`, after
+    /// recycling staging chunks whose copies have finished (without blocking). `false`
+    /// when there is nothing to copy. Call [`submit`](Self::submit) with the encoder.
+    pub(crate) fn write<T: bytemuck::Pod>(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        items: &[T],
+    ) -> Result<bool, GpuError> {
+        debug_assert_eq!(std::mem::size_of::<T>() as u64, self.spec.item_bytes);
+        self.resize(device, items.len())?;
+        let Some(size) = wgpu::BufferSize::new(self.bytes()) else {
+            return Ok(false);
+        };
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|source| GpuError::Poll {
+                operation: "recycling staging memory",
+                source,
+            })?;
+        let mut view = self.belt.write_buffer(encoder, &self.buffer, 0, size);
+        view.copy_from_slice(bytemuck::cast_slice(items));
+        Ok(true)
+    }
+
+    /// Submits `encoder` (holding this buffer's copy) and returns the staging chunks
+    /// to the ring once the GPU has consumed them.
+    pub(crate) fn submit(&mut self, queue: &wgpu::Queue, encoder: wgpu::CommandEncoder) {
+        self.belt.finish();
+        queue.submit([encoder.finish()]);
+        self.belt.recall();
+    }
+
+    /// The device buffer (`capacity` items; the first `len` are current).
+    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// Bytes of the current items.
+    pub(crate) fn bytes(&self) -> u64 {
+        self.len as u64 * self.spec.item_bytes
+    }
+}
+
+impl SampleBuffer {
+    /// An empty buffer of [`MIN_CAPACITY`] samples.
+    pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
+        let spec = Streamed {
+            label: "strata samples",
+            what: "sample buffer size (bytes)",
+            operation: "allocating the sample buffer",
+            item_bytes: SAMPLE_BYTES,
+            limit: device.limits().max_buffer_size,
+            usage: wgpu::BufferUsages::VERTEX
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC,
+        };
+        Ok(Self {
+            inner: StreamedBuffer::new(device, spec)?,
+        })
     }
 
     /// Replaces the contents with `samples`, growing or shrinking the buffer first when
@@ -155,23 +214,15 @@ impl SampleBuffer {
         queue: &wgpu::Queue,
         samples: &[Sample],
     ) -> Result<(), GpuError> {
-        self.resize(device, samples.len())?;
-        let Some(size) = wgpu::BufferSize::new(samples.len() as u64 * SAMPLE_BYTES) else {
-            return Ok(());
-        };
-        recycle_staging(device)?;
         scoped(device, "uploading samples", || {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("strata sample upload"),
             });
-            {
-                let mut view = self.belt.write_buffer(&mut encoder, &self.buffer, 0, size);
-                view.copy_from_slice(bytemuck::cast_slice(samples));
+            if self.inner.write(device, &mut encoder, samples)? {
+                self.inner.submit(queue, encoder);
             }
-            self.belt.finish();
-            queue.submit([encoder.finish()]);
-            self.belt.recall();
-        })
+            Ok(())
+        })?
     }
 
     /// Makes the buffer hold `len` samples without writing them, growing or shrinking
@@ -179,42 +230,33 @@ impl SampleBuffer {
     /// undefined): for a GPU pass that writes the samples itself, such as
     /// [`SiteExpander::expand`](super::expand::SiteExpander::expand).
     pub fn resize(&mut self, device: &wgpu::Device, len: usize) -> Result<(), GpuError> {
-        let capacity = next_capacity(self.capacity, len);
-        if capacity != self.capacity {
-            let (buffer, belt) = Self::allocate(device, capacity)?;
-            self.buffer = buffer;
-            self.belt = belt;
-            self.capacity = capacity;
-            self.reallocations += 1;
-        }
-        self.len = len;
-        Ok(())
+        self.inner.resize(device, len)
     }
 
     /// The device buffer (capacity samples; the first [`len`](Self::len) are current).
     pub fn buffer(&self) -> &wgpu::Buffer {
-        &self.buffer
+        self.inner.buffer()
     }
 
     /// Samples held: those of the last [`upload`](Self::upload) or
     /// [`resize`](Self::resize).
     pub fn len(&self) -> usize {
-        self.len
+        self.inner.len
     }
 
     /// Whether the last upload was empty.
     pub fn is_empty(&self) -> bool {
-        self.len == 0
+        self.inner.len == 0
     }
 
     /// Samples the buffer can hold without reallocating.
     pub fn capacity(&self) -> usize {
-        self.capacity
+        self.inner.capacity
     }
 
     /// How many times the buffer was reallocated (grown or shrunk) since creation.
     pub fn reallocations(&self) -> usize {
-        self.reallocations
+        self.inner.reallocations
     }
 
     /// Copies the current samples back from the GPU (waits for the device; for tests and
@@ -224,7 +266,7 @@ impl SampleBuffer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<Sample>, GpuError> {
-        let bytes = read_buffer(device, queue, &self.buffer, self.len as u64 * SAMPLE_BYTES)?;
+        let bytes = read_buffer(device, queue, self.inner.buffer(), self.inner.bytes())?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 }

@@ -10,9 +10,9 @@
 //! [`Sampler::sample_into`] on whatever adapter wgpu finds).
 
 use strata_engine::sample::{SampleSite, Sampler};
-use wgpu::util::{DeviceExt, StagingBelt};
+use wgpu::util::DeviceExt;
 
-use super::buffers::{SampleBuffer, Streamed, allocate_streamed, next_capacity, recycle_staging};
+use super::buffers::{SampleBuffer, Streamed, StreamedBuffer};
 use super::context::{GpuError, scoped};
 use super::shaders;
 
@@ -56,9 +56,7 @@ pub struct SiteExpander {
     mesh: wgpu::Buffer,
     offsets: ExpandParams,
     total_measure: f64,
-    sites: wgpu::Buffer,
-    belt: StagingBelt,
-    capacity: usize,
+    sites: StreamedBuffer,
 }
 
 /// The mesh table of `sampler` as 32-bit words (layout: `ExpandParams`), and the
@@ -105,7 +103,20 @@ impl SiteExpander {
                 limit,
             });
         }
-        let (sites, belt) = allocate_sites(device, super::buffers::MIN_CAPACITY)?;
+        let limits = device.limits();
+        let sites = StreamedBuffer::new(
+            device,
+            Streamed {
+                label: "strata sites",
+                what: "sites buffer size (bytes)",
+                operation: "allocating the sites buffer",
+                item_bytes: SITE_BYTES,
+                limit: limits
+                    .max_buffer_size
+                    .min(limits.max_storage_buffer_binding_size),
+                usage: wgpu::BufferUsages::STORAGE,
+            },
+        )?;
         scoped(device, "building the sample expansion pass", || {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("strata expand"),
@@ -173,8 +184,6 @@ impl SiteExpander {
                 offsets,
                 total_measure: sampler.total_measure(),
                 sites,
-                belt,
-                capacity: super::buffers::MIN_CAPACITY,
             }
         })
     }
@@ -194,16 +203,9 @@ impl SiteExpander {
     ) -> Result<(), GpuError> {
         let n = sites.len();
         samples.resize(device, n)?;
-        let capacity = next_capacity(self.capacity, n);
-        if capacity != self.capacity {
-            let (buffer, belt) = allocate_sites(device, capacity)?;
-            self.sites = buffer;
-            self.belt = belt;
-            self.capacity = capacity;
-        }
-        let Some(size) = wgpu::BufferSize::new(n as u64 * SITE_BYTES) else {
+        if n == 0 {
             return Ok(());
-        };
+        }
         let count = u32::try_from(n).map_err(|_| GpuError::Limit {
             what: "sites per expansion",
             requested: n as u64,
@@ -227,8 +229,11 @@ impl SiteExpander {
             row: gx * WORKGROUP,
             ..self.offsets
         };
-        recycle_staging(device)?;
         scoped(device, "expanding sample sites", || {
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("strata expand"),
+            });
+            self.sites.write(device, &mut encoder, sites)?;
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("strata expand"),
@@ -241,9 +246,9 @@ impl SiteExpander {
                     wgpu::BindGroupEntry {
                         binding: 1,
                         resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &self.sites,
+                            buffer: self.sites.buffer(),
                             offset: 0,
-                            size: Some(size),
+                            size: wgpu::BufferSize::new(self.sites.bytes()),
                         }),
                     },
                     wgpu::BindGroupEntry {
@@ -260,13 +265,6 @@ impl SiteExpander {
                     },
                 ],
             });
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("strata expand"),
-            });
-            {
-                let mut view = self.belt.write_buffer(&mut encoder, &self.sites, 0, size);
-                view.copy_from_slice(bytemuck::cast_slice(sites));
-            }
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("strata expand"),
@@ -276,32 +274,10 @@ impl SiteExpander {
                 pass.set_bind_group(1, &bind_group, &[]);
                 pass.dispatch_workgroups(gx, gy, 1);
             }
-            self.belt.finish();
-            queue.submit([encoder.finish()]);
-            self.belt.recall();
-        })
+            self.sites.submit(queue, encoder);
+            Ok(())
+        })?
     }
-}
-
-/// A sites buffer of `capacity` sites and its staging ring.
-fn allocate_sites(
-    device: &wgpu::Device,
-    capacity: usize,
-) -> Result<(wgpu::Buffer, StagingBelt), GpuError> {
-    let limits = device.limits();
-    allocate_streamed(
-        device,
-        Streamed {
-            label: "strata sites",
-            what: "sites buffer size (bytes)",
-            operation: "allocating the sites buffer",
-            bytes: capacity as u64 * SITE_BYTES,
-            limit: limits
-                .max_buffer_size
-                .min(limits.max_storage_buffer_binding_size),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        },
-    )
 }
 
 #[cfg(test)]

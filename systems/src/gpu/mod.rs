@@ -3,7 +3,7 @@
 //!
 //! - [`context`]: adapter and device with typed errors; error scopes.
 //! - [`layout`]: the Pod structs shared with WGSL and their vertex layouts.
-//! - [`buffers`]: the growable sample buffer with a staging ring.
+//! - [`buffers`]: the growable sample (and sites) buffers with their staging rings.
 //! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
 //! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
 //! - [`headless`]: offscreen target, readback, PNG.
