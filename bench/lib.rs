@@ -15,19 +15,15 @@ pub const SHARED_MESHES: [&str; 8] = [
 ];
 
 /// The shared test meshes: `STRATA_MESH_DIR`, else `../shared/meshes` beside the
-/// project; an error naming the folder where it is absent.
+/// project (see [`strata_engine::io::shared_mesh_dir`]); an error naming the folder
+/// where it is absent.
 pub fn shared_mesh_dir() -> Result<PathBuf, String> {
-    let dir = std::env::var_os("STRATA_MESH_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"));
-    if dir.is_dir() {
-        Ok(dir)
-    } else {
-        Err(format!(
+    strata_engine::io::shared_mesh_dir().ok_or_else(|| {
+        format!(
             "{}: mesh folder not found (set STRATA_MESH_DIR)",
-            dir.display()
-        ))
-    }
+            strata_engine::io::shared_mesh_location().display()
+        )
+    })
 }
 
 /// The first command-line argument as a repeat count, or `default`.

@@ -18,13 +18,10 @@ pub const SHARED_MESHES: [&str; 8] = [
 /// The folder of real test meshes (`shared/meshes` beside the project, see its
 /// README), or `None` where it is absent so that tests can skip.
 ///
-/// `STRATA_MESH_DIR` overrides the default `<workspace>/../shared/meshes`.
+/// `STRATA_MESH_DIR` overrides the default `<workspace>/../shared/meshes`; see
+/// [`strata_engine::io::shared_mesh_dir`], which this forwards to.
 pub fn shared_mesh_dir() -> Option<PathBuf> {
-    let dir = match std::env::var_os("STRATA_MESH_DIR") {
-        Some(dir) => PathBuf::from(dir),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/meshes"),
-    };
-    dir.is_dir().then_some(dir)
+    strata_engine::io::shared_mesh_dir()
 }
 
 /// The project's own small mesh corpus, `tests/data/meshes`.

@@ -29,7 +29,7 @@
 
 use glam::{DMat3, DVec3};
 
-use super::spec::eigenvalues;
+use super::params::eigenvalues;
 use super::{FieldError, TensorField, eigen_in_plane, outer};
 use crate::mesh::TriMesh;
 

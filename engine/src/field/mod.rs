@@ -19,6 +19,7 @@ mod curvature;
 mod eigen;
 mod error;
 mod file;
+mod params;
 mod spec;
 mod warp;
 

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
+use super::params::{eigenvalues, finite_point, invalid, positive};
 use super::warp::PlanarWarp;
 use super::{FieldError, TensorField};
 use crate::mesh::TriMesh;
@@ -453,34 +454,6 @@ impl FieldSpec {
                 curvature::sampling_field(mesh, &k, &settings)
             }
         }
-    }
-}
-
-/// Eigenvalues `(l1, l2)` for density `sqrt(l1 l2)` and spacing ratio `sqrt(l1 / l2)`.
-pub(crate) fn eigenvalues(density: f64, anisotropy: f64) -> [f64; 2] {
-    [density * anisotropy, density / anisotropy]
-}
-
-pub(crate) fn invalid(parameter: &'static str, value: f64, expected: &'static str) -> FieldError {
-    FieldError::InvalidParameter {
-        parameter,
-        value,
-        expected,
-    }
-}
-
-pub(crate) fn finite_point(parameter: &'static str, p: [f64; 2]) -> Result<(), FieldError> {
-    match p.into_iter().find(|c| !c.is_finite()) {
-        Some(c) => Err(invalid(parameter, c, "finite coordinates")),
-        None => Ok(()),
-    }
-}
-
-pub(crate) fn positive(parameter: &'static str, value: f64) -> Result<(), FieldError> {
-    if value > 0.0 && value.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(parameter, value, "a finite value > 0"))
     }
 }
 

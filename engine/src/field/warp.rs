@@ -5,7 +5,7 @@
 
 use glam::{DMat2, DMat3, DVec2};
 
-use super::spec::{finite_point, invalid};
+use super::params::{finite_point, invalid};
 use super::{FieldError, TensorField};
 use crate::mesh::TriMesh;
 

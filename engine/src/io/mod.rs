@@ -17,6 +17,8 @@
 //! - Writers ([`write_mesh_ply`], [`write_samples_ply`], [`write_samples_csv`]) write
 //!   to a temporary file beside the target and rename it, so a reader never sees half
 //!   a file; the `_to` variants write to any [`Write`](std::io::Write).
+//! - The shared mesh corpus ([`shared_mesh_dir`]): `$STRATA_MESH_DIR`, else
+//!   `<workspace>/../shared/meshes`, for tests and benchmarks.
 //!
 //! Errors say where: the file, and the line (text), or the element and record
 //! (binary). Content that makes no valid mesh (an out-of-range or negative index, a
@@ -28,6 +30,7 @@
 mod obj;
 mod ply;
 mod samples;
+mod shared;
 mod write;
 
 use std::path::Path;
@@ -39,6 +42,9 @@ use crate::mesh::{MeshError, TriMesh};
 use crate::sample::Sample;
 
 pub use samples::{SAMPLE_COLUMNS, parse_samples_ply, read_samples_ply};
+#[cfg(test)]
+pub(crate) use shared::shared_mesh;
+pub use shared::{MESH_DIR_VAR, default_shared_mesh_dir, shared_mesh_dir, shared_mesh_location};
 pub use write::{
     write_mesh_ply, write_mesh_ply_to, write_samples_csv, write_samples_csv_to, write_samples_ply,
     write_samples_ply_to,

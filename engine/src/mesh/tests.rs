@@ -963,3 +963,76 @@ proptest! {
         check_soup(&s);
     }
 }
+
+/// FNV-1a over a stream of 64-bit words.
+fn fnv1a(words: impl IntoIterator<Item = u64>) -> u64 {
+    words.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, w| {
+        w.to_le_bytes()
+            .into_iter()
+            .fold(h, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
+    })
+}
+
+/// Vertex count, face count, a hash of the triangles and a hash of the positions.
+/// `exact` hashes the positions' bits; otherwise they are rounded to multiples of
+/// 2^-32 first (for shapes built with `sin`/`cos`, whose last bit may differ between
+/// platform math libraries).
+fn shape_fingerprint(m: &TriMesh, exact: bool) -> (usize, usize, u64, u64) {
+    let triangles = fnv1a(m.triangles().iter().flatten().map(|&i| u64::from(i)));
+    let coordinates = m.positions().iter().flat_map(|p| p.to_array());
+    let positions = if exact {
+        fnv1a(coordinates.map(f64::to_bits))
+    } else {
+        fnv1a(coordinates.map(|c| (c * 2f64.powi(32)).round() as i64 as u64))
+    };
+    (m.vertex_count(), m.face_count(), triangles, positions)
+}
+
+/// Pins every shape's output (vertex order, triangle order and positions: to the bit for
+/// the shapes built with exact IEEE operations only, to 2^-32 for the cylinder and the
+/// torus), so that moving or restructuring the generators cannot change a mesh
+/// unnoticed.
+#[test]
+fn shapes_output_is_pinned() {
+    let cases = [
+        (
+            "plane",
+            shapes::plane(2.0, 3),
+            true,
+            (16, 18, 8768988574591504554, 13630828428892066725),
+        ),
+        (
+            "sphere",
+            shapes::sphere(1.5, 3),
+            true,
+            (92, 180, 5007315612167448933, 9237639699685329993),
+        ),
+        (
+            "cylinder",
+            shapes::cylinder(1.0, 3.0, 7),
+            false,
+            (35, 56, 3138054801315937537, 7695830547614967733),
+        ),
+        (
+            "torus",
+            shapes::torus(2.0, 0.5, 5),
+            false,
+            (120, 240, 12355808689526310693, 6971154538144274253),
+        ),
+        (
+            "genus2",
+            shapes::genus2(2.0, 1),
+            true,
+            (310, 624, 8550149304235969809, 7403005205942891305),
+        ),
+    ];
+    let mut changed = Vec::new();
+    for (name, mesh, exact, expected) in cases {
+        let mesh = mesh.expect(name);
+        let got = shape_fingerprint(&mesh, exact);
+        if got != expected {
+            changed.push((name, got));
+        }
+    }
+    assert!(changed.is_empty(), "output changed: {changed:?}");
+}

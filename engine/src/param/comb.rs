@@ -12,7 +12,7 @@ use crate::field::{TensorField, eigen_in_plane, tangent_frame};
 use crate::mesh::{NONE, TriMesh};
 
 use super::patch::Patch;
-use super::solve::solve_spd;
+use super::spd::solve_spd;
 use super::{ParamError, ParamOptions};
 
 /// Spacing ratios are capped here when averaging (a degenerate face tensor would

@@ -48,6 +48,7 @@ mod comb;
 mod patch;
 pub mod predicates;
 mod solve;
+mod spd;
 mod validity;
 
 pub use validity::{boundary_edges, boundary_overlaps, count_flipped};

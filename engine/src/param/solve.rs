@@ -10,9 +10,6 @@
 //! module header.
 
 use faer::Mat;
-use faer::Side;
-use faer::prelude::*;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use glam::{DVec2, DVec3};
 
@@ -21,6 +18,7 @@ use crate::mesh::TriMesh;
 use super::ParamError;
 use super::comb::Frames;
 use super::patch::Patch;
+use super::spd::solve_spd;
 
 /// Gradients (in the face's plane) of the three hat functions of a triangle with unit
 /// normal `n` and area `area`: `grad phi_i = n x (p_{i+2} - p_{i+1}) / (2 area)`.
@@ -73,26 +71,6 @@ pub(crate) fn assemble(
     let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(unknowns, unknowns, &triplets)
         .map_err(|_| ParamError::Solver { stage: "assembly" })?;
     Ok((matrix, rhs))
-}
-
-/// Solves `A x = rhs` for a sparse symmetric positive definite `A` given by its lower
-/// triangle (sparse Cholesky: AMD ordering, symbolic then numeric factorization, one
-/// solve for all right-hand-side columns; sequential).
-pub(crate) fn solve_spd(
-    matrix: &SparseColMat<usize, f64>,
-    mut rhs: Mat<f64>,
-) -> Result<Mat<f64>, ParamError> {
-    let symbolic =
-        SymbolicLlt::try_new(matrix.symbolic(), Side::Lower).map_err(|_| ParamError::Solver {
-            stage: "symbolic factorization",
-        })?;
-    let llt = Llt::try_new_with_symbolic(symbolic, matrix.as_ref(), Side::Lower).map_err(|_| {
-        ParamError::Solver {
-            stage: "numeric factorization (matrix not positive definite)",
-        }
-    })?;
-    llt.solve_in_place(rhs.as_mut());
-    Ok(rhs)
 }
 
 /// Solves for `(u, v)` per local vertex.

@@ -473,8 +473,9 @@ mod tests {
 
     use super::*;
     use crate::field::FieldSpec;
+    use crate::io::shared_mesh;
     use crate::mesh::shapes;
-    use crate::segment::singularity::{detect_singularities, shared_mesh};
+    use crate::segment::singularity::detect_singularities;
 
     /// Unit direction of edge `e` from its first to its second vertex.
     fn edge_direction(mesh: &TriMesh, e: u32) -> DVec3 {

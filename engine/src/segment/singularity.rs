@@ -331,23 +331,6 @@ pub fn isotropic_faces(mesh: &TriMesh, field: &TensorField, max_coherence: f64) 
         .collect()
 }
 
-/// Loads a mesh of the shared corpus (`$STRATA_MESH_DIR`, else `../shared/meshes` beside
-/// the workspace), or prints a note and returns `None` where it is absent.
-#[cfg(test)]
-pub(crate) fn shared_mesh(name: &str) -> Option<TriMesh> {
-    let dir = std::env::var_os("STRATA_MESH_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes"))
-        });
-    let path = dir.join(name);
-    if !path.exists() {
-        println!("note: {} absent, skipped", path.display());
-        return None;
-    }
-    Some(crate::io::load(&path).expect("shared mesh loads"))
-}
-
 #[cfg(test)]
 mod tests {
     use std::time::Instant;
@@ -356,6 +339,7 @@ mod tests {
 
     use super::*;
     use crate::field::FieldSpec;
+    use crate::io::shared_mesh;
     use crate::mesh::shapes;
     use crate::rng::Rng;
 

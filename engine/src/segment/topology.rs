@@ -476,9 +476,9 @@ mod tests {
 
     use super::*;
     use crate::field::FieldSpec;
+    use crate::io::shared_mesh;
     use crate::mesh::shapes;
     use crate::segment::paths::field_edge_costs;
-    use crate::segment::singularity::shared_mesh;
 
     fn all_faces(mesh: &TriMesh) -> Vec<u32> {
         (0..mesh.face_count() as u32).collect()
