@@ -18,6 +18,12 @@
 //! - [`dda`]: differential domain analysis of non-uniform, anisotropic and surface
 //!   samplings (section 7.5).
 //! - [`alignment`]: per-face angle between the field and the parameter axes (7.3.1).
+//! - [`strata`]: where a sampler's 1D strata lie, how compact they are and the count
+//!   variance they put into boxes (7.3.2, 7.4).
+//! - [`seed_ratio`]: geometric mean ratio of two curves over N with its jackknife
+//!   error over the seeds (7.3.2).
+//! - [`radial_band`]: a radial profile over a frequency band against a reference
+//!   (7.5).
 //!
 //! Points outside the unit square (or NaN) are a caller error: the `try_` functions
 //! return [`AnalysisError`], their twins panic with the same message.
@@ -27,7 +33,10 @@ pub mod baseline;
 pub mod dda;
 pub mod discrepancy;
 pub mod mesh_baseline;
+pub mod radial_band;
+pub mod seed_ratio;
 pub mod spectrum;
+pub mod strata;
 
 pub use baseline::{jittered_grid, planar_samples, poisson_disk, uniform_random};
 pub use discrepancy::{
@@ -88,6 +97,9 @@ pub enum AnalysisError {
         /// Number of seeds given.
         seeds: usize,
     },
+    /// [`strata::strata_variance`] was given no boxes to average over.
+    #[error("the strata's count variance needs at least one box")]
+    NoBoxes,
 }
 
 /// Checks that every point is finite and lies in the closed unit square `[0, 1]^2`.
