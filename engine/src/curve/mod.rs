@@ -7,12 +7,21 @@
 //! each, their cumulative sum, and what is needed to map a 1D curve parameter back to
 //! a point and a triangle. Build cost: O(cells x triangles per cell).
 
-mod cells;
+mod boundary;
 mod clip;
 pub mod hilbert;
+mod key;
+mod locate;
+mod pieces;
+mod refine;
+mod segment_curve;
 
-pub use cells::{CellKey, CurveDomain, DomainPoint, LeafScratch, SegmentCurve, barycentric};
 pub use clip::{Poly, clip_triangle};
+pub use key::CellKey;
+pub use locate::barycentric;
+pub use pieces::LeafScratch;
+pub use refine::CurveDomain;
+pub use segment_curve::{DomainPoint, SegmentCurve};
 
 /// Per triangle, the density per unit of parameter area at its corners: the surface
 /// density at each corner times `surface area / parameter area` of the triangle, so
