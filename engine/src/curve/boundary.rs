@@ -44,8 +44,6 @@ impl SegmentCurve {
     /// measure of a piece is the exact integral of its triangle's affine density
     /// (`g . moment + h area`). The target measure is carried down as in
     /// [`descend_partial`](Self::descend_partial), which this equals up to round-off.
-    // Out of line: boundary leaves hold a few percent of the samples, and the full-leaf
-    // path stays small (fewer registers saved per sample).
     #[inline(never)]
     pub(super) fn descend_pieces(
         &self,

@@ -51,8 +51,7 @@ impl SegmentCurve {
     /// As [`point_in_leaf_to`](Self::point_in_leaf_to), with the scratch memory of the
     /// boundary-leaf descent given by the caller (a few kilobytes that would otherwise
     /// be initialised per call; reuse one per thread or chunk of work). The result does
-    /// not depend on the scratch's previous contents. Always inlined: it is the
-    /// sampler's per-sample path, compiled with the sampler's target features.
+    /// not depend on the scratch's previous contents.
     #[inline(always)]
     pub fn point_in_leaf_with(
         &self,
@@ -128,8 +127,8 @@ impl SegmentCurve {
         self.point_location_nearest(cands, uv)
     }
 
-    /// The rest of [`point_location`](Self::point_location), out of line (rare: a point
-    /// on an edge up to round-off): the candidate with the largest smallest barycentric
+    /// The rest of [`point_location`](Self::point_location) (rare: a point on an edge
+    /// up to round-off): the candidate with the largest smallest barycentric
     /// coordinate, and the point clamped onto it.
     #[inline(never)]
     fn point_location_nearest(&self, cands: &[u32], uv: DVec2) -> DomainPoint {
