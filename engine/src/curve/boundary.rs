@@ -45,21 +45,21 @@ impl SegmentCurve {
     /// (`g . moment + h area`). The target measure is carried down as in
     /// [`descend_partial`](Self::descend_partial), which this equals up to round-off.
     #[inline(never)]
-    pub(super) fn descend_pieces(
-        &self,
+    pub(super) fn descend_pieces<'a>(
+        &'a self,
         leaf: usize,
         key: CellKey,
         cands: &[u32],
         t: f64,
         levels: u32,
-        scratch: &mut LeafScratch,
+        scratch: &mut LeafScratch<'a>,
     ) -> DomainPoint {
         let mut lo = key.origin();
         let mut size = key.size();
         let mut state = key.state();
         let mut node_measure = self.cumulative[leaf + 1] - self.cumulative[leaf];
         let mut target = t * node_measure;
-        if levels == 0 && scratch.root_of != Some((self.id, leaf)) {
+        if levels == 0 && !scratch.holds(self, leaf) {
             // No descent and nothing cached (a leaf expecting at most one sample, the
             // usual boundary leaf at high counts): clip candidates only up to the piece
             // holding the target, the piece the cached path below picks from all of
@@ -72,13 +72,13 @@ impl SegmentCurve {
         // first cut (between its first two and last two children in curve order), kept
         // in the scratch for the next sample: consecutive values often fall in the same
         // boundary leaf.
-        if scratch.root_of != Some((self.id, leaf)) {
+        if !scratch.holds(self, leaf) {
             scratch.root.clear();
             for &tri in cands {
                 let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
                 scratch.root.add(self, tri, poly);
             }
-            scratch.root_of = Some((self.id, leaf));
+            scratch.root_of = Some((self, leaf));
             scratch.halves_ready = false;
         }
         if levels > 0 && !scratch.halves_ready {

@@ -51,14 +51,14 @@ impl SegmentCurve {
     /// As [`point_in_leaf_to`](Self::point_in_leaf_to), with the scratch memory of the
     /// boundary-leaf descent given by the caller (a few kilobytes that would otherwise
     /// be initialised per call; reuse one per thread or chunk of work). The result does
-    /// not depend on the scratch's previous contents.
+    /// not depend on the scratch's previous contents ([`LeafScratch`]'s contract).
     #[inline(always)]
-    pub fn point_in_leaf_with(
-        &self,
+    pub fn point_in_leaf_with<'a>(
+        &'a self,
         leaf: usize,
         t: f64,
         levels: u32,
-        scratch: &mut LeafScratch,
+        scratch: &mut LeafScratch<'a>,
     ) -> DomainPoint {
         let key = self.keys[leaf];
         if key.full() {

@@ -14,21 +14,79 @@ use super::segment_curve::SegmentCurve;
 pub(super) const PIECES: usize = 6;
 
 /// Scratch memory of the exact descent through boundary leaves
-/// ([`SegmentCurve::point_in_leaf_with`]).
+/// ([`SegmentCurve::point_in_leaf_with`]), with a cache of the last boundary leaf's
+/// candidate triangles clipped to it (consecutive values often fall in one leaf).
+///
+/// Contract: the cache is keyed by the leaf and by the curve it was filled for, which
+/// the scratch borrows for its lifetime `'a`. While the scratch exists that curve can
+/// be neither dropped, moved nor changed, so its address names it and no other curve
+/// can take that address. One scratch may therefore be reused across leaves and
+/// curves (any borrowed for `'a`) without being reset, and the points never depend on
+/// what it holds: a hit gives the points of a fresh scratch. A clone of a curve is
+/// another curve to the cache (a miss, the same points). There is no global state.
+///
+/// ```
+/// use glam::DVec2;
+/// use strata_engine::curve::{CurveDomain, CurveOptions, LeafScratch, SegmentCurve};
+///
+/// let options = CurveOptions { max_cell_share: 0.01, boundary_level: 4, ..Default::default() };
+/// let triangle = |uv: &[DVec2]| {
+///     let corner_density = &[[1.0, 5.0, 1.0]];
+///     let domain = CurveDomain { uv, triangles: &[[0, 1, 2]], corner_density };
+///     SegmentCurve::build(&domain, &options)
+/// };
+/// let a = triangle(&[DVec2::ZERO, DVec2::new(0.9, 0.1), DVec2::new(0.2, 0.8)])?;
+/// let b = triangle(&[DVec2::new(0.1, 0.0), DVec2::new(1.0, 0.3), DVec2::new(0.0, 0.9)])?;
+/// let boundary = |c: &SegmentCurve, i: usize| !c.cells()[i].full();
+/// let leaf = (0..a.cell_count().min(b.cell_count()))
+///     .find(|&i| boundary(&a, i) && boundary(&b, i))
+///     .expect("a boundary leaf in both");
+/// let mut scratch = LeafScratch::default();
+/// // The same leaf index in two curves, revisited: the cache tells them apart.
+/// for curve in [&a, &b, &a] {
+///     let fresh = curve.point_in_leaf_to(leaf, 0.3, 3);
+///     assert_eq!(curve.point_in_leaf_with(leaf, 0.3, 3, &mut scratch), fresh);
+/// }
+/// # Ok::<(), strata_engine::curve::CurveError>(())
+/// ```
+///
+/// The borrow is what makes the key sound: a scratch cannot outlive a curve it was
+/// filled for.
+///
+/// ```compile_fail,E0597
+/// # use glam::DVec2;
+/// # use strata_engine::curve::{CurveDomain, CurveOptions, LeafScratch, SegmentCurve};
+/// # let uv = [DVec2::ZERO, DVec2::new(0.9, 0.1), DVec2::new(0.2, 0.8)];
+/// # let domain = CurveDomain { uv: &uv, triangles: &[[0, 1, 2]], corner_density: &[[1.0; 3]] };
+/// let mut scratch = LeafScratch::default();
+/// {
+///     let curve = SegmentCurve::build(&domain, &CurveOptions::default()).expect("valid");
+///     curve.point_in_leaf_with(0, 0.5, 0, &mut scratch);
+/// } // `curve` dropped here while `scratch` still borrows it
+/// drop(scratch);
+/// ```
 #[derive(Clone)]
-pub struct LeafScratch {
+pub struct LeafScratch<'a> {
     pub(super) bufs: [PieceSet; 3],
-    /// The candidates of leaf `root_of.1` of the cells with id `root_of.0`, clipped to
-    /// the leaf.
+    /// The candidates of leaf `root_of.1` of curve `root_of.0`, clipped to the leaf.
     pub(super) root: PieceSet,
     /// `root` split by the leaf's first cut: below and above the midline.
     pub(super) halves: [PieceSet; 2],
     /// Whether `halves` holds the cut of `root`.
     pub(super) halves_ready: bool,
-    pub(super) root_of: Option<(u64, usize)>,
+    pub(super) root_of: Option<(&'a SegmentCurve, usize)>,
 }
 
-impl Default for LeafScratch {
+impl LeafScratch<'_> {
+    /// Whether `root` holds the candidates of leaf `leaf` of `curve`: the same curve
+    /// (by address, see the type's contract) and the same leaf.
+    #[inline]
+    pub(super) fn holds(&self, curve: &SegmentCurve, leaf: usize) -> bool {
+        matches!(self.root_of, Some((c, l)) if std::ptr::eq(c, curve) && l == leaf)
+    }
+}
+
+impl Default for LeafScratch<'_> {
     fn default() -> Self {
         Self {
             bufs: [PieceSet::EMPTY; 3],
@@ -40,7 +98,7 @@ impl Default for LeafScratch {
     }
 }
 
-impl std::fmt::Debug for LeafScratch {
+impl std::fmt::Debug for LeafScratch<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("LeafScratch")
     }

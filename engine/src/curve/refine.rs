@@ -13,7 +13,7 @@ use glam::DVec2;
 use super::clip::clip_triangle;
 use super::hilbert::State;
 use super::key::CellKey;
-use super::segment_curve::{NEXT_CURVE_ID, SegmentCurve};
+use super::segment_curve::SegmentCurve;
 use super::{CurveError, CurveOptions};
 
 /// A parameter domain in the unit square: triangles in `uv` with a density per corner.
@@ -56,7 +56,6 @@ impl SegmentCurve {
             triangles: domain.triangles.to_vec(),
             density_planes,
             options: *options,
-            id: NEXT_CURVE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         };
         let total: f64 = (0..curve.triangles.len())
             .map(|t| curve.triangle_measure(t))

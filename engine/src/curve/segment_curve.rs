@@ -29,14 +29,7 @@ pub struct SegmentCurve {
     /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
     pub(super) density_planes: Vec<[f64; 3]>,
     pub(super) options: CurveOptions,
-    /// Identifies these cells for the leaf cache of [`LeafScratch`]: unique per build
-    /// (a clone shares it, and the cells never change after the build).
-    pub(super) id: u64,
 }
-
-/// Source of [`SegmentCurve`] ids.
-pub(super) static NEXT_CURVE_ID: std::sync::atomic::AtomicU64 =
-    std::sync::atomic::AtomicU64::new(0);
 
 /// A point of the domain: its triangle (index into the domain's triangles), parameter
 /// position and barycentric coordinates in that triangle.
