@@ -386,46 +386,6 @@ fn splitting_descent_matches_the_clipping_descent() {
 }
 
 #[test]
-fn cell_size_is_the_power_of_two() {
-    for level in 0..=30u8 {
-        let (x, y) = if level >= 2 {
-            (3, 1)
-        } else {
-            (level as u32, 0)
-        };
-        let key = CellKey::new(x, y, level, hilbert::State::ROOT, true);
-        assert_eq!(key.size(), 1.0 / (1u64 << level) as f64, "level {level}");
-        assert_eq!(key.origin(), DVec2::new(x as f64, y as f64) * key.size());
-    }
-}
-
-#[test]
-fn cell_keys_pack_every_field() {
-    let mut rng = crate::rng::Rng::new(11, 0);
-    for level in 0..=CellKey::MAX_LEVEL {
-        for state in 0..4u8 {
-            for full in [false, true] {
-                let side = 1u64 << level;
-                let corners = [(0, 0), (side - 1, side - 1), (side - 1, 0), (0, side - 1)];
-                let random = (
-                    (rng.next_f64() * side as f64) as u64 % side,
-                    (rng.next_f64() * side as f64) as u64 % side,
-                );
-                for (x, y) in corners.into_iter().chain([random]) {
-                    let key = CellKey::new(x as u32, y as u32, level, hilbert::State(state), full);
-                    assert_eq!(
-                        (key.x(), key.y(), key.level(), key.state(), key.full()),
-                        (x as u32, y as u32, level, hilbert::State(state), full),
-                        "{key:?}"
-                    );
-                }
-            }
-        }
-    }
-    assert_eq!(std::mem::size_of::<CellKey>(), 8);
-}
-
-#[test]
 fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
     // The scratch caches the last boundary leaf's clipped candidates: interleaving two
     // curves (same leaf indices, different triangles) and revisiting leaves must give

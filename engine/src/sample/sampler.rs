@@ -424,6 +424,8 @@ impl Sampler {
         // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
+        // One scratch for the chunk, shared by its segments: its leaf cache knows which
+        // curve it was filled for (see `LeafScratch`).
         let mut scratch = LeafScratch::default();
         for (i, count) in Allocation::new(n, groups.measures.iter().copied()) {
             let (grp_lo, grp_hi) = (first, first + count);

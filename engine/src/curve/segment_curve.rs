@@ -1,0 +1,85 @@
+//! The [`SegmentCurve`] type: the adaptive Hilbert cells of one segment (leaf keys in
+//! curve order, cumulative measures, candidate triangles per leaf, the domain's
+//! triangles and affine densities) and its plain accessors.
+//!
+//! Built by [`SegmentCurve::build`] (`refine.rs`); values are mapped to points by
+//! `locate.rs` (full leaves) and `boundary.rs` (boundary leaves). Memory:
+//! [`SegmentCurve::heap_bytes`].
+
+use glam::DVec2;
+
+use super::CurveOptions;
+use super::key::CellKey;
+
+/// The adaptive Hilbert cells of one parameterized segment.
+///
+/// Leaves are stored in Hilbert order with the cumulative measure, so a 1D value in
+/// `[0, measure)` maps to a leaf by search and then to a point inside it by the
+/// continuous Hilbert map ([`SegmentCurve::locate`]).
+#[derive(Clone, Debug)]
+pub struct SegmentCurve {
+    pub(super) keys: Vec<CellKey>,
+    /// `cumulative[i]` is the measure of leaves `0..i`; length `keys.len() + 1`.
+    pub(super) cumulative: Vec<f64>,
+    /// Per leaf, a range into `candidates`: the triangles overlapping it.
+    pub(super) candidate_offsets: Vec<u32>,
+    pub(super) candidates: Vec<u32>,
+    pub(super) uv: Vec<DVec2>,
+    pub(super) triangles: Vec<[u32; 3]>,
+    /// Per triangle, the density as an affine function `g . p + h`: `[gx, gy, h]`.
+    pub(super) density_planes: Vec<[f64; 3]>,
+    pub(super) options: CurveOptions,
+}
+
+/// A point of the domain: its triangle (index into the domain's triangles), parameter
+/// position and barycentric coordinates in that triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DomainPoint {
+    /// Triangle index in the domain.
+    pub triangle: u32,
+    /// Position in the unit square.
+    pub uv: DVec2,
+    /// Barycentric coordinates (non-negative, summing to 1).
+    pub bary: [f64; 3],
+}
+
+impl SegmentCurve {
+    pub(super) fn triangle_corners(&self, t: usize) -> [DVec2; 3] {
+        self.triangles[t].map(|v| self.uv[v as usize])
+    }
+
+    /// Total measure (integral of density over the domain).
+    pub fn measure(&self) -> f64 {
+        *self.cumulative.last().unwrap_or(&0.0)
+    }
+
+    /// Number of leaf cells.
+    pub fn cell_count(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// Leaf cells in Hilbert order.
+    pub fn cells(&self) -> &[CellKey] {
+        &self.keys
+    }
+
+    /// Cumulative measure: entry `i` is the measure of leaves `0..i`.
+    pub fn cumulative(&self) -> &[f64] {
+        &self.cumulative
+    }
+
+    /// The options the cells were built with.
+    pub fn options(&self) -> &CurveOptions {
+        &self.options
+    }
+
+    /// Memory held, in bytes.
+    pub fn heap_bytes(&self) -> usize {
+        self.keys.capacity() * std::mem::size_of::<CellKey>()
+            + self.cumulative.capacity() * 8
+            + (self.candidate_offsets.capacity() + self.candidates.capacity()) * 4
+            + self.uv.capacity() * 16
+            + self.triangles.capacity() * 12
+            + self.density_planes.capacity() * 24
+    }
+}
