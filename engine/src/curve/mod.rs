@@ -7,10 +7,12 @@
 //! each, their cumulative sum, and what is needed to map a 1D curve parameter back to
 //! a point and a triangle. Build cost: O(cells x triangles per cell).
 
+mod budget;
 mod cells;
 mod clip;
 pub mod hilbert;
 
+pub use budget::{CellInput, budget_cells, budget_options};
 pub use cells::{CellKey, CurveDomain, DomainPoint, LeafScratch, SegmentCurve, barycentric};
 pub use clip::{Poly, clip_triangle};
 
