@@ -84,7 +84,7 @@ impl Scene {
             &progress_spinners(),
         )?;
         stages.extend(pre.stages.iter().copied());
-        let surface = pre.planar_map().is_none().then(|| SurfaceSummary {
+        let surface = pre.planar_map().is_none().then_some(SurfaceSummary {
             segments_before_split: pre.report.segments_before_split,
             segments: pre.report.segments,
             splits: pre.report.splits,
