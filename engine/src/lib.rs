@@ -13,8 +13,8 @@
 //! | [`segment`] | field-driven segmentation into singularity-free discs |
 //! | [`param`] | field-aligned parameterization of one segment, with its validity |
 //! | [`curve`] | Hilbert curves and adaptive Hilbert cells with measures |
-//! | [`surface`] | segmentation + parameterization (with splitting) + cells, for a whole surface |
-//! | [`planar`] | the same for flat domains, by one linear map |
+//! | [`surface`] | the front door: planar fast path or segmentation + parameterization (with splitting) + cells |
+//! | [`planar`] | flat domains as one segment, by one linear map |
 //! | [`sample`] | 1D stratified sequences mapped through the cells to surface samples |
 //! | [`analysis`] | discrepancy and other quality measures |
 //! | [`rng`] | counter-based random numbers (thread-count independent) |

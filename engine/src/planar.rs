@@ -12,7 +12,8 @@
 //! per-segment parameterization of the surface pipeline.
 //!
 //! Output: a [`Sampler`] with one segment and the [`PlanarMap`] used. Cost: O(F) plus
-//! the cells' construction.
+//! the cells' construction. [`Preprocessed::build`](crate::surface::Preprocessed::build)
+//! takes this path by itself for a flat mesh.
 
 use std::sync::Arc;
 
@@ -99,6 +100,17 @@ pub fn sampler(
     options: &CurveOptions,
 ) -> Result<(Sampler, PlanarMap), PlanarError> {
     let map = planar_map(&mesh, &field)?;
+    Ok((sampler_with_map(mesh, field, &map, options)?, map))
+}
+
+/// The one-segment sampler of a planar domain whose map [`planar_map`] has already
+/// derived (so a caller that tested planarity with it does not test twice).
+pub fn sampler_with_map(
+    mesh: Arc<TriMesh>,
+    field: Arc<TensorField>,
+    map: &PlanarMap,
+    options: &CurveOptions,
+) -> Result<Sampler, PlanarError> {
     let uv: Vec<DVec2> = mesh
         .positions()
         .iter()
@@ -129,7 +141,7 @@ pub fn sampler(
             curve: std::sync::Arc::new(curve),
         }],
     )?;
-    Ok((sampler, map))
+    Ok(sampler)
 }
 
 /// Checks planarity and derives the linear map from the mean tensor.

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use strata_engine::field::{FieldError, TensorField};
 use strata_engine::mesh::{MeshError, TriMesh};
-use strata_engine::planar::{self, PlanarError};
+use strata_engine::planar::PlanarError;
 use strata_engine::sample::Sampler;
 use strata_engine::surface::{Preprocessed, SurfaceError, SurfaceOptions};
 
@@ -69,51 +69,35 @@ impl Scene {
         let t = Instant::now();
         let field = Arc::new(config.field.build(&mesh)?);
         stages.push(("field", t.elapsed()));
-        let t = Instant::now();
-        // Flat meshes: one linear map (exact for constant-frame fields); surfaces: the
-        // full pipeline.
-        match planar::sampler(mesh.clone(), field.clone(), &config.curve) {
-            Ok((sampler, _)) => {
-                stages.push(("cells", t.elapsed()));
-                Ok(Self {
-                    mesh,
-                    field,
-                    sampler,
-                    stages,
-                    surface: None,
-                })
-            }
-            Err(PlanarError::NotPlanar { .. }) => {
-                let options = SurfaceOptions {
-                    segment: config.segment,
-                    param: config.param,
-                    curve: config.curve,
-                    ..Default::default()
-                };
-                let pre = Preprocessed::build_with_progress(
-                    mesh.clone(),
-                    field.clone(),
-                    &options,
-                    &progress_spinners(),
-                )?;
-                stages.extend(pre.stages.iter().copied());
-                let surface = SurfaceSummary {
-                    segments_before_split: pre.report.segments_before_split,
-                    segments: pre.report.segments,
-                    splits: pre.report.splits,
-                    isotropic_segments: pre.report.isotropic_segments,
-                    singularities: pre.segmentation.singularities.len(),
-                };
-                Ok(Self {
-                    mesh,
-                    field,
-                    sampler: pre.sampler,
-                    stages,
-                    surface: Some(surface),
-                })
-            }
-            Err(e) => Err(e.into()),
-        }
+        let options = SurfaceOptions {
+            segment: config.segment,
+            param: config.param,
+            curve: config.curve,
+            ..Default::default()
+        };
+        // The engine's front door: one linear map for flat meshes (exact for
+        // constant-frame fields), the full surface pipeline otherwise.
+        let pre = Preprocessed::build_with_progress(
+            mesh.clone(),
+            field.clone(),
+            &options,
+            &progress_spinners(),
+        )?;
+        stages.extend(pre.stages.iter().copied());
+        let surface = pre.planar_map().is_none().then_some(SurfaceSummary {
+            segments_before_split: pre.report.segments_before_split,
+            segments: pre.report.segments,
+            splits: pre.report.splits,
+            isotropic_segments: pre.report.isotropic_segments,
+            singularities: pre.segmentation.singularities.len(),
+        });
+        Ok(Self {
+            mesh,
+            field,
+            sampler: pre.sampler,
+            stages,
+            surface,
+        })
     }
 }
 

@@ -34,7 +34,9 @@ fn run(gamma_deg: f64, angle_criterion: AngleCriterion) -> (usize, f64, f64) {
         angle_criterion,
         ..Default::default()
     };
-    let pre = Preprocessed::build(mesh, field, &options).expect("preprocess");
+    // The surface pipeline on purpose: `build` would take the planar path for this flat
+    // mesh, whose one linear map does not follow a turning field.
+    let pre = Preprocessed::build_surface(mesh, field, &options).expect("preprocess");
     // Isotropic-fallback segments have no field direction to follow: left out.
     let max = pre
         .params

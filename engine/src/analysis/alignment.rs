@@ -28,7 +28,7 @@ use crate::param::SegmentParam;
 /// let mesh = Arc::new(shapes::plane(1.0, 8)?);
 /// let spec = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 };
 /// let field = Arc::new(spec.build(&mesh)?);
-/// let pre = surface::Preprocessed::build(mesh.clone(), field.clone(), &Default::default())?;
+/// let pre = surface::Preprocessed::build_surface(mesh.clone(), field.clone(), &Default::default())?;
 /// let angles = alignment::face_angles(&mesh, &field, &pre.params);
 /// assert!(angles.iter().all(|a| *a < 1e-6));
 /// # Ok::<(), Box<dyn std::error::Error>>(())

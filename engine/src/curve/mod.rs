@@ -31,6 +31,7 @@
 //! function.
 
 mod boundary;
+mod budget;
 mod clip;
 pub mod hilbert;
 mod key;
@@ -39,6 +40,7 @@ mod pieces;
 mod refine;
 mod segment_curve;
 
+pub use budget::{CellInput, budget_cells, budget_options};
 pub use clip::{Poly, clip_triangle};
 pub use key::CellKey;
 pub use locate::barycentric;

@@ -73,3 +73,42 @@ pub fn eigen_in_plane(t: &DMat3, n: DVec3) -> Eigen2 {
         l2,
     }
 }
+
+/// The unit eigenvector of the largest eigenvalue of a symmetric 3x3 matrix (power
+/// iteration from the column of largest norm, 32 steps; enough to pick a seed
+/// direction, not an accurate solver: eigenvalues close in size converge slowly).
+/// Its sign is arbitrary; `X` for the zero matrix.
+pub fn principal_axis(m: DMat3) -> DVec3 {
+    let mut v = [m.x_axis, m.y_axis, m.z_axis]
+        .into_iter()
+        .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+        .unwrap_or(DVec3::X)
+        .try_normalize()
+        .unwrap_or(DVec3::X);
+    for _ in 0..32 {
+        v = (m * v).try_normalize().unwrap_or(v);
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::outer;
+
+    #[test]
+    fn principal_axis_finds_the_largest_eigenvector() {
+        // A diagonal matrix: the axis of the largest entry, whatever the column norms.
+        let d = DMat3::from_diagonal(DVec3::new(1.0, 5.0, 2.0));
+        assert!((principal_axis(d).abs() - DVec3::Y).length() < 1e-9);
+        // A rotated one: l1 = 4 along a, l2 = 1 along b, 0 along a x b.
+        let a = DVec3::new(1.0, 2.0, 2.0) / 3.0;
+        let b = DVec3::new(2.0, 1.0, -2.0) / 3.0;
+        let m = outer(a, a) * 4.0 + outer(b, b);
+        let v = principal_axis(m);
+        assert!((v.length() - 1.0).abs() < 1e-12);
+        assert!(v.dot(a).abs() > 1.0 - 1e-9, "{v} against {a}");
+        // The zero matrix has no direction: the fallback.
+        assert_eq!(principal_axis(DMat3::ZERO), DVec3::X);
+    }
+}

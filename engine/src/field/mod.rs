@@ -19,6 +19,7 @@ mod curvature;
 mod eigen;
 mod error;
 mod file;
+mod isotropic;
 mod params;
 mod spec;
 mod warp;
@@ -26,9 +27,10 @@ mod warp;
 pub use curvature::{
     CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
 };
-pub use eigen::{Eigen2, eigen_2x2, eigen_in_plane, tangent_frame};
+pub use eigen::{Eigen2, eigen_2x2, eigen_in_plane, principal_axis, tangent_frame};
 pub use error::FieldError;
 pub use file::{format_field_file, parse_field_file, read_field_file};
+pub use isotropic::isotropic_copy;
 pub use spec::{FieldSpec, PlanarDensity};
 pub use warp::PlanarWarp;
 

@@ -11,11 +11,13 @@
 //! finite, every face has positive area. Later stages do not re-check.
 
 mod error;
+pub(crate) mod face_set;
 pub mod shapes;
 mod topology;
 
 pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};
+pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label};
 
 use glam::DVec3;
 

@@ -16,6 +16,7 @@
 //!    minimum spanning tree the walk may not cross;
 //! 4. cuts that make every segment a disc.
 
+mod from_labels;
 pub mod paths;
 mod pipeline;
 pub mod region;
@@ -24,6 +25,7 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use from_labels::segmentation_from_labels;
 pub use pipeline::segment;
 pub use region::{RegionError, segment_region};
 
@@ -35,7 +37,7 @@ pub use singularity::{
     LineFieldTransport, detect_singularities, isotropic_faces, line_field_transport,
     singularities_from,
 };
-pub use topology::{PatchTopology, disc_cuts, patch_topology};
+pub use topology::{PatchTopology, disc_cuts, is_disc, patch_topology};
 pub use walk::{WalkSystem, connected_parts, random_walk, walk_weights};
 
 /// A singularity of the major-direction line field inside a face.

@@ -5,11 +5,11 @@ use rayon::prelude::*;
 use super::paths::{field_edge_costs_with, singularity_tree};
 use super::seeds::{face_frames, place_seeds};
 use super::singularity::{line_field_transport, singularities_from};
-use super::topology::{disc_cuts, patch_topology};
-use super::walk::{connected_parts, random_walk, walk_weights};
+use super::topology::{disc_cuts, is_disc, patch_topology};
+use super::walk::{random_walk, walk_weights};
 use super::{Segment, SegmentError, SegmentOptions, Segmentation};
 use crate::field::TensorField;
-use crate::mesh::{NONE, TriMesh};
+use crate::mesh::{FaceSet, NONE, TriMesh, connected_parts, group_by_label};
 
 /// How many times a segment that is still not a disc after cutting is split in two
 /// before giving up (each split halves it, so this is never reached on real meshes).
@@ -51,34 +51,37 @@ pub fn segment(
     let mut cut = vec![false; mesh.edge_count()];
 
     // 1. The whole mesh.
-    let all = vec![true; f_count];
+    let all = FaceSet::all(mesh);
     let weights = walk_weights(mesh, &frames, options.sigma, &cut);
-    let seeds = place_seeds(mesh, &frames, &weights, &all, options.beta, options.seed);
-    let mut labels = connected_parts(mesh, &random_walk(mesh, &weights, &all, &seeds)?, &cut);
+    let seeds = place_seeds(
+        mesh,
+        &frames,
+        &weights,
+        all.mask(),
+        options.beta,
+        options.seed,
+    );
+    let walked = random_walk(mesh, &weights, all.mask(), &seeds)?;
+    let mut labels = connected_parts(mesh, &walked, &cut);
 
     // 2. Singularities on segment boundaries.
-    let mut singular = vec![false; f_count];
-    for s in &singularities {
-        singular[s.face as usize] = true;
-    }
+    let singular_faces: Vec<u32> = singularities.iter().map(|s| s.face).collect();
+    let singular = FaceSet::new(mesh, &singular_faces);
     if !singularities.is_empty() {
-        let groups = group_faces(&labels);
+        let groups = group_by_label(&labels, 0..f_count as u32);
         let trees: Vec<Vec<u32>> = groups
             .par_iter()
             .map(|faces| {
                 let sing: Vec<u32> = faces
                     .iter()
                     .copied()
-                    .filter(|&f| singular[f as usize])
+                    .filter(|&f| singular.contains(f))
                     .collect();
                 if sing.is_empty() {
                     return Vec::new();
                 }
-                let mut region = vec![false; f_count];
-                for &f in faces {
-                    region[f as usize] = true;
-                }
-                singularity_tree(mesh, &costs, &sing, &region)
+                let region = FaceSet::new(mesh, faces);
+                singularity_tree(mesh, &costs, &sing, region.mask())
             })
             .collect();
         let touched: Vec<usize> = (0..groups.len())
@@ -93,13 +96,10 @@ pub fn segment(
             let weights = walk_weights(mesh, &frames, options.sigma, &cut);
             let mut next = labels.iter().copied().max().unwrap_or(0) + 1;
             for (round, &i) in touched.iter().enumerate() {
-                let mut mask = vec![false; f_count];
-                for &f in &groups[i] {
-                    mask[f as usize] = true;
-                }
+                let mask = FaceSet::new(mesh, &groups[i]);
                 let seed = options.seed.wrapping_add(1 + round as u64);
-                let seeds = place_seeds(mesh, &frames, &weights, &mask, options.beta, seed);
-                let local = random_walk(mesh, &weights, &mask, &seeds)?;
+                let seeds = place_seeds(mesh, &frames, &weights, mask.mask(), options.beta, seed);
+                let local = random_walk(mesh, &weights, mask.mask(), &seeds)?;
                 // Give the re-segmented faces fresh labels above all existing ones.
                 for &f in &groups[i] {
                     labels[f as usize] = next + local[f as usize];
@@ -112,13 +112,12 @@ pub fn segment(
 
     // 3. Discs.
     for _ in 0..MAX_SPLIT_ROUNDS {
-        let groups = group_faces(&labels);
+        let groups = group_by_label(&labels, 0..f_count as u32);
         let extra: Vec<(usize, Vec<u32>, bool)> = groups
             .par_iter()
             .enumerate()
             .map(|(i, faces)| {
-                let topo = patch_topology(mesh, faces, &cut);
-                if is_disc(topo.euler_characteristic, topo.boundary_loops.len()) {
+                if is_disc(mesh, faces, &cut) {
                     return (i, Vec::new(), true);
                 }
                 let new_cuts = disc_cuts(mesh, &costs, faces, &cut);
@@ -126,12 +125,7 @@ pub fn segment(
                 for &e in &new_cuts {
                     with[e as usize] = true;
                 }
-                let topo = patch_topology(mesh, faces, &with);
-                (
-                    i,
-                    new_cuts,
-                    is_disc(topo.euler_characteristic, topo.boundary_loops.len()),
-                )
+                (i, new_cuts, is_disc(mesh, faces, &with))
             })
             .collect();
         let mut to_split = Vec::new();
@@ -158,15 +152,14 @@ pub fn segment(
             + 1;
         for i in to_split {
             let faces = &groups[i];
-            let mut mask = vec![false; f_count];
-            for &f in faces {
-                mask[f as usize] = true;
-            }
-            let (a, b) = farthest_pair(mesh, faces, &mask, &cut);
+            let mask = FaceSet::new(mesh, faces);
+            let Some([a, b]) = mask.far_pair(mesh, &cut) else {
+                continue;
+            };
             if a == b {
                 continue;
             }
-            let local = random_walk(mesh, &weights, &mask, &[a, b])?;
+            let local = random_walk(mesh, &weights, mask.mask(), &[a, b])?;
             for &f in faces {
                 if local[f as usize] == 1 {
                     labels[f as usize] = next;
@@ -178,7 +171,7 @@ pub fn segment(
     }
 
     // Output, segments numbered by their lowest face.
-    let groups = group_faces(&labels);
+    let groups = group_by_label(&labels, 0..f_count as u32);
     let mut face_segment = vec![0u32; f_count];
     let segments: Vec<Segment> = groups
         .par_iter()
@@ -188,7 +181,7 @@ pub fn segment(
                 faces: faces.clone(),
                 boundary_loops: topo.boundary_loops,
                 euler_characteristic: topo.euler_characteristic,
-                has_singular_face: faces.iter().any(|&f| singular[f as usize]),
+                has_singular_face: faces.iter().any(|&f| singular.contains(f)),
             }
         })
         .collect();
@@ -212,47 +205,4 @@ pub fn segment(
         singularities,
         cut_edges,
     })
-}
-
-fn is_disc(euler: i64, loops: usize) -> bool {
-    euler == 1 && loops == 1
-}
-
-/// Faces of each label, labels in order of their lowest face (faces ascending).
-fn group_faces(labels: &[u32]) -> Vec<Vec<u32>> {
-    let mut index = std::collections::HashMap::new();
-    let mut groups: Vec<Vec<u32>> = Vec::new();
-    for (f, &l) in labels.iter().enumerate() {
-        if l == NONE {
-            continue;
-        }
-        let g = *index.entry(l).or_insert_with(|| {
-            groups.push(Vec::new());
-            groups.len() - 1
-        });
-        groups[g].push(f as u32);
-    }
-    groups
-}
-
-/// Two faces of `faces` far apart in the face graph (a double breadth-first sweep),
-/// not crossing cut edges.
-fn farthest_pair(mesh: &TriMesh, faces: &[u32], mask: &[bool], cut: &[bool]) -> (u32, u32) {
-    let sweep = |start: u32| -> u32 {
-        let mut seen = std::collections::HashSet::from([start]);
-        let mut queue = std::collections::VecDeque::from([start]);
-        let mut last = start;
-        while let Some(f) = queue.pop_front() {
-            last = f;
-            for (k, &n) in mesh.face_neighbors()[f as usize].iter().enumerate() {
-                let e = mesh.face_edges()[f as usize][k];
-                if n != NONE && mask[n as usize] && !cut[e as usize] && seen.insert(n) {
-                    queue.push_back(n);
-                }
-            }
-        }
-        last
-    };
-    let a = sweep(faces[0]);
-    (a, sweep(a))
 }

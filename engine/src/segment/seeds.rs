@@ -27,6 +27,7 @@ use rayon::prelude::*;
 
 use super::line_angle;
 use crate::field::TensorField;
+use crate::mesh::face_set::across;
 use crate::mesh::{NONE, TriMesh};
 use crate::rng::Rng;
 
@@ -97,14 +98,6 @@ pub fn direction_confidence(anisotropy: f64) -> f64 {
     } else {
         ((anisotropy - 1.0) / (ISOTROPY_THRESHOLD - 1.0)).max(0.0)
     }
-}
-
-/// The face across edge `e` from face `f`, if the edge joins two faces.
-#[inline]
-pub(crate) fn across(mesh: &TriMesh, e: u32, f: u32) -> Option<u32> {
-    let [a, b] = mesh.edge_faces()[e as usize];
-    let other = if a == f { b } else { a };
-    (a != NONE && b != NONE && other != f).then_some(other)
 }
 
 /// Calls `visit(g)` for each neighbour `g` of mask face `f` across an edge of positive

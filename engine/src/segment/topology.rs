@@ -238,6 +238,20 @@ pub fn patch_topology(mesh: &TriMesh, faces: &[u32], cut: &[bool]) -> PatchTopol
     }
 }
 
+impl PatchTopology {
+    /// Whether the cut-open patch is a topological disc: Euler characteristic 1 and
+    /// one boundary loop (what a parameterization needs).
+    pub fn is_disc(&self) -> bool {
+        self.euler_characteristic == 1 && self.boundary_loops.len() == 1
+    }
+}
+
+/// Whether `faces`, cut open along `cut`, form a topological disc (see
+/// [`PatchTopology::is_disc`]). O(F_p log F_p + F).
+pub fn is_disc(mesh: &TriMesh, faces: &[u32], cut: &[bool]) -> bool {
+    patch_topology(mesh, faces, cut).is_disc()
+}
+
 /// An edge of the cut-open patch joining two local faces.
 struct Joined {
     /// Mesh edge.
@@ -486,6 +500,33 @@ mod tests {
 
     fn no_cut(mesh: &TriMesh) -> Vec<bool> {
         vec![false; mesh.edge_count()]
+    }
+
+    #[test]
+    fn the_disc_test_tells_a_disc_from_an_annulus_and_a_closed_surface() {
+        let plane = shapes::plane(1.0, 6).expect("plane");
+        assert!(is_disc(&plane, &all_faces(&plane), &no_cut(&plane)));
+        // The plane without its middle faces: an annulus (Euler characteristic 0).
+        let ring: Vec<u32> = all_faces(&plane)
+            .into_iter()
+            .filter(|&f| {
+                let c = plane.face_positions(f).iter().sum::<glam::DVec3>() / 3.0;
+                (c.x - 0.5).abs() > 0.2 || (c.y - 0.5).abs() > 0.2
+            })
+            .collect();
+        assert!(ring.len() < plane.face_count());
+        let top = patch_topology(&plane, &ring, &no_cut(&plane));
+        assert_eq!((top.euler_characteristic, top.boundary_loops.len()), (0, 2));
+        assert!(!top.is_disc());
+        assert!(!is_disc(&plane, &ring, &no_cut(&plane)));
+        // Closed surfaces are not discs; a sphere slit along one edge is.
+        let sphere = shapes::sphere(1.0, 4).expect("sphere");
+        assert!(!is_disc(&sphere, &all_faces(&sphere), &no_cut(&sphere)));
+        let mut slit = no_cut(&sphere);
+        slit[0] = true;
+        assert!(is_disc(&sphere, &all_faces(&sphere), &slit));
+        let torus = shapes::torus(1.0, 0.4, 8).expect("torus");
+        assert!(!is_disc(&torus, &all_faces(&torus), &no_cut(&torus)));
     }
 
     fn costs(mesh: &TriMesh) -> Vec<f64> {

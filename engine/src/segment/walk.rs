@@ -46,6 +46,8 @@ use rayon::prelude::*;
 
 use super::seeds::{FaceField, direction_confidence, for_each_walk_neighbor};
 use super::{SegmentError, line_angle};
+pub use crate::mesh::connected_parts;
+use crate::mesh::face_set::is_interior;
 use crate::mesh::{NONE, TriMesh};
 
 /// Right-hand sides (seeds) solved together. Measured on the bunny (69k unknowns, 1.9M
@@ -60,13 +62,6 @@ pub const RHS_BLOCK: usize = 16;
 /// make the walk's matrix numerically singular, while a weight of `1e-13 |e|` is as much
 /// a wall for the labels.
 pub const MAX_EXPONENT: f64 = 30.0;
-
-/// Whether edge `e` joins exactly two faces.
-#[inline]
-fn is_interior(mesh: &TriMesh, e: usize) -> bool {
-    let [a, b] = mesh.edge_faces()[e];
-    mesh.edge_valence()[e] == 2 && a != NONE && b != NONE
-}
 
 /// The random walk's weight of every mesh edge (section 4): `|e| exp(-d*/sigma)` for an
 /// edge between two faces, with `d` the angle between the faces' major directions (a
@@ -468,51 +463,6 @@ pub fn random_walk(
     seeds: &[u32],
 ) -> Result<Vec<u32>, SegmentError> {
     Ok(WalkSystem::build(mesh, weights, mask, seeds)?.labels())
-}
-
-/// Splits labels into connected parts: two faces keep one label only if they are
-/// joined by a path of faces of that label through manifold edges that are not
-/// `blocked`. New labels are numbered from 0 in order of each part's lowest face;
-/// `u32::MAX` (unlabelled) faces stay `u32::MAX`.
-///
-/// Cost O(F), sequential.
-///
-/// # Panics
-/// If `labels` or `blocked` do not match the mesh.
-pub fn connected_parts(mesh: &TriMesh, labels: &[u32], blocked: &[bool]) -> Vec<u32> {
-    let n = mesh.face_count();
-    assert_eq!(labels.len(), n, "one label per face");
-    assert_eq!(
-        blocked.len(),
-        mesh.edge_count(),
-        "one blocked flag per edge"
-    );
-    let mut out = vec![NONE; n];
-    let mut next = 0u32;
-    let mut queue = VecDeque::new();
-    for start in 0..n {
-        if labels[start] == NONE || out[start] != NONE {
-            continue;
-        }
-        out[start] = next;
-        queue.push_back(start as u32);
-        while let Some(f) = queue.pop_front() {
-            for &e in &mesh.face_edges()[f as usize] {
-                if blocked[e as usize] || !is_interior(mesh, e as usize) {
-                    continue;
-                }
-                if let Some(g) = super::seeds::across(mesh, e, f)
-                    && out[g as usize] == NONE
-                    && labels[g as usize] == labels[start]
-                {
-                    out[g as usize] = next;
-                    queue.push_back(g);
-                }
-            }
-        }
-        next += 1;
-    }
-    out
 }
 
 #[cfg(test)]
@@ -920,32 +870,6 @@ mod tests {
             assert!(labels.iter().all(|&l| (l as usize) < seeds.len()));
             let parts = connected_parts(&mesh, &labels, &blocked);
             assert!(parts.iter().all(|&p| p != NONE));
-        }
-    }
-
-    #[test]
-    fn connected_parts_splits_and_renumbers() {
-        // A 4 x 4 plane: columns of quads labelled 7, 3, 7, unlabelled.
-        let mesh = shapes::plane(1.0, 4).expect("plane");
-        let labels: Vec<u32> = (0..mesh.face_count())
-            .map(|f| [7, 3, 7, NONE][(f / 2) % 4])
-            .collect();
-        let parts = connected_parts(&mesh, &labels, &no_blocks(&mesh));
-        for (f, &p) in parts.iter().enumerate() {
-            assert_eq!(p, [0, 1, 2, NONE][(f / 2) % 4], "face {f}");
-        }
-        // A blocked line between rows 1 and 2 splits every column.
-        let p = mesh.positions();
-        let blocked: Vec<bool> = mesh
-            .edges()
-            .iter()
-            .map(|[a, b]| p[*a as usize].y == 0.5 && p[*b as usize].y == 0.5)
-            .collect();
-        let parts = connected_parts(&mesh, &labels, &blocked);
-        for (f, &p) in parts.iter().enumerate() {
-            let top = f / 8 >= 2;
-            let expected = [[0, 1, 2, NONE], [3, 4, 5, NONE]][usize::from(top)][(f / 2) % 4];
-            assert_eq!(p, expected, "face {f}");
         }
     }
 }

@@ -1,0 +1,389 @@
+//! Subsets of a mesh's faces and breadth-first tools over the face graph.
+//!
+//! Input: a [`TriMesh`], a subset of its faces ([`FaceSet`]), a per-edge `cut` (or
+//! `blocked`) mask of edges the graph may not cross and, for grouping, a label per face.
+//! Output: hop distances from a face, two faces far apart (a double sweep), faces
+//! grouped by label, and the connected parts of equal label. Two faces are adjacent
+//! when they share a manifold edge (exactly two faces) that is not cut.
+//!
+//! Cost: O(F) per call for the per-face arrays, plus O(size of the set) for the sweep
+//! itself; sequential. The segmentation (its disc fallback) and the split of invalid
+//! segments (paper section 5.2) both use these; the disc test itself is
+//! [`is_disc`](crate::segment::is_disc), beside the patch topology it reads.
+
+use std::collections::{BTreeMap, VecDeque};
+
+use super::{NONE, TriMesh};
+
+/// A subset of a mesh's faces: a membership flag per mesh face (built once, O(1) to
+/// test) and the member faces in the order given (to iterate).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FaceSet {
+    /// Per mesh face, whether it is in the set.
+    mask: Vec<bool>,
+    /// The member faces, each once, in the order given.
+    faces: Vec<u32>,
+}
+
+impl FaceSet {
+    /// The set of `faces` of `mesh`, in the order given (a face given twice is kept
+    /// once, at its first place). Cost O(F).
+    ///
+    /// # Panics
+    /// If a face index is out of range.
+    pub fn new(mesh: &TriMesh, faces: &[u32]) -> Self {
+        let mut mask = vec![false; mesh.face_count()];
+        let mut members = Vec::with_capacity(faces.len());
+        for &f in faces {
+            if !mask[f as usize] {
+                mask[f as usize] = true;
+                members.push(f);
+            }
+        }
+        Self {
+            mask,
+            faces: members,
+        }
+    }
+
+    /// Every face of `mesh`, ascending.
+    pub fn all(mesh: &TriMesh) -> Self {
+        Self {
+            mask: vec![true; mesh.face_count()],
+            faces: (0..mesh.face_count() as u32).collect(),
+        }
+    }
+
+    /// Whether face `f` is in the set.
+    #[inline]
+    pub fn contains(&self, f: u32) -> bool {
+        self.mask[f as usize]
+    }
+
+    /// The member faces, in the order given at construction.
+    pub fn faces(&self) -> &[u32] {
+        &self.faces
+    }
+
+    /// The membership flag per mesh face (the mask that [`random_walk`] and
+    /// [`place_seeds`] take).
+    ///
+    /// [`random_walk`]: crate::segment::random_walk
+    /// [`place_seeds`]: crate::segment::place_seeds
+    pub fn mask(&self) -> &[bool] {
+        &self.mask
+    }
+
+    /// Number of member faces.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Whether the set has no face.
+    pub fn is_empty(&self) -> bool {
+        self.faces.is_empty()
+    }
+
+    /// The lowest member face, `None` for an empty set.
+    pub fn lowest(&self) -> Option<u32> {
+        self.faces.iter().copied().min()
+    }
+
+    /// Breadth-first hop distances from `start` over the set's faces, through manifold
+    /// edges not in `cut`. Neighbours are visited in the order of the face's edges, so
+    /// [`HopDistances::farthest`] (the last face reached) is deterministic.
+    pub fn hop_distances(&self, mesh: &TriMesh, cut: &[bool], start: u32) -> HopDistances {
+        let mut dist = vec![u32::MAX; mesh.face_count()];
+        let mut queue = VecDeque::from([start]);
+        dist[start as usize] = 0;
+        let mut last = start;
+        while let Some(f) = queue.pop_front() {
+            last = f;
+            for (k, &g) in mesh.face_neighbors()[f as usize].iter().enumerate() {
+                let e = mesh.face_edges()[f as usize][k] as usize;
+                if g != NONE && !cut[e] && self.mask[g as usize] && dist[g as usize] == u32::MAX {
+                    dist[g as usize] = dist[f as usize] + 1;
+                    queue.push_back(g);
+                }
+            }
+        }
+        HopDistances {
+            farthest: last,
+            dist,
+        }
+    }
+
+    /// Two faces far apart in the set (a double sweep: the farthest face from the
+    /// lowest face, then the farthest from that one), not crossing `cut`. Both are
+    /// the same face when the lowest face reaches no other. `None` for an empty set.
+    pub fn far_pair(&self, mesh: &TriMesh, cut: &[bool]) -> Option<[u32; 2]> {
+        let start = self.lowest()?;
+        let a = self.hop_distances(mesh, cut, start).farthest;
+        let b = self.hop_distances(mesh, cut, a).farthest;
+        Some([a, b])
+    }
+
+    /// Per mesh face, `label(i)` for the `i`-th face of the set and `NONE` elsewhere.
+    pub fn labels(&self, label: impl Fn(usize) -> u32) -> Vec<u32> {
+        let mut out = vec![NONE; self.mask.len()];
+        for (i, &f) in self.faces.iter().enumerate() {
+            out[f as usize] = label(i);
+        }
+        out
+    }
+
+    /// The set's faces grouped into the connected parts of equal `labels` (one label
+    /// per mesh face, `NONE` outside the set), not crossing `cut`: parts in the order
+    /// of their lowest face, faces within a part in the set's order. Every face is in
+    /// exactly one group: set faces labelled `NONE` come last, as one group.
+    pub fn parts(&self, mesh: &TriMesh, labels: &[u32], cut: &[bool]) -> Vec<Vec<u32>> {
+        let part = connected_parts(mesh, labels, cut);
+        let mut groups = group_by_label(&part, self.faces.iter().copied());
+        let unlabelled: Vec<u32> = self
+            .faces
+            .iter()
+            .copied()
+            .filter(|&f| part[f as usize] == NONE)
+            .collect();
+        if !unlabelled.is_empty() {
+            groups.push(unlabelled);
+        }
+        groups
+    }
+}
+
+/// The result of [`FaceSet::hop_distances`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct HopDistances {
+    /// The last face reached: one of the farthest (ties go to the first found).
+    pub farthest: u32,
+    /// Hops from the start per mesh face, `u32::MAX` where unreached.
+    pub dist: Vec<u32>,
+}
+
+/// `faces` grouped by `labels[f]`: one group per label, groups in increasing label
+/// order, faces in the order given; faces labelled `NONE` are left out.
+///
+/// For the output of [`connected_parts`] (parts numbered by lowest face) over faces
+/// in ascending order this is the faces of each part, parts by lowest face.
+pub fn group_by_label(labels: &[u32], faces: impl IntoIterator<Item = u32>) -> Vec<Vec<u32>> {
+    let mut groups: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for f in faces {
+        let l = labels[f as usize];
+        if l != NONE {
+            groups.entry(l).or_default().push(f);
+        }
+    }
+    groups.into_values().collect()
+}
+
+/// Whether edge `e` joins exactly two faces.
+#[inline]
+pub(crate) fn is_interior(mesh: &TriMesh, e: usize) -> bool {
+    let [a, b] = mesh.edge_faces()[e];
+    mesh.edge_valence()[e] == 2 && a != NONE && b != NONE
+}
+
+/// Splits labels into connected parts: two faces keep one label only if they are
+/// joined by a path of faces of that label through manifold edges that are not
+/// `blocked`. New labels are numbered from 0 in order of each part's lowest face;
+/// `u32::MAX` (unlabelled) faces stay `u32::MAX`.
+///
+/// Cost O(F), sequential.
+///
+/// # Panics
+/// If `labels` or `blocked` do not match the mesh.
+pub fn connected_parts(mesh: &TriMesh, labels: &[u32], blocked: &[bool]) -> Vec<u32> {
+    let n = mesh.face_count();
+    assert_eq!(labels.len(), n, "one label per face");
+    assert_eq!(
+        blocked.len(),
+        mesh.edge_count(),
+        "one blocked flag per edge"
+    );
+    let mut out = vec![NONE; n];
+    let mut next = 0u32;
+    let mut queue = VecDeque::new();
+    for start in 0..n {
+        if labels[start] == NONE || out[start] != NONE {
+            continue;
+        }
+        out[start] = next;
+        queue.push_back(start as u32);
+        while let Some(f) = queue.pop_front() {
+            for &e in &mesh.face_edges()[f as usize] {
+                if blocked[e as usize] || !is_interior(mesh, e as usize) {
+                    continue;
+                }
+                if let Some(g) = across(mesh, e, f)
+                    && out[g as usize] == NONE
+                    && labels[g as usize] == labels[start]
+                {
+                    out[g as usize] = next;
+                    queue.push_back(g);
+                }
+            }
+        }
+        next += 1;
+    }
+    out
+}
+
+/// The face across edge `e` from face `f`, if the edge joins two faces.
+#[inline]
+pub(crate) fn across(mesh: &TriMesh, e: u32, f: u32) -> Option<u32> {
+    let [a, b] = mesh.edge_faces()[e as usize];
+    let other = if a == f { b } else { a };
+    (a != NONE && b != NONE && other != f).then_some(other)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::mesh::shapes;
+
+    /// A strip of `n` triangles, face `i` sharing an edge with faces `i - 1` and
+    /// `i + 1` only.
+    fn strip(n: u32) -> TriMesh {
+        let positions = (0..n + 2)
+            .map(|v| DVec3::new(f64::from(v / 2), f64::from(v % 2), 0.0))
+            .collect();
+        let triangles = (0..n)
+            .map(|i| {
+                if i % 2 == 0 {
+                    [i, i + 2, i + 1]
+                } else {
+                    [i, i + 1, i + 2]
+                }
+            })
+            .collect();
+        TriMesh::new(positions, triangles).expect("strip")
+    }
+
+    fn no_cut(mesh: &TriMesh) -> Vec<bool> {
+        vec![false; mesh.edge_count()]
+    }
+
+    /// The edge shared by faces `a` and `b`.
+    fn shared_edge(mesh: &TriMesh, a: u32, b: u32) -> u32 {
+        let k = mesh.face_neighbors()[a as usize]
+            .iter()
+            .position(|&g| g == b)
+            .expect("adjacent");
+        mesh.face_edges()[a as usize][k]
+    }
+
+    #[test]
+    fn a_face_set_keeps_the_order_given_and_drops_repeats() {
+        let mesh = strip(6);
+        let set = FaceSet::new(&mesh, &[4, 1, 4, 3]);
+        assert_eq!(set.faces(), &[4, 1, 3]);
+        assert_eq!(set.len(), 3);
+        assert_eq!(set.lowest(), Some(1));
+        assert!(set.contains(4) && !set.contains(0) && !set.contains(2));
+        assert_eq!(
+            set.mask(),
+            &[false, true, false, true, true, false],
+            "mask per mesh face"
+        );
+        assert_eq!(set.labels(|i| 10 + i as u32)[4], 10);
+        assert_eq!(set.labels(|i| 10 + i as u32)[0], NONE);
+        assert!(FaceSet::new(&mesh, &[]).is_empty());
+        assert_eq!(FaceSet::all(&mesh).faces(), &[0, 1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn hop_distances_on_a_strip_count_faces() {
+        let mesh = strip(7);
+        let all = FaceSet::all(&mesh);
+        let hops = all.hop_distances(&mesh, &no_cut(&mesh), 2);
+        assert_eq!(hops.dist, vec![2, 1, 0, 1, 2, 3, 4]);
+        assert_eq!(hops.farthest, 6);
+        assert_eq!(all.far_pair(&mesh, &no_cut(&mesh)), Some([6, 0]));
+        // Faces outside the set are neither crossed nor reached.
+        let left = FaceSet::new(&mesh, &[0, 1, 2, 4, 5, 6]);
+        let hops = left.hop_distances(&mesh, &no_cut(&mesh), 0);
+        assert_eq!(hops.dist[..4], [0, 1, 2, u32::MAX]);
+        assert_eq!(hops.dist[4..], [u32::MAX; 3]);
+        assert_eq!(hops.farthest, 2);
+    }
+
+    #[test]
+    fn a_cut_disconnects_the_sweep_and_the_parts() {
+        let mesh = strip(6);
+        let mut cut = no_cut(&mesh);
+        cut[shared_edge(&mesh, 2, 3) as usize] = true;
+        let all = FaceSet::all(&mesh);
+        let hops = all.hop_distances(&mesh, &cut, 0);
+        assert_eq!(hops.dist, vec![0, 1, 2, u32::MAX, u32::MAX, u32::MAX]);
+        assert_eq!(all.far_pair(&mesh, &cut), Some([2, 0]));
+        let one_label = vec![5; mesh.face_count()];
+        assert_eq!(
+            all.parts(&mesh, &one_label, &cut),
+            vec![vec![0, 1, 2], vec![3, 4, 5]]
+        );
+        assert_eq!(
+            all.parts(&mesh, &one_label, &no_cut(&mesh)),
+            vec![(0..6).collect::<Vec<_>>()]
+        );
+    }
+
+    #[test]
+    fn grouping_by_label_orders_groups_by_label_and_keeps_face_order() {
+        let labels = [2, 0, 2, NONE, 1, 0];
+        assert_eq!(
+            group_by_label(&labels, 0..6),
+            vec![vec![1, 5], vec![4], vec![0, 2]]
+        );
+        assert_eq!(
+            group_by_label(&labels, [5, 2, 1, 0]),
+            vec![vec![5, 1], vec![2, 0]]
+        );
+    }
+
+    #[test]
+    fn parts_split_each_label_into_connected_pieces() {
+        let mesh = strip(6);
+        // Labels a a b a a b: label a is in two pieces.
+        let labels = vec![0, 0, 1, 0, 0, 1];
+        let set = FaceSet::all(&mesh);
+        assert_eq!(
+            set.parts(&mesh, &labels, &no_cut(&mesh)),
+            vec![vec![0, 1], vec![2], vec![3, 4], vec![5]]
+        );
+        // Unlabelled faces of the set come last, together.
+        let labels = vec![0, NONE, 0, 0, NONE, 0];
+        assert_eq!(
+            set.parts(&mesh, &labels, &no_cut(&mesh)),
+            vec![vec![0], vec![2, 3], vec![5], vec![1, 4]]
+        );
+    }
+
+    #[test]
+    fn connected_parts_splits_and_renumbers() {
+        // A 4 x 4 plane: columns of quads labelled 7, 3, 7, unlabelled.
+        let mesh = shapes::plane(1.0, 4).expect("plane");
+        let labels: Vec<u32> = (0..mesh.face_count())
+            .map(|f| [7, 3, 7, NONE][(f / 2) % 4])
+            .collect();
+        let parts = connected_parts(&mesh, &labels, &no_cut(&mesh));
+        for (f, &p) in parts.iter().enumerate() {
+            assert_eq!(p, [0, 1, 2, NONE][(f / 2) % 4], "face {f}");
+        }
+        // A blocked line between rows 1 and 2 splits every column.
+        let p = mesh.positions();
+        let blocked: Vec<bool> = mesh
+            .edges()
+            .iter()
+            .map(|[a, b]| p[*a as usize].y == 0.5 && p[*b as usize].y == 0.5)
+            .collect();
+        let parts = connected_parts(&mesh, &labels, &blocked);
+        for (f, &p) in parts.iter().enumerate() {
+            let top = f / 8 >= 2;
+            let expected = [[0, 1, 2, NONE], [3, 4, 5, NONE]][usize::from(top)][(f / 2) % 4];
+            assert_eq!(p, expected, "face {f}");
+        }
+    }
+}

@@ -1,0 +1,423 @@
+//! Splitting of invalid segments (paper section 5.2): parameterize every segment, and
+//! split in two and parameterize again those whose parameterization is invalid.
+//!
+//! Input: a mesh, a field, the segments (as face lists) and [`SurfaceOptions`]. Output:
+//! the final pieces' [`SegmentParam`]s, ordered by their lowest mesh face, and the
+//! split counts of a [`SurfaceReport`].
+//!
+//! A segment whose parameterization is invalid (flipped or overlapping, or the mapped
+//! field off the u axis by more than `gamma` on average), or that cannot be
+//! parameterized, is split in two by the random walk restricted to it, seeded at its
+//! two most different directions, and both halves are parameterized again. A split
+//! whose parts are not discs or are badly unbalanced (an outlier direction next to a
+//! singularity seeds a region of a few faces) is redone from two faces far apart, so a
+//! segment needs about log2 of its size rounds, not one per outlier. Below
+//! `min_segment_faces` a segment is parameterized with an isotropic field (flagged
+//! `isotropic_fallback`; it is sampled with the right density but without
+//! anisotropy); a piece for which even that flips is halved again, down to single
+//! triangles, which are always valid. So every face ends in a parameterized piece.
+//!
+//! Cost: one sparse factorization per parameterization, one random walk per split;
+//! segments in parallel with rayon, the result independent of the thread count.
+
+use std::sync::OnceLock;
+
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
+use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
+use crate::mesh::{FaceSet, TriMesh};
+use crate::param::{SegmentParam, parameterize_all};
+use crate::segment::{
+    FaceField, SegmentError, Segmentation, face_frames, is_disc, random_walk, walk_weights,
+};
+
+/// Parameterizes every segment of `segmentation`, splitting invalid ones (see the
+/// module docs). Returns the final segments' parameterizations, ordered by their lowest
+/// mesh face, and what happened (`segments_before_split` and `cells` are left 0).
+pub fn parameterize_with_splitting(
+    mesh: &TriMesh,
+    field: &TensorField,
+    segmentation: &Segmentation,
+    options: &SurfaceOptions,
+) -> Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError> {
+    let context = SplitContext::new(mesh, field, &segmentation.cut_edges, options);
+    let results: Vec<Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError>> = segmentation
+        .segments
+        .par_iter()
+        .map(|s| parameterize_segment_with_splitting(mesh, field, &context, &s.faces, options))
+        .collect();
+    let mut report = SurfaceReport::default();
+    let mut accepted: Vec<SegmentParam> = Vec::new();
+    for result in results {
+        let (params, r) = result?;
+        report.splits += r.splits;
+        report.isotropic_segments += r.isotropic_segments;
+        report.single_face_segments += r.single_face_segments;
+        accepted.extend(params);
+    }
+    // Deterministic order: by lowest mesh face.
+    accepted.sort_by_key(lowest_face);
+    Ok((accepted, report))
+}
+
+/// The lowest mesh face of a parameterized segment: the key that orders segments.
+pub fn lowest_face(p: &SegmentParam) -> u32 {
+    p.faces.iter().copied().min().unwrap_or(u32::MAX)
+}
+
+/// What splitting needs besides the segment: the cut edges as a per-edge mask, the
+/// per-face field directions and the random walk's edge weights, computed once for
+/// the whole mesh and shared by every segment (and the isotropic fallback field, made
+/// on first use).
+#[derive(Debug)]
+pub struct SplitContext {
+    cut: Vec<bool>,
+    frames: FaceField,
+    weights: Vec<f64>,
+    isotropic: OnceLock<TensorField>,
+}
+
+impl SplitContext {
+    /// Prepares splitting on `mesh` with `field`, the walk not crossing `cut_edges`
+    /// (the segmentation's cuts). Cost O(F).
+    pub fn new(
+        mesh: &TriMesh,
+        field: &TensorField,
+        cut_edges: &[u32],
+        options: &SurfaceOptions,
+    ) -> Self {
+        let mut cut = vec![false; mesh.edge_count()];
+        for &e in cut_edges {
+            if let Some(c) = cut.get_mut(e as usize) {
+                *c = true;
+            }
+        }
+        let frames = face_frames(mesh, field);
+        let weights = walk_weights(mesh, &frames, options.segment.sigma, &cut);
+        Self {
+            cut,
+            frames,
+            weights,
+            isotropic: OnceLock::new(),
+        }
+    }
+
+    fn isotropic(&self, mesh: &TriMesh, field: &TensorField) -> Result<&TensorField, FieldError> {
+        if let Some(iso) = self.isotropic.get() {
+            return Ok(iso);
+        }
+        let iso = isotropic_copy(mesh, field)?;
+        Ok(self.isotropic.get_or_init(|| iso))
+    }
+}
+
+/// Parameterizes one segment (its `faces`), splitting it while invalid, as
+/// [`parameterize_with_splitting`] does for every segment: the result for a segment
+/// does not depend on the other segments, so a caller may redo only the segments that
+/// changed. Returns the final pieces' parameterizations, ordered by their lowest face,
+/// and the split counts.
+///
+/// ```
+/// use strata_engine::{field::FieldSpec, mesh::shapes, segment::segment};
+/// use strata_engine::surface::{parameterize_segment_with_splitting, SplitContext, SurfaceOptions};
+/// let mesh = shapes::sphere(1.0, 4)?;
+/// let field = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 }
+///     .build(&mesh)?;
+/// let options = SurfaceOptions::default();
+/// let seg = segment(&mesh, &field, &options.segment)?;
+/// let context = SplitContext::new(&mesh, &field, &seg.cut_edges, &options);
+/// let (pieces, _) = parameterize_segment_with_splitting(
+///     &mesh, &field, &context, &seg.segments[0].faces, &options)?;
+/// let faces: usize = pieces.iter().map(|p| p.faces.len()).sum();
+/// assert_eq!(faces, seg.segments[0].faces.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn parameterize_segment_with_splitting(
+    mesh: &TriMesh,
+    field: &TensorField,
+    context: &SplitContext,
+    faces: &[u32],
+    options: &SurfaceOptions,
+) -> Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError> {
+    let cut = &context.cut;
+    let mut report = SurfaceReport::default();
+    let mut accepted: Vec<SegmentParam> = Vec::new();
+    let mut pending: Vec<Vec<u32>> = vec![faces.to_vec()];
+    let mut small: Vec<Vec<u32>> = Vec::new();
+    while !pending.is_empty() {
+        let results = parameterize_all(mesh, field, &pending, cut, &options.param);
+        let mut to_split = Vec::new();
+        for (faces, result) in pending.into_iter().zip(results) {
+            match result {
+                Ok(p) if p.report.valid && angle_ok(&p, options) => accepted.push(p),
+                _ if faces.len() < options.min_segment_faces.max(2) => small.push(faces),
+                _ => to_split.push(faces),
+            }
+        }
+        report.splits += to_split.len();
+        // Each split is one random walk over its segment: independent, so in parallel;
+        // the halves are collected in order, so the result does not depend on threads.
+        let halves: Vec<Vec<Vec<u32>>> = to_split
+            .par_iter()
+            .map(|faces| split_in_two(mesh, &context.frames, &context.weights, cut, faces))
+            .collect::<Result<_, _>>()?;
+        pending = halves.into_iter().flatten().collect();
+    }
+    // Isotropic fallback: the same density, no anisotropy. A piece whose fallback
+    // parameterization still flips or overlaps (around a sharp cone, say) is halved
+    // again; a single triangle is always valid.
+    while !small.is_empty() {
+        let iso = context.isotropic(mesh, field)?;
+        let results = parameterize_all(mesh, iso, &small, cut, &options.param);
+        let mut again = Vec::new();
+        for (faces, result) in small.into_iter().zip(results) {
+            match result {
+                Ok(mut p) if faces.len() == 1 || (p.report.flipped == 0 && !p.report.overlaps) => {
+                    p.report.isotropic_fallback = true;
+                    if faces.len() == 1 {
+                        report.single_face_segments += 1;
+                    } else {
+                        report.isotropic_segments += 1;
+                    }
+                    accepted.push(p);
+                }
+                Err(e) if faces.len() == 1 => return Err(e.into()),
+                _ => again.extend(halve(mesh, cut, &FaceSet::new(mesh, &faces))),
+            }
+        }
+        small = again;
+    }
+    accepted.sort_by_key(lowest_face);
+    Ok((accepted, report))
+}
+
+/// The optional stricter angle test (the mean is part of `report.valid` already).
+fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
+    match options.angle_criterion {
+        AngleCriterion::Mean => true,
+        AngleCriterion::Max => {
+            p.report.isotropic_fallback || p.report.max_angle_deg < options.param.gamma.to_degrees()
+        }
+    }
+}
+
+/// A split is accepted when every part is a disc (the parameterization needs one) and
+/// the smallest part holds at least this share of the faces. Without the balance
+/// test, seeds at outlier faces (next to a singularity, say) peel off a few faces per
+/// round, often leaving a hole, and splitting a large segment takes hundreds of
+/// rounds instead of about log2 of its size.
+const MIN_SPLIT_SHARE: usize = 8;
+
+/// Splits a segment in two by the random walk (section 5.2) and returns the connected
+/// parts.
+///
+/// The walk is first seeded at the segment's two most different face directions (as
+/// lines), as in the paper. If that split is unbalanced (a part under
+/// 1/[`MIN_SPLIT_SHARE`] of the faces) or leaves a part that is not a disc, the walk is
+/// seeded again at two faces far apart in the segment (a double sweep of
+/// breadth-first search), which halves the segment; failing that too, the faces are
+/// given to the nearer of those two seeds, and as a last resort halved by face order.
+fn split_in_two(
+    mesh: &TriMesh,
+    frames: &FaceField,
+    weights: &[f64],
+    cut: &[bool],
+    faces: &[u32],
+) -> Result<Vec<Vec<u32>>, SurfaceError> {
+    let [a, b] = most_different_faces(frames, faces);
+    if a == b {
+        return Ok(vec![faces.to_vec()]); // a single face: nothing to split
+    }
+    let set = FaceSet::new(mesh, faces);
+    let good = |parts: &[Vec<u32>]| {
+        parts.len() > 1
+            && parts
+                .iter()
+                .all(|p| p.len() * MIN_SPLIT_SHARE >= faces.len() && is_disc(mesh, p, cut))
+    };
+    let walk = |seeds: [u32; 2]| -> Result<Option<Vec<Vec<u32>>>, SurfaceError> {
+        match random_walk(mesh, weights, set.mask(), &seeds) {
+            Ok(labels) => Ok(Some(set.parts(mesh, &labels, cut))),
+            // Parts of the segment unreachable from both seeds (cut off by cut edges).
+            Err(SegmentError::Unseeded { .. }) => Ok(None),
+            Err(e) => Err(e.into()),
+        }
+    };
+    let first = match walk([a, b])? {
+        Some(parts) if good(&parts) => return Ok(parts),
+        other => other,
+    };
+    if let Some([far_a, far_b]) = set.far_pair(mesh, cut)
+        && far_a != far_b
+        && let Some(parts) = walk([far_a, far_b])?
+        && good(&parts)
+    {
+        return Ok(parts);
+    }
+    let parts = halve(mesh, cut, &set);
+    if good(&parts) {
+        return Ok(parts);
+    }
+    // Keep the paper's split if it split at all (it makes progress).
+    match first {
+        Some(first) if first.len() > 1 => Ok(first),
+        _ => Ok(parts),
+    }
+}
+
+/// Splits `set` (two or more faces) into the connected parts of the faces nearer (in
+/// hops) to one or the other of two faces far apart; by the set's face order if that
+/// does not split them (faces unreachable from each other).
+fn halve(mesh: &TriMesh, cut: &[bool], set: &FaceSet) -> Vec<Vec<u32>> {
+    if let Some([a, b]) = set.far_pair(mesh, cut)
+        && a != b
+    {
+        let from_a = set.hop_distances(mesh, cut, a).dist;
+        let from_b = set.hop_distances(mesh, cut, b).dist;
+        let faces = set.faces();
+        let labels = set.labels(|i| {
+            let f = faces[i] as usize;
+            (from_b[f] < from_a[f]) as u32
+        });
+        let parts = set.parts(mesh, &labels, cut);
+        if parts.len() > 1 {
+            return parts;
+        }
+    }
+    let half = set.len() / 2;
+    let labels = set.labels(|i| (i >= half) as u32);
+    set.parts(mesh, &labels, cut)
+}
+
+/// The face whose direction is farthest from the segment's mean line direction (mean
+/// of `m m^T`), then the face farthest from that one (ties to the lower face id).
+fn most_different_faces(frames: &FaceField, faces: &[u32]) -> [u32; 2] {
+    let mut mean = DMat3::ZERO;
+    for &f in faces {
+        let m = frames.major[f as usize];
+        mean += outer(m, m);
+    }
+    let axis = principal_axis(mean);
+    let farthest = |from: DVec3| {
+        faces
+            .iter()
+            .copied()
+            .min_by(|&a, &b| {
+                let da = frames.major[a as usize].dot(from).abs();
+                let db = frames.major[b as usize].dot(from).abs();
+                da.total_cmp(&db).then(a.cmp(&b))
+            })
+            .unwrap_or(faces[0])
+    };
+    let a = farthest(axis);
+    let mut b = farthest(frames.major[a as usize]);
+    if a == b {
+        b = faces.iter().copied().find(|&f| f != a).unwrap_or(a);
+    }
+    [a, b]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::shapes;
+
+    /// A plane whose field is constant except in a small disc in the middle, where it
+    /// is turned by 90 degrees: the paper's seeds (the two most different directions)
+    /// include a face of that disc, and the walk gives that seed just the disc, a hole
+    /// in the rest of the plane. The split must still give discs of balanced size.
+    #[test]
+    fn an_outlier_direction_does_not_peel_a_hole_out_of_the_segment() {
+        let mesh = shapes::plane(1.0, 16).expect("plane");
+        let dirs: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .map(|p| {
+                let r = (p.truncate() - glam::DVec2::splat(0.5)).length();
+                if r < 0.1 { DVec3::Y } else { DVec3::X }
+            })
+            .collect();
+        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
+            .expect("field");
+        let options = SurfaceOptions::default();
+        let context = SplitContext::new(&mesh, &field, &[], &options);
+        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        // The paper's seeds alone: one seed region is a small island.
+        let [a, b] = most_different_faces(&context.frames, &faces);
+        let all = FaceSet::all(&mesh);
+        let labels = random_walk(&mesh, &context.weights, all.mask(), &[a, b]).expect("walk");
+        let paper = all.parts(&mesh, &labels, &context.cut);
+        let smallest = paper.iter().map(Vec::len).min().unwrap_or(0);
+        assert!(
+            smallest * MIN_SPLIT_SHARE < faces.len()
+                || paper.iter().any(|p| !is_disc(&mesh, p, &context.cut)),
+            "the case must exercise the fallback: parts {:?}",
+            paper.iter().map(Vec::len).collect::<Vec<_>>()
+        );
+        let parts = split_in_two(
+            &mesh,
+            &context.frames,
+            &context.weights,
+            &context.cut,
+            &faces,
+        )
+        .expect("split");
+        assert!(parts.len() >= 2);
+        assert_eq!(parts.iter().map(Vec::len).sum::<usize>(), faces.len());
+        for p in &parts {
+            assert!(
+                p.len() * MIN_SPLIT_SHARE >= faces.len(),
+                "part of {} faces",
+                p.len()
+            );
+            assert!(is_disc(&mesh, p, &context.cut));
+        }
+    }
+
+    #[test]
+    fn halving_always_makes_progress_and_keeps_every_face() {
+        let mesh = shapes::plane(1.0, 6).expect("plane");
+        let cut = vec![false; mesh.edge_count()];
+        let mut pending = vec![(0..mesh.face_count() as u32).collect::<Vec<_>>()];
+        let mut singles = 0;
+        while let Some(faces) = pending.pop() {
+            if faces.len() == 1 {
+                singles += 1;
+                continue;
+            }
+            let parts = halve(&mesh, &cut, &FaceSet::new(&mesh, &faces));
+            assert!(parts.len() >= 2, "{} faces not split", faces.len());
+            assert_eq!(parts.iter().map(Vec::len).sum::<usize>(), faces.len());
+            pending.extend(parts);
+        }
+        assert_eq!(singles, mesh.face_count());
+    }
+
+    #[test]
+    fn the_max_criterion_rejects_what_the_mean_accepts() {
+        let mesh = shapes::plane(1.0, 4).expect("plane");
+        let field = TensorField::from_frames(
+            &mesh,
+            &vec![DVec3::X; mesh.vertex_count()],
+            &vec![[2.0, 0.5]; mesh.vertex_count()],
+        )
+        .expect("field");
+        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        let cut = vec![false; mesh.edge_count()];
+        let mut options = SurfaceOptions::default();
+        let results = parameterize_all(&mesh, &field, &[faces], &cut, &options.param);
+        let mut p = results
+            .into_iter()
+            .next()
+            .expect("one result")
+            .expect("the plane parameterizes");
+        p.report.max_angle_deg = options.param.gamma.to_degrees() + 1.0;
+        assert!(angle_ok(&p, &options), "the mean criterion ignores the max");
+        options.angle_criterion = AngleCriterion::Max;
+        assert!(!angle_ok(&p, &options));
+        p.report.isotropic_fallback = true;
+        assert!(angle_ok(&p, &options), "fallback pieces have no direction");
+    }
+}
