@@ -7,7 +7,7 @@ use strata_engine::field::{FieldError, TensorField};
 use strata_engine::mesh::{MeshError, TriMesh};
 use strata_engine::planar::{self, PlanarError};
 use strata_engine::sample::Sampler;
-use strata_engine::surface::{Preprocessed, SurfaceError, SurfaceOptions};
+use strata_engine::surface::{Preprocessed, SurfaceError};
 
 use crate::config::{MeshSource, SceneConfig};
 
@@ -84,12 +84,7 @@ impl Scene {
                 })
             }
             Err(PlanarError::NotPlanar { .. }) => {
-                let options = SurfaceOptions {
-                    segment: config.segment,
-                    param: config.param,
-                    curve: config.curve,
-                    ..Default::default()
-                };
+                let options = config.surface_options();
                 let pre = Preprocessed::build_with_progress(
                     mesh.clone(),
                     field.clone(),
