@@ -29,10 +29,13 @@ const MAX_TRIES: u32 = 64;
 const NAME_CHARS: usize = 64;
 
 /// Writes a file atomically: runs `write` on a buffered temporary file in `path`'s
-/// folder, syncs it and renames it over `path` (see the [module docs](self)). On any
-/// error (of `write`, of creating, flushing, syncing or renaming) the temporary file is
-/// removed, `path` keeps its old content (or stays absent), and the error is returned;
-/// file-system errors come back as `E::from(io::Error)`.
+/// folder, syncs it and renames it over `path`, so that a reader sees the old file or
+/// the whole new one. The temporary file is `.<name>.<pid>.<nanos>.<try>.tmp`, created
+/// with `create_new` (a name taken by another writer is retried with the next `<try>`),
+/// so concurrent writes never share one. On any error (of `write`, of creating,
+/// flushing, syncing or renaming) or a panic in `write`, the temporary file is removed
+/// and `path` keeps its old content (or stays absent); the error is returned, file-system
+/// errors as `E::from(io::Error)`.
 ///
 /// ```
 /// use std::io::Write;
