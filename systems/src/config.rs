@@ -6,11 +6,15 @@
 //!     field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 4.0, density: 1.0),
 //!     sampling: (count: 20000, seed: 7),
 //!     curve: (max_cell_share: 0.0000152587890625),        // optional, see CurveOptions
+//!     surface: (min_segment_faces: 16, angle_criterion: Mean), // optional
 //! )
 //! ```
 //!
 //! Unknown fields are errors (a typo must not be silently ignored); omitted optional
-//! sections take their defaults. Relative file paths are relative to the config file.
+//! sections take their defaults, which are the engine's. Relative file paths are
+//! relative to the config file. The `segment`, `param`, `curve` and `surface` sections
+//! together are the engine's [`SurfaceOptions`], every field of it, mapped in one place:
+//! [`SceneConfig::surface_options`].
 
 use std::path::{Path, PathBuf};
 
@@ -20,6 +24,7 @@ use strata_engine::field::FieldSpec;
 use strata_engine::mesh::shapes::Shape;
 use strata_engine::param::ParamOptions;
 use strata_engine::segment::SegmentOptions;
+use strata_engine::surface::{AngleCriterion, SurfaceOptions};
 
 /// A scene: a mesh, a tensor field on it, and sampling settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -42,10 +47,38 @@ pub struct SceneConfig {
     /// Parameterization settings (gamma, isotropy threshold).
     #[serde(default)]
     pub param: ParamOptions,
+    /// When invalid segments stop being split, and which angle must stay under gamma.
+    #[serde(default)]
+    pub surface: SurfaceConfig,
     /// Where the mesh is placed in the world (applied to the samples, so changing it
     /// only reruns sampling). Default: identity.
     #[serde(default)]
     pub transform: TransformConfig,
+}
+
+/// The settings of the surface preprocessing as a whole: the fields of
+/// [`SurfaceOptions`] that are not in its `segment`, `param` and `curve` parts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SurfaceConfig {
+    /// Segments with fewer faces are not split further but parameterized with the
+    /// isotropic fallback. Range >= 1; default: the engine's, 16.
+    pub min_segment_faces: usize,
+    /// The angle between the mapped field and the u axis that must stay under
+    /// `param.gamma`: `Mean`, the area-weighted mean over the segment (section 5.2), or
+    /// `Max`, the largest per-face angle (section 7.3.1; splits more). Default: the
+    /// engine's, `Mean`.
+    pub angle_criterion: AngleCriterion,
+}
+
+impl Default for SurfaceConfig {
+    fn default() -> Self {
+        let engine = SurfaceOptions::default();
+        Self {
+            min_segment_faces: engine.min_segment_faces,
+            angle_criterion: engine.angle_criterion,
+        }
+    }
 }
 
 /// A similarity transform of the mesh: scale, then rotate, then translate.
@@ -249,12 +282,31 @@ impl SceneConfig {
         Self::from_ron(&text, path)
     }
 
+    /// The engine's preprocessing options of this scene: the `segment`, `param`,
+    /// `curve` and `surface` sections. The one mapping from a scene to
+    /// [`SurfaceOptions`]; every field of it comes from the scene.
+    pub fn surface_options(&self) -> SurfaceOptions {
+        // No `..Default::default()`: a new engine option must get a scene setting here.
+        SurfaceOptions {
+            segment: self.segment,
+            param: self.param,
+            curve: self.curve,
+            min_segment_faces: self.surface.min_segment_faces,
+            angle_criterion: self.surface.angle_criterion,
+        }
+    }
+
     /// Checks value ranges that the types cannot express.
     pub fn validate(&self) -> Result<(), String> {
         self.field.validate().map_err(|e| e.to_string())?;
+        // The parts one by one first, for messages that name the option alone.
         self.curve.validate().map_err(|e| e.to_string())?;
         self.segment.validate().map_err(|e| e.to_string())?;
         self.param.validate().map_err(|e| e.to_string())?;
+        // Then what the engine checks of the options as a whole (`min_segment_faces`).
+        self.surface_options()
+            .validate()
+            .map_err(|e| e.to_string())?;
         self.transform.validate()?;
         Ok(())
     }
@@ -279,6 +331,98 @@ mod tests {
                 size: 2.0,
                 resolution: 4
             })
+        );
+    }
+
+    #[test]
+    fn omitted_sections_give_the_engines_default_options() {
+        let s = SceneConfig::from_ron("(mesh: Shape(Plane()))", Path::new("x.ron")).expect("valid");
+        assert_eq!(s.surface_options(), SurfaceOptions::default());
+        // Empty sections too.
+        let s = SceneConfig::from_ron(
+            "(mesh: Shape(Plane()), segment: (), param: (), curve: (), surface: ())",
+            Path::new("x.ron"),
+        )
+        .expect("valid");
+        assert_eq!(s.surface_options(), SurfaceOptions::default());
+    }
+
+    #[test]
+    fn a_scene_sets_every_surface_option() {
+        let text = r#"(
+            mesh: Shape(Plane()),
+            segment: (beta: 0.5, sigma: 2.0, seed: 11),
+            param: (gamma: 0.25, isotropy_threshold: 1.5),
+            curve: (max_cell_share: 0.001, boundary_level: 9, max_level: 18, leaf_levels: 10),
+            surface: (min_segment_faces: 5, angle_criterion: Max),
+        )"#;
+        let s = SceneConfig::from_ron(text, Path::new("all.ron")).expect("valid");
+        let want = SurfaceOptions {
+            segment: SegmentOptions {
+                beta: 0.5,
+                sigma: 2.0,
+                seed: 11,
+            },
+            param: ParamOptions {
+                gamma: 0.25,
+                isotropy_threshold: 1.5,
+            },
+            curve: CurveOptions {
+                max_cell_share: 0.001,
+                boundary_level: 9,
+                max_level: 18,
+                leaf_levels: 10,
+            },
+            min_segment_faces: 5,
+            angle_criterion: AngleCriterion::Max,
+        };
+        assert_eq!(s.surface_options(), want);
+        // Every value above differs from its default, so none was taken from there.
+        let d = SurfaceOptions::default();
+        assert!(d.segment.beta != 0.5 && d.segment.sigma != 2.0 && d.segment.seed != 11);
+        assert!(d.param.gamma != 0.25 && d.param.isotropy_threshold != 1.5);
+        assert!(d.curve.max_cell_share != 0.001 && d.curve.boundary_level != 9);
+        assert!(d.curve.max_level != 18 && d.curve.leaf_levels != 10);
+        assert!(d.min_segment_faces != 5 && d.angle_criterion != AngleCriterion::Max);
+        // The sections written back by serde parse to the same options (a field added
+        // to one of them is covered by this round trip too).
+        let text = format!(
+            "(mesh: Shape(Plane()), segment: {}, param: {}, curve: {}, surface: {})",
+            ron::to_string(&want.segment).expect("ron"),
+            ron::to_string(&want.param).expect("ron"),
+            ron::to_string(&want.curve).expect("ron"),
+            ron::to_string(&s.surface).expect("ron"),
+        );
+        let again = SceneConfig::from_ron(&text, Path::new("again.ron")).expect("valid");
+        assert_eq!(again.surface_options(), want);
+    }
+
+    #[test]
+    fn bad_surface_settings_name_file_line_and_column() {
+        let e = SceneConfig::from_ron(
+            "(\n  mesh: Shape(Plane()),\n  surface: (min_segment_faces: 0),\n)",
+            Path::new("s.ron"),
+        )
+        .expect_err("min_segment_faces 0");
+        assert_eq!(
+            e.to_string(),
+            "s.ron:3:13: min_segment_faces must be at least 1"
+        );
+        let e = SceneConfig::from_ron(
+            "(mesh: Shape(Plane()),\n surface: (angle_criterion: Median))",
+            Path::new("s.ron"),
+        )
+        .expect_err("unknown criterion");
+        assert!(e.to_string().starts_with("s.ron:2:"), "{e}");
+        assert!(e.to_string().contains("Median"), "{e}");
+        let e = SceneConfig::from_ron(
+            "(mesh: Shape(Plane()), surface: (min_faces: 3))",
+            Path::new("s.ron"),
+        )
+        .expect_err("unknown field");
+        assert!(
+            e.to_string().starts_with("s.ron:1:") && e.to_string().contains("min_faces"),
+            "{e}"
         );
     }
 

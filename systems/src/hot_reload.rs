@@ -28,7 +28,6 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, select};
 use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
 use notify::{RecursiveMode, Watcher};
 use strata_engine::field::FieldSpec;
-use strata_engine::surface::SurfaceOptions;
 
 use crate::config::{ConfigError, MeshSource, SceneConfig};
 use crate::ecs::components::*;
@@ -277,16 +276,6 @@ fn dependencies(scene: &Result<SceneConfig, ConfigError>) -> Vec<PathBuf> {
     out
 }
 
-/// The engine's surface settings from a scene.
-pub fn surface_options(config: &SceneConfig) -> SurfaceOptions {
-    SurfaceOptions {
-        segment: config.segment,
-        param: config.param,
-        curve: config.curve,
-        ..Default::default()
-    }
-}
-
 /// Applies the newest good scene from the inbox (see the module docs).
 pub fn apply_scene_updates(world: &mut World) {
     let updates = match world.get_resource_mut::<SceneInbox>() {
@@ -346,7 +335,7 @@ fn apply_scene(
         (false, Some(f)) => f.0.clone(),
         _ => Arc::new(config.field.build(&mesh)?),
     };
-    let options = surface_options(&config);
+    let options = config.surface_options();
     let count = usize::try_from(config.sampling.count).unwrap_or(usize::MAX);
     let mut what = Vec::new();
     let entity = match entity {

@@ -1,20 +1,28 @@
 //! # strata-systems
 //!
-//! The application layer of strata: scene configuration files (RON), turning a scene
-//! into engine inputs, the streaming engine as a bevy_ecs world ([`ecs`]) with scene
-//! hot reload ([`hot_reload`]), GPU streaming and field-aligned splat rendering with
-//! wgpu ([`gpu`]), and the `strata` command-line tool. The pure algorithms are in
-//! `strata-engine`.
+//! The application layer of strata: scene files, the streaming engine as a bevy_ecs
+//! world with hot reload, GPU streaming and splat rendering with wgpu, report writers,
+//! and the `strata` command-line tool. The pure algorithms are in `strata-engine`.
+//!
+//! - [`config`]: scene files (RON) as [`config::SceneConfig`], and their one mapping to
+//!   the engine's options ([`config::SceneConfig::surface_options`]).
+//! - [`scene`]: a scene turned into engine data (mesh, field, sampler).
+//! - [`ecs`]: the streaming engine's components and systems.
+//! - [`hot_reload`]: the scene watcher and its application to the world.
+//! - [`gpu`]: wgpu streaming, splat rendering, offscreen pictures.
+//! - [`viewer`]: the interactive window over the streaming engine.
+//! - [`report`]: report writers (SVG atlas, PNG plots, JSON reports, the analysis).
+//! - [`cli`]: the `strata` command line, one file per command.
 
-pub mod analyze;
-pub mod atlas;
 pub mod cli;
 pub mod config;
 pub mod ecs;
 pub mod gpu;
 pub mod hot_reload;
-pub mod plot;
-pub mod render;
+pub mod report;
 pub mod scene;
-pub mod view;
-pub mod watch;
+pub mod viewer;
+
+/// The PNG plots, at their old path: new code names [`report::plot`] (kept for
+/// `bench/src/bin/experiments.rs`).
+pub use report::plot;

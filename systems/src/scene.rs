@@ -7,7 +7,7 @@ use strata_engine::field::{FieldError, TensorField};
 use strata_engine::mesh::{MeshError, TriMesh};
 use strata_engine::planar::PlanarError;
 use strata_engine::sample::Sampler;
-use strata_engine::surface::{Preprocessed, SurfaceError, SurfaceOptions};
+use strata_engine::surface::{Preprocessed, SurfaceError};
 
 use crate::config::{MeshSource, SceneConfig};
 
@@ -69,12 +69,7 @@ impl Scene {
         let t = Instant::now();
         let field = Arc::new(config.field.build(&mesh)?);
         stages.push(("field", t.elapsed()));
-        let options = SurfaceOptions {
-            segment: config.segment,
-            param: config.param,
-            curve: config.curve,
-            ..Default::default()
-        };
+        let options = config.surface_options();
         // The engine's front door: one linear map for flat meshes (exact for
         // constant-frame fields), the full surface pipeline otherwise.
         let pre = Preprocessed::build_with_progress(

@@ -345,7 +345,7 @@ fn sample_buffer_reads_back_and_resizes() {
         return;
     };
     let scene = scene(PLANE);
-    let mut buffer = strata_systems::gpu::SampleBuffer::new(&ctx.device).expect("buffer");
+    let mut buffer = strata_systems::gpu::GpuSampleBuffer::new(&ctx.device).expect("buffer");
     assert_eq!(buffer.capacity(), MIN_CAPACITY);
     let mut capacity = MIN_CAPACITY;
     let mut reallocations = 0;
@@ -394,7 +394,7 @@ fn expanded_sites_match_the_cpu_samples() {
     let (lo, hi) = sampler.mesh().bounds();
     let diagonal = (hi - lo).length() as f32;
     let mut expander = SiteExpander::new(&ctx.device, sampler).expect("expander");
-    let mut buffer = strata_systems::gpu::SampleBuffer::new(&ctx.device).expect("buffer");
+    let mut buffer = strata_systems::gpu::GpuSampleBuffer::new(&ctx.device).expect("buffer");
     for n in [3usize, 20_000, 100] {
         let cpu = sampler.sample(n, 5);
         let mut sites = vec![SampleSite::default(); n];

@@ -1099,14 +1099,37 @@ fn writers_replace_files_atomically_and_report_bad_paths() {
     let text = std::fs::read_to_string(&path).expect("read");
     assert!(text.starts_with("x,y,z,"), "{text}");
     assert_eq!(text.lines().count(), 3);
-    assert!(!dir.path().join("out.csv.tmp").exists());
+    let names = || {
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .expect("dir")
+            .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(
+        names(),
+        ["out.csv"],
+        "the temporary file was renamed over the target"
+    );
 
-    // The writer goes through `<name>.tmp` beside the target: when that cannot be
-    // created, the write fails and the old file stays whole.
-    std::fs::create_dir(dir.path().join("out.csv.tmp")).expect("mkdir");
-    let e = io::write_samples_csv(&path, &some_samples()).expect_err("tmp path is a folder");
-    assert!(matches!(&e, MeshError::Io { .. }), "{e:?}");
+    // When the last step, the rename over the target, fails (here the target is a
+    // folder), the write fails, the target stays as it was and the temporary file
+    // beside it is removed.
+    let folder = dir.path().join("taken.csv");
+    std::fs::create_dir(&folder).expect("mkdir");
+    std::fs::write(folder.join("inside"), "x").expect("write");
+    let e = io::write_samples_csv(&folder, &some_samples()).expect_err("target is a folder");
+    assert!(
+        matches!(&e, MeshError::Io { path, .. } if path == &folder),
+        "{e:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(folder.join("inside")).expect("read"),
+        "x"
+    );
     assert_eq!(std::fs::read_to_string(&path).expect("read"), text);
+    assert_eq!(names(), ["out.csv", "taken.csv"]);
 
     let missing = dir.path().join("no-such-folder").join("s.ply");
     let e = io::write_samples_ply(&missing, &some_samples()).expect_err("no folder");

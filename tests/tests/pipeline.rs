@@ -114,9 +114,15 @@ fn cli_writes_ply_and_csv_that_read_back() {
     let mut lines = text.lines();
     assert!(lines.next().expect("header").starts_with("x,y,z,"));
     assert_eq!(lines.count(), 10);
-    assert!(
-        !dir.path().join("s.csv.tmp").exists(),
-        "atomic write leaves no temporary file"
+    let mut names: Vec<_> = std::fs::read_dir(dir.path())
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["s.csv", "s.ply"],
+        "atomic writes leave no temporary file"
     );
 }
 

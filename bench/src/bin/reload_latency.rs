@@ -7,6 +7,7 @@
 //! new samples in the buffer) and the end-to-end time from the save to new samples,
 //! which adds the watcher's debounce (100 ms) and file-system latency.
 
+use std::io::Write;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -105,10 +106,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         full_runs.push(t.elapsed());
         let turned = if i % 2 == 0 { DVec3::Y } else { DVec3::Z };
         let text = format_field_file(&cap_field(&mesh, cap, turned)?);
-        let tmp = dir.path().join("bunny.field.tmp");
+        // Saved as editors do: a temporary file renamed over the field file.
         let (u, e, _) = change(&mut engine, || {
-            std::fs::write(&tmp, &text)?;
-            std::fs::rename(&tmp, &field_path)
+            strata_engine::io::write_atomically(&field_path, |w| w.write_all(text.as_bytes()))
         })?;
         let stats = engine.stats();
         if i == 0 {

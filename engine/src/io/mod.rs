@@ -1,4 +1,5 @@
-//! File formats: OBJ and PLY mesh readers, PLY and CSV writers for meshes and samples.
+//! File formats: OBJ and PLY mesh readers, PLY and CSV writers for meshes and samples,
+//! and the atomic file writing that every writer (here and in the applications) uses.
 //!
 //! Input: a path (or bytes plus a name for messages). Output: a validated
 //! [`TriMesh`], or [`Sample`]s; writers go the other way. Cost: O(file size); a
@@ -14,9 +15,11 @@
 //!   every scalar type; faces from `face` (`vertex_indices` or `vertex_index`) and
 //!   triangle strips from `tristrips` (`-1` restarts a strip, winding alternates); all
 //!   other elements and properties are skipped.
-//! - Writers ([`write_mesh_ply`], [`write_samples_ply`], [`write_samples_csv`]) write
-//!   to a temporary file beside the target and rename it, so a reader never sees half
-//!   a file; the `_to` variants write to any [`Write`](std::io::Write).
+//! - Writers ([`write_mesh_ply`], [`write_samples_ply`], [`write_samples_csv`]) go
+//!   through [`write_atomically`] (a temporary file beside the target, synced, then
+//!   renamed over it), so a reader never sees half a file; the `_to` variants write to
+//!   any [`Write`](std::io::Write). Applications write their own files (reports,
+//!   images) with [`write_atomically`] too.
 //! - The shared mesh corpus ([`shared_mesh_dir`]): `$STRATA_MESH_DIR`, else
 //!   `<workspace>/../shared/meshes`, for tests and benchmarks.
 //!
@@ -27,6 +30,7 @@
 //!
 //! [`MeshWarning::TriangulatedPolygons`]: crate::mesh::MeshWarning::TriangulatedPolygons
 
+mod atomic;
 mod obj;
 mod ply;
 mod samples;
@@ -41,6 +45,7 @@ use crate::mesh::{MeshError, TriMesh};
 #[cfg(doc)]
 use crate::sample::Sample;
 
+pub use atomic::write_atomically;
 pub use samples::{SAMPLE_COLUMNS, parse_samples_ply, read_samples_ply};
 #[cfg(test)]
 pub(crate) use shared::shared_mesh;

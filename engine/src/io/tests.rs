@@ -314,16 +314,3 @@ fn obj_duplicate_vertices_are_merged_with_a_warning() {
     );
     assert_eq!(mesh.input_vertex_map()[4], 1);
 }
-
-#[test]
-fn temp_path_keeps_folder_and_extension() {
-    assert_eq!(
-        write::temp_path(Path::new("a/b.ply")),
-        Path::new("a/b.ply.tmp")
-    );
-    assert_eq!(write::temp_path(Path::new("a/b")), Path::new("a/b.tmp"));
-    assert_eq!(
-        write::temp_path(Path::new("a/b.tar.gz")),
-        Path::new("a/b.tar.gz.tmp")
-    );
-}

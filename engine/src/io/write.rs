@@ -1,15 +1,14 @@
 //! Writers: meshes and samples as binary little-endian PLY, samples as CSV.
 //!
-//! The path-taking writers are atomic: they write `<path>.<ext>.tmp` in the same folder
-//! through a [`BufWriter`], sync it, and rename it over `path`, so a reader sees the old
-//! file or the whole new one. The `_to` variants write to any [`Write`] (wrap unbuffered
-//! sinks in a `BufWriter`: they issue one small write per record).
+//! The path-taking writers are atomic ([`write_atomically`]: a temporary file in the
+//! same folder, synced, then renamed over `path`), so a reader sees the old file or the
+//! whole new one. The `_to` variants write to any [`Write`] (wrap unbuffered sinks in a
+//! `BufWriter`: they issue one small write per record).
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::io::{self, Write};
+use std::path::Path;
 
-use super::SAMPLE_COLUMNS;
+use super::{SAMPLE_COLUMNS, write_atomically};
 use crate::mesh::{MeshError, TriMesh};
 use crate::sample::Sample;
 
@@ -21,7 +20,12 @@ pub fn write_mesh_ply(
     mesh: &TriMesh,
     face_colors: Option<&[[u8; 3]]>,
 ) -> Result<(), MeshError> {
-    write_atomically(path, |w| write_mesh_ply_to(w, mesh, face_colors))
+    write_atomically(path, |w| write_mesh_ply_to(w, mesh, face_colors)).map_err(|source| {
+        MeshError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
 }
 
 /// Writes `mesh` as binary little-endian PLY to `w`: element `vertex` with `float x y z`
@@ -96,7 +100,10 @@ pub fn write_mesh_ply_to<W: Write>(
 ///
 /// Errors: [`MeshError::Io`] naming `path`.
 pub fn write_samples_ply(path: &Path, samples: &[Sample]) -> Result<(), MeshError> {
-    write_atomically(path, |w| write_samples_ply_to(w, samples))
+    write_atomically(path, |w| write_samples_ply_to(w, samples)).map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Writes samples as a binary little-endian PLY point cloud to `w`: one element `vertex`
@@ -141,7 +148,10 @@ pub fn write_samples_ply_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Resul
 ///
 /// Errors: [`MeshError::Io`] naming `path`.
 pub fn write_samples_csv(path: &Path, samples: &[Sample]) -> Result<(), MeshError> {
-    write_atomically(path, |w| write_samples_csv_to(w, samples))
+    write_atomically(path, |w| write_samples_csv_to(w, samples)).map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Writes samples as CSV to `w`: a header row of the [`SAMPLE_COLUMNS`] (`x,y,z` first),
@@ -185,41 +195,4 @@ fn sample_row(s: &Sample) -> [u32; 16] {
         s.segment,
         s.index,
     ]
-}
-
-/// `<path>.<ext>.tmp` (or `<path>.tmp` without an extension), in the same folder.
-pub(super) fn temp_path(path: &Path) -> PathBuf {
-    match path.extension() {
-        Some(ext) => {
-            let mut ext = ext.to_os_string();
-            ext.push(".tmp");
-            path.with_extension(ext)
-        }
-        None => path.with_extension("tmp"),
-    }
-}
-
-/// Runs `write` into a buffered temporary file beside `path`, then renames it over
-/// `path`. On failure the temporary file is removed and `path` is untouched.
-fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
-) -> Result<(), MeshError> {
-    let tmp = temp_path(path);
-    let result = (|| {
-        let mut w = BufWriter::new(File::create(&tmp)?);
-        write(&mut w)?;
-        let file = w.into_inner().map_err(io::IntoInnerError::into_error)?;
-        file.sync_all()?;
-        drop(file);
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|source| {
-        // Best effort: the temporary file may not exist, and the first error matters.
-        let _ = std::fs::remove_file(&tmp);
-        MeshError::Io {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
 }

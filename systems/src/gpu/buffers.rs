@@ -1,5 +1,5 @@
 //! Growable GPU buffers refilled every frame through a ring of mapped staging chunks:
-//! the buffer of [`Sample`]s the splats are drawn from ([`SampleBuffer`]) and the sites
+//! the buffer of [`Sample`]s the splats are drawn from ([`GpuSampleBuffer`]) and the sites
 //! buffer of the expansion pass ([`super::expand`]), both a `StreamedBuffer`.
 //!
 //! Capacity policy: the buffer holds a power of two of samples, at least
@@ -26,13 +26,14 @@ pub const MIN_CAPACITY: usize = 1024;
 
 const SAMPLE_BYTES: u64 = std::mem::size_of::<Sample>() as u64;
 
-/// The device buffer of samples that the splat pipeline reads at instance rate.
+/// The device buffer of samples that the splat pipeline reads at instance rate: the
+/// render-side copy of the ECS's [`SampleBuffer`](crate::ecs::SampleBuffer).
 #[derive(Debug)]
-pub struct SampleBuffer {
+pub struct GpuSampleBuffer {
     inner: StreamedBuffer,
 }
 
-/// The capacity that [`SampleBuffer`] chooses for `count` samples when it currently
+/// The capacity that [`GpuSampleBuffer`] chooses for `count` samples when it currently
 /// holds `capacity` (see the module documentation).
 pub fn next_capacity(capacity: usize, count: usize) -> usize {
     let fit = count.max(MIN_CAPACITY).next_power_of_two();
@@ -187,7 +188,7 @@ impl StreamedBuffer {
     }
 }
 
-impl SampleBuffer {
+impl GpuSampleBuffer {
     /// An empty buffer of [`MIN_CAPACITY`] samples.
     pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
         let spec = Streamed {

@@ -4,6 +4,7 @@
 //! towards -Z; positive yaw turns it towards +X, positive pitch raises it.
 
 use glam::{Mat4, Vec3};
+use strata_engine::mesh::TriMesh;
 
 /// A perspective camera orbiting a target.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -91,6 +92,16 @@ impl OrbitCamera {
         self.distance = hi;
     }
 
+    /// This camera's yaw, pitch and field of view, looking at `mesh`: its bounding box
+    /// fitted at `aspect` ([`fit_box`](Self::fit_box)), then the distance multiplied by
+    /// `zoom` (< 1 is closer).
+    pub fn fitted_to_mesh(mut self, mesh: &TriMesh, aspect: f32, zoom: f32) -> Self {
+        let (min, max) = mesh.bounds();
+        self.fit_box(min.as_vec3(), max.as_vec3(), aspect);
+        self.distance *= zoom;
+        self
+    }
+
     /// The camera position.
     pub fn eye(&self) -> Vec3 {
         let (sy, cy) = self.yaw.sin_cos();
@@ -145,6 +156,26 @@ mod tests {
                 assert!((0.0..=1.0).contains(&ndc.z), "{ndc}");
             }
         }
+    }
+
+    #[test]
+    fn fitting_to_a_mesh_keeps_the_orientation_and_scales_the_distance() {
+        let mesh = strata_engine::mesh::shapes::plane(2.0, 2).expect("plane");
+        let look = OrbitCamera {
+            yaw: 0.25,
+            pitch: -0.5,
+            fov_y: 0.8,
+            ..OrbitCamera::default()
+        };
+        let fitted = look.fitted_to_mesh(&mesh, 1.5, 1.0);
+        let (min, max) = mesh.bounds();
+        let mut boxed = look;
+        boxed.fit_box(min.as_vec3(), max.as_vec3(), 1.5);
+        assert_eq!(fitted, boxed);
+        assert_eq!((fitted.yaw, fitted.pitch, fitted.fov_y), (0.25, -0.5, 0.8));
+        assert_eq!(fitted.target, Vec3::new(1.0, 1.0, 0.0));
+        let closer = look.fitted_to_mesh(&mesh, 1.5, 0.5);
+        assert_eq!(closer.distance, 0.5 * fitted.distance);
     }
 
     #[test]

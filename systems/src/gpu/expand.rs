@@ -2,7 +2,7 @@
 //! sample ([`Sampler::sample_sites_into`]) instead of 64 and skips the record
 //! (interpolated position, normal and field, the field's eigen-decomposition), which a
 //! compute pass (`shaders/expand.wgsl`) then computes per sample in `f32`, straight
-//! into the renderer's [`SampleBuffer`].
+//! into the renderer's [`GpuSampleBuffer`].
 //!
 //! On the bunny at 10^6 samples this takes the CPU side of a frame from the full
 //! sampler's time to the sites' time (`sample_floor` in `bench/`) and the upload from
@@ -12,7 +12,7 @@
 use strata_engine::sample::{SampleSite, Sampler};
 use wgpu::util::DeviceExt;
 
-use super::buffers::{SampleBuffer, Streamed, StreamedBuffer};
+use super::buffers::{GpuSampleBuffer, Streamed, StreamedBuffer};
 use super::context::{GpuError, scoped};
 use super::shaders;
 
@@ -199,7 +199,7 @@ impl SiteExpander {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         sites: &[SampleSite],
-        samples: &mut SampleBuffer,
+        samples: &mut GpuSampleBuffer,
     ) -> Result<(), GpuError> {
         let n = sites.len();
         samples.resize(device, n)?;

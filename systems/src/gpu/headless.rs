@@ -1,7 +1,11 @@
 //! Offscreen rendering: a colour and depth target without a window, read back into an
-//! RGBA image and written as PNG.
+//! RGBA image and written as PNG; [`HeadlessTarget::render_samples`] draws a set of
+//! samples (and their mesh) in one call (`strata render`).
 
 use std::path::Path;
+
+use strata_engine::mesh::TriMesh;
+use strata_engine::sample::Sample;
 
 use super::buffers::map_read;
 use super::camera::OrbitCamera;
@@ -31,16 +35,18 @@ impl RgbaImage {
         ]
     }
 
-    /// Writes the image as an 8-bit RGBA PNG.
+    /// Writes the image as an 8-bit RGBA PNG, atomically
+    /// ([`strata_engine::io::write_atomically`]).
     pub fn write_png(&self, path: &Path) -> Result<(), png::EncodingError> {
-        let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-        let mut encoder = png::Encoder::new(file, self.width, self.height);
-        encoder.set_color(png::ColorType::Rgba);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = encoder.write_header()?;
-        writer.write_image_data(&self.pixels)?;
-        writer.finish()
+        strata_engine::io::write_atomically(path, |file| {
+            let mut encoder = png::Encoder::new(file, self.width, self.height);
+            encoder.set_color(png::ColorType::Rgba);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+            let mut writer = encoder.write_header()?;
+            writer.write_image_data(&self.pixels)?;
+            writer.finish()
+        })
     }
 }
 
@@ -148,6 +154,27 @@ impl HeadlessTarget {
             depth: DEPTH_FORMAT,
             samples: self.samples,
         }
+    }
+
+    /// Draws `samples` as splats, over `mesh` when given (with each face's segment id,
+    /// for [`MeshMode::Segments`](super::MeshMode::Segments)), with a new
+    /// [`SplatRenderer`] for this target, and reads the picture back (waits for the
+    /// device). For one picture; to draw many, keep a renderer and call
+    /// [`render`](Self::render).
+    pub fn render_samples(
+        &self,
+        ctx: &GpuContext,
+        samples: &[Sample],
+        mesh: Option<(&TriMesh, &[u32])>,
+        camera: &OrbitCamera,
+        style: &SplatStyle,
+    ) -> Result<RgbaImage, GpuError> {
+        let mut renderer = SplatRenderer::new(&ctx.device, self.format())?;
+        renderer.upload(&ctx.device, &ctx.queue, samples)?;
+        if let Some((mesh, face_segments)) = mesh {
+            renderer.set_mesh(&ctx.device, &ctx.queue, mesh, Some(face_segments))?;
+        }
+        self.render(ctx, &renderer, camera, style)
     }
 
     /// Draws `renderer`'s samples (and mesh) and reads the picture back (waits for

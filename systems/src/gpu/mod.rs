@@ -31,7 +31,7 @@ pub mod upload;
 /// ECS render system, tests) name the same types.
 pub use wgpu;
 
-pub use buffers::SampleBuffer;
+pub use buffers::GpuSampleBuffer;
 pub use camera::OrbitCamera;
 pub use context::{GpuContext, GpuError, GpuOptions};
 pub use expand::SiteExpander;

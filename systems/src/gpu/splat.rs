@@ -15,7 +15,7 @@ use glam::Vec3;
 use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{Sample, Sampler};
 
-use super::buffers::SampleBuffer;
+use super::buffers::GpuSampleBuffer;
 use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
 use super::layout::{
@@ -107,14 +107,14 @@ pub struct SplatRenderer {
     disc: wgpu::RenderPipeline,
     gaussian: wgpu::RenderPipeline,
     mesh_pipeline: wgpu::RenderPipeline,
-    samples: SampleBuffer,
+    samples: GpuSampleBuffer,
     mesh: Option<(wgpu::Buffer, u32)>,
 }
 
 impl SplatRenderer {
     /// Builds the pipelines for targets of `format`.
     pub fn new(device: &wgpu::Device, format: TargetFormat) -> Result<Self, GpuError> {
-        let samples = SampleBuffer::new(device)?;
+        let samples = GpuSampleBuffer::new(device)?;
         let (uniforms, bind_group, disc, gaussian, mesh_pipeline) =
             scoped(device, "building the splat pipelines", || {
                 build_pipelines(device, format)
@@ -136,7 +136,7 @@ impl SplatRenderer {
         self.format
     }
 
-    /// Replaces the samples drawn (see [`SampleBuffer::upload`]).
+    /// Replaces the samples drawn (see [`GpuSampleBuffer::upload`]).
     pub fn upload(
         &mut self,
         device: &wgpu::Device,
@@ -147,13 +147,13 @@ impl SplatRenderer {
     }
 
     /// The sample buffer.
-    pub fn samples(&self) -> &SampleBuffer {
+    pub fn samples(&self) -> &GpuSampleBuffer {
         &self.samples
     }
 
     /// The sample buffer, for a GPU pass that writes the samples itself
     /// ([`SiteExpander`](super::expand::SiteExpander)).
-    pub fn samples_mut(&mut self) -> &mut SampleBuffer {
+    pub fn samples_mut(&mut self) -> &mut GpuSampleBuffer {
         &mut self.samples
     }
 

@@ -3,7 +3,7 @@
 //! The engine's `sample_meshes` system ([`crate::ecs::sampling`]) fills each mesh
 //! entity's CPU-side [`SampleBuffer`]; [`upload_samples`],
 //! running after it, copies the buffer of one mesh entity into the [`SplatRenderer`]'s
-//! GPU buffer whenever it was rewritten (its `generation` moved). The upload goes
+//! [`GpuSampleBuffer`](super::GpuSampleBuffer) whenever it was rewritten (its `generation` moved). The upload goes
 //! through the renderer's staging ring and never waits on the GPU, so the CPU does not
 //! stall on the previous frame. Drawing stays with the caller (a window or a headless
 //! target), which reads the renderer from the [`GpuSplats`] resource.

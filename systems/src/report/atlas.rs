@@ -52,8 +52,8 @@ const TITLE_PX: f64 = 24.0;
 /// ticks, clamped to this range.
 const TICK_FRACTION: (f64, f64) = (0.01, 0.05);
 
-/// Writes [`atlas_svg`] to `path` atomically: into a temporary file beside it (same
-/// name plus `.tmp`), then renamed over `path`.
+/// Writes [`atlas_svg`] to `path` atomically
+/// ([`strata_engine::io::write_atomically`]).
 pub fn write_atlas_svg(
     path: &Path,
     mesh: &TriMesh,
@@ -61,13 +61,7 @@ pub fn write_atlas_svg(
     params: &[SegmentParam],
 ) -> std::io::Result<()> {
     let svg = atlas_svg(mesh, field, params);
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    std::fs::write(&tmp, svg.as_bytes())?;
-    std::fs::rename(&tmp, path).inspect_err(|_| {
-        // The rename error is the one worth reporting; the stray file is only litter.
-        let _ = std::fs::remove_file(&tmp);
-    })
+    strata_engine::io::write_atomically(path, |w| std::io::Write::write_all(w, svg.as_bytes()))
 }
 
 /// The atlas of `params` as SVG text (see the [module docs](self)): tiles in a grid of
@@ -79,7 +73,7 @@ pub fn write_atlas_svg(
 ///
 /// ```
 /// use strata_engine::{field::FieldSpec, mesh::shapes, param};
-/// use strata_systems::atlas::atlas_svg;
+/// use strata_systems::report::atlas::atlas_svg;
 /// let mesh = shapes::plane(1.0, 4)?;
 /// let spec = FieldSpec::Constant { direction: [1.0, 1.0, 0.0], anisotropy: 2.0, density: 1.0 };
 /// let field = spec.build(&mesh)?;

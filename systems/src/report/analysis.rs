@@ -1,5 +1,8 @@
-//! `strata analyze`: quality measures of a scene's samples (or of a sample file) as
-//! JSON numbers and PNG plots.
+//! Quality measures of samples as JSON numbers and PNG plots (`strata analyze`).
+//!
+//! Input: an [`AnalysisInput`] (realizations of one sample count, and the scene they
+//! were drawn from, if any) and [`AnalysisOptions`]. Output: files in a folder, and an
+//! [`AnalysisSummary`].
 //!
 //! - Every input: differential domain analysis (`dda.json`, `dda_rapsd.png`,
 //!   `dda_anisotropy.png`, `dda_spectrum.png`), which works on surfaces and for
@@ -11,9 +14,12 @@
 //!   `discrepancy_*.png`, `rapsd.png`, `anisotropy.png`, `periodogram.png`). These
 //!   measures assume a uniform density in that frame: for a constant anisotropic field
 //!   axis-aligned with the domain they are the measures in the field's metric.
-//! - `--alignment` on a flat scene: the per-face angle between the field and the
+//! - `alignment` on a flat scene: the per-face angle between the field and the
 //!   parameter axes after the surface pipeline's segmentation (`alignment.json`,
 //!   `alignment.png`).
+//!
+//! Cost: the DDA is O(realizations x samples x neighbours); the exact sup discrepancy
+//! is quadratic in the count per realization (curves stop at 8192 samples).
 
 use std::path::{Path, PathBuf};
 
@@ -23,67 +29,112 @@ use strata_engine::analysis::dda::{DdaOptions, dda};
 use strata_engine::analysis::spectrum::periodogram;
 use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, ShapeFamily, alignment};
 use strata_engine::sample::Sample;
-use strata_engine::surface::{Preprocessed, SurfaceOptions};
+use strata_engine::surface::Preprocessed;
 
+use super::plot::{self, Axes, Series};
 use crate::config::SceneConfig;
-use crate::plot::{self, Axes, Series};
 use crate::scene::Scene;
-
-/// Arguments of `strata analyze`.
-#[derive(Debug, clap::Args)]
-pub struct AnalyzeArgs {
-    /// Scene file (`.ron`) to sample, or a sample file (`.ply`, as `strata sample`
-    /// writes) to analyse as it is.
-    pub input: PathBuf,
-    /// Output folder for the JSON and PNG files (created if missing).
-    #[arg(long, short = 'o', default_value = "analysis")]
-    pub out: PathBuf,
-    /// Samples per realization (scene only; overrides `sampling.count`).
-    #[arg(long, short = 'n')]
-    pub count: Option<u64>,
-    /// Realizations to average (scene only): seeds `seed, seed + 1, ...`.
-    #[arg(long, default_value_t = 4)]
-    pub runs: u64,
-    /// First seed (scene only; overrides `sampling.seed`).
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// DDA kernel support in expected spacings (the paper's epsilon).
-    #[arg(long, default_value_t = 10.0)]
-    pub epsilon: f64,
-    /// Write only the JSON numbers, no PNG plots.
-    #[arg(long)]
-    pub no_plots: bool,
-    /// Also map the angle between the field and the parameter axes (flat scenes).
-    #[arg(long)]
-    pub alignment: bool,
-}
 
 /// Draws one plot into the given file.
 type DrawFn<'a> = dyn Fn(&Path) -> Result<(), plot::PlotError> + 'a;
 
-/// What was analysed.
-struct Input {
-    sets: Vec<Vec<Sample>>,
-    /// A scene to draw more counts from (discrepancy curves), with its first seed.
-    scene: Option<(Scene, u64)>,
-    config: Option<SceneConfig>,
+/// What to analyse.
+pub struct AnalysisInput {
+    /// Realizations, each the same non-zero number of samples; at least one.
+    pub sets: Vec<Vec<Sample>>,
+    /// The scene they were drawn from, if any: discrepancy curves draw more counts
+    /// from it, and the alignment map preprocesses it.
+    pub scene: Option<SampledScene>,
 }
 
-/// Runs `strata analyze`.
-pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
-    if args.runs == 0 {
-        bail!("--runs must be at least 1");
+/// A scene and how its realizations were drawn.
+pub struct SampledScene {
+    /// The scene, preprocessed.
+    pub scene: Scene,
+    /// Its configuration.
+    pub config: SceneConfig,
+    /// The seed of the first realization; realization `k` used `first_seed + k`.
+    pub first_seed: u64,
+}
+
+impl AnalysisInput {
+    /// One realization read from a file (at least one sample).
+    pub fn from_samples(samples: Vec<Sample>) -> Self {
+        Self {
+            sets: vec![samples],
+            scene: None,
+        }
     }
-    let input = load(args)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+
+    /// `runs` realizations of `count` samples of `scene`, with seeds `first_seed`,
+    /// `first_seed + 1`, ...
+    pub fn from_scene(
+        scene: Scene,
+        config: SceneConfig,
+        count: usize,
+        first_seed: u64,
+        runs: u64,
+    ) -> Self {
+        let sets = (0..runs)
+            .map(|k| scene.sampler.sample(count, first_seed + k))
+            .collect();
+        Self {
+            sets,
+            scene: Some(SampledScene {
+                scene,
+                config,
+                first_seed,
+            }),
+        }
+    }
+}
+
+/// What to measure and draw.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnalysisOptions {
+    /// DDA kernel support in expected spacings (the paper's epsilon).
+    pub epsilon: f64,
+    /// Draw the PNG plots (the JSON numbers are always written).
+    pub plots: bool,
+    /// Also map the angle between the field and the parameter axes (flat scenes only).
+    pub alignment: bool,
+}
+
+/// What [`write_analysis`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AnalysisSummary {
+    /// Realizations analysed.
+    pub realizations: usize,
+    /// Samples per realization.
+    pub samples: usize,
+    /// The plots written.
+    pub plots: Vec<PathBuf>,
+    /// Why plots were skipped (for example no font), one entry per failed plot.
+    pub plot_errors: Vec<String>,
+}
+
+/// Measures `input` and writes the JSON files (and, with `options.plots`, the PNG
+/// plots) into `out`, creating it if missing; `source` names the input in
+/// `summary.json`. See the [module docs](self) for the files. A plot that fails is
+/// reported in the summary, not as an error: the numbers never depend on plots. An
+/// input without samples is an error.
+pub fn write_analysis(
+    input: &AnalysisInput,
+    source: &Path,
+    out: &Path,
+    options: &AnalysisOptions,
+) -> anyhow::Result<AnalysisSummary> {
+    if input.sets.is_empty() || input.sets.iter().any(Vec::is_empty) {
+        bail!("nothing to analyse: every realization needs at least one sample");
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut written: Vec<PathBuf> = Vec::new();
     let mut plot_errors: Vec<String> = Vec::new();
     let mut plot_to = |name: &str, f: &DrawFn| {
-        if args.no_plots {
+        if !options.plots {
             return;
         }
-        let path = args.out.join(name);
+        let path = out.join(name);
         match f(&path) {
             Ok(()) => written.push(path),
             Err(e) => plot_errors.push(e.to_string()),
@@ -91,16 +142,16 @@ pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     };
     let n = input.sets[0].len();
     // Differential domain analysis: every input.
-    let options = DdaOptions {
-        epsilon: args.epsilon,
+    let dda_options = DdaOptions {
+        epsilon: options.epsilon,
         ..Default::default()
     };
-    let spectrum = dda(&input.sets, &options).context("differential domain analysis")?;
+    let spectrum = dda(&input.sets, &dda_options).context("differential domain analysis")?;
     let radial = spectrum.radial();
     write_json(
-        &args.out.join("dda.json"),
+        &out.join("dda.json"),
         &serde_json::json!({
-            "samples": n, "realizations": input.sets.len(), "options": options_json(&options),
+            "samples": n, "realizations": input.sets.len(), "options": options_json(&dda_options),
             "frequency": radial.frequency, "rapsd": radial.rapsd,
             "anisotropy_db": radial.anisotropy_db,
         }),
@@ -152,7 +203,7 @@ pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
     });
 
     // Planar measures.
-    if let Some(frame) = planar_frame(&input) {
+    if let Some(frame) = planar_frame(input) {
         let unit: Vec<Vec<DVec2>> = input.sets.iter().map(|s| frame.map(s)).collect();
         let families = [
             (ShapeFamily::Rectangles, "rectangles"),
@@ -165,12 +216,13 @@ pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
             let sup = unit.iter().map(|p| d.sup(p)).sum::<f64>() / unit.len() as f64;
             let l2 = unit.iter().map(|p| d.l2(p)).sum::<f64>() / unit.len() as f64;
             let mut entry = serde_json::json!({"n": n, "sup": sup, "l2": l2});
-            if let Some((scene, seed)) = &input.scene {
+            if let Some(sampled) = &input.scene {
+                let (scene, seed) = (&sampled.scene, sampled.first_seed);
                 let ns: Vec<usize> = (6..=13)
                     .flat_map(|l| [1usize << l, (1 << l) + (1 << (l - 1))])
                     .filter(|&k| k <= n.clamp(64, 8192))
                     .collect();
-                let seeds: Vec<u64> = (0..args.runs).map(|k| seed + k).collect();
+                let seeds: Vec<u64> = (0..input.sets.len() as u64).map(|k| seed + k).collect();
                 if ns.len() >= 2 {
                     let curve = DiscrepancyCurve::measure(
                         &d,
@@ -214,7 +266,7 @@ pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         let spec = periodogram(&unit, 2.5).context("periodogram")?;
         let r = spec.radial();
         write_json(
-            &args.out.join("planar.json"),
+            &out.join("planar.json"),
             &serde_json::json!({
                 "domain_lo": [frame.lo.x, frame.lo.y], "domain_size": [frame.size.x, frame.size.y],
                 "discrepancy": disc,
@@ -261,70 +313,22 @@ pub fn analyze(args: &AnalyzeArgs) -> anyhow::Result<()> {
         plot_to("points.png", &|p| {
             plot::points(p, "samples (unit-square frame)", &unit[0], DVec2::ONE)
         });
-        if args.alignment {
-            alignment_map(args, &input, &mut plot_to)?;
+        if options.alignment {
+            alignment_map(out, input, &mut plot_to)?;
         }
-    } else if args.alignment {
+    } else if options.alignment {
         bail!("--alignment needs a flat scene (the map is drawn in the plane)");
     }
     write_json(
-        &args.out.join("summary.json"),
-        &serde_json::json!({"input": args.input, "samples": n, "realizations": input.sets.len()}),
+        &out.join("summary.json"),
+        &serde_json::json!({"input": source, "samples": n, "realizations": input.sets.len()}),
     )?;
-    println!(
-        "analysed {} x {n} samples: wrote JSON{} to {}",
-        input.sets.len(),
-        if args.no_plots { "" } else { " and PNG" },
-        args.out.display()
-    );
-    for e in plot_errors.iter().take(1) {
-        eprintln!("warning: plots skipped: {e}");
-    }
-    Ok(())
-}
-
-fn load(args: &AnalyzeArgs) -> anyhow::Result<Input> {
-    let ext = args
-        .input
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("ply") => {
-            let samples = strata_engine::io::read_samples_ply(&args.input)
-                .with_context(|| args.input.display().to_string())?;
-            if samples.is_empty() {
-                bail!("{}: no samples", args.input.display());
-            }
-            Ok(Input {
-                sets: vec![samples],
-                scene: None,
-                config: None,
-            })
-        }
-        Some("ron") => {
-            let config = SceneConfig::load(&args.input)?;
-            let scene = Scene::build(&config).with_context(|| args.input.display().to_string())?;
-            let count = args.count.unwrap_or(config.sampling.count);
-            let count = usize::try_from(count).context("sample count does not fit in memory")?;
-            if count == 0 {
-                bail!("sample count must be at least 1");
-            }
-            let seed = args.seed.unwrap_or(config.sampling.seed);
-            let sets = (0..args.runs)
-                .map(|k| scene.sampler.sample(count, seed + k))
-                .collect();
-            Ok(Input {
-                sets,
-                scene: Some((scene, seed)),
-                config: Some(config),
-            })
-        }
-        _ => bail!(
-            "{}: expected a scene (.ron) or a sample file (.ply)",
-            args.input.display()
-        ),
-    }
+    Ok(AnalysisSummary {
+        realizations: input.sets.len(),
+        samples: n,
+        plots: written,
+        plot_errors,
+    })
 }
 
 /// The affine frame of a flat input: `q = (p - lo) / size` per axis.
@@ -348,7 +352,7 @@ impl Frame {
 
 /// The frame of the domain if every sample lies in one `z = const` plane: the scene's
 /// mesh bounds, or the samples' bounds for a sample file.
-fn planar_frame(input: &Input) -> Option<Frame> {
+fn planar_frame(input: &AnalysisInput) -> Option<Frame> {
     let z0 = input.sets[0][0].position[2];
     let flat = input
         .sets
@@ -359,8 +363,8 @@ fn planar_frame(input: &Input) -> Option<Frame> {
         return None;
     }
     let (lo, hi) = match &input.scene {
-        Some((scene, _)) => {
-            let (lo, hi) = scene.mesh.bounds();
+        Some(sampled) => {
+            let (lo, hi) = sampled.scene.mesh.bounds();
             (lo.truncate(), hi.truncate())
         }
         None => input.sets.iter().flatten().fold(
@@ -375,22 +379,21 @@ fn planar_frame(input: &Input) -> Option<Frame> {
     (size.x > 0.0 && size.y > 0.0).then_some(Frame { lo, size })
 }
 
+/// The alignment map of a scene input: `alignment.json` and `alignment.png`.
 fn alignment_map(
-    args: &AnalyzeArgs,
-    input: &Input,
+    out: &Path,
+    input: &AnalysisInput,
     plot_to: &mut dyn FnMut(&str, &DrawFn),
 ) -> anyhow::Result<()> {
-    let (Some((scene, _)), Some(config)) = (&input.scene, &input.config) else {
+    let Some(SampledScene { scene, config, .. }) = &input.scene else {
         bail!("--alignment needs a scene file");
     };
-    let options = SurfaceOptions {
-        segment: config.segment,
-        param: config.param,
-        curve: config.curve,
-        ..Default::default()
-    };
-    let pre = Preprocessed::build(scene.mesh.clone(), scene.field.clone(), &options)
-        .context("surface preprocessing for the alignment map")?;
+    let pre = Preprocessed::build(
+        scene.mesh.clone(),
+        scene.field.clone(),
+        &config.surface_options(),
+    )
+    .context("surface preprocessing for the alignment map")?;
     let angles = alignment::face_angles(&scene.mesh, &scene.field, &pre.params);
     let max = angles
         .iter()
@@ -398,7 +401,7 @@ fn alignment_map(
         .filter(|a| a.is_finite())
         .fold(0.0, f64::max);
     write_json(
-        &args.out.join("alignment.json"),
+        &out.join("alignment.json"),
         &serde_json::json!({"segments": pre.params.len(), "max_angle_deg": max,
             "face_angle_deg": angles}),
     )?;
@@ -415,13 +418,90 @@ fn alignment_map(
     Ok(())
 }
 
+/// The DDA options as JSON.
 fn options_json(o: &DdaOptions) -> serde_json::Value {
     serde_json::json!({"epsilon": o.epsilon, "max_frequency": o.max_frequency,
         "frequency_step": o.frequency_step, "bins_per_spacing": o.bins_per_spacing,
         "min_normal_cos": o.min_normal_cos, "arc_tolerance": o.arc_tolerance})
 }
 
+/// Writes `value` as pretty JSON, atomically.
 fn write_json(path: &Path, value: &serde_json::Value) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(value)?;
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+    strata_engine::io::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_json(path: &Path) -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("json")
+    }
+
+    #[test]
+    fn a_flat_scene_gets_dda_planar_measures_and_a_summary() {
+        let config = SceneConfig::from_ron(
+            "(mesh: Shape(Plane(size: 1.0, resolution: 4)), sampling: (count: 256, seed: 5))",
+            Path::new("flat.ron"),
+        )
+        .expect("scene");
+        let scene = Scene::build(&config).expect("build");
+        let input = AnalysisInput::from_scene(scene, config, 256, 5, 2);
+        assert_eq!(input.sets.len(), 2);
+        assert_ne!(input.sets[0], input.sets[1], "seeds 5 and 6 differ");
+        let dir = tempfile::tempdir().expect("tempdir");
+        let options = AnalysisOptions {
+            epsilon: 10.0,
+            plots: false,
+            alignment: false,
+        };
+        let summary =
+            write_analysis(&input, Path::new("flat.ron"), dir.path(), &options).expect("analysis");
+        assert_eq!((summary.realizations, summary.samples), (2, 256));
+        assert!(summary.plots.is_empty() && summary.plot_errors.is_empty());
+        let s = read_json(&dir.path().join("summary.json"));
+        assert_eq!(s["input"], "flat.ron");
+        assert_eq!(
+            (s["samples"].as_u64(), s["realizations"].as_u64()),
+            (Some(256), Some(2))
+        );
+        let dda = read_json(&dir.path().join("dda.json"));
+        assert_eq!(dda["options"]["epsilon"], 10.0);
+        let planar = read_json(&dir.path().join("planar.json"));
+        let rect = &planar["discrepancy"]["rectangles"];
+        // A scene input gets a discrepancy curve over counts up to its own.
+        let ns: Vec<u64> = rect["curve"]["n"]
+            .as_array()
+            .expect("curve")
+            .iter()
+            .filter_map(|v| v.as_u64())
+            .collect();
+        assert_eq!(ns, [64, 96, 128, 192, 256]);
+        let sup = rect["sup"].as_f64().expect("sup");
+        assert!(sup > 0.0 && sup < 0.1, "stratified samples: {sup}");
+        assert!(!dir.path().join("alignment.json").exists());
+    }
+
+    #[test]
+    fn inputs_without_samples_are_errors() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let options = AnalysisOptions {
+            epsilon: 10.0,
+            plots: false,
+            alignment: false,
+        };
+        for input in [
+            AnalysisInput {
+                sets: Vec::new(),
+                scene: None,
+            },
+            AnalysisInput::from_samples(Vec::new()),
+        ] {
+            let e = write_analysis(&input, Path::new("x.ply"), dir.path(), &options)
+                .expect_err("no samples");
+            assert!(e.to_string().contains("at least one sample"), "{e}");
+        }
+    }
 }

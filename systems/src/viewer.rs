@@ -1,8 +1,11 @@
-//! `strata view`: a window (winit) with an orbit camera over the streaming engine
-//! ([`crate::hot_reload::StreamingEngine`]): the scene file (and the mesh and field
-//! files it names) is watched and hot-reloaded, the engine resamples every frame, and
-//! the GPU upload system ([`crate::gpu::upload`]) streams the samples into the
-//! renderer's buffer; the title shows the frame time and the sample count.
+//! An interactive window (winit) with an orbit camera over the streaming engine
+//! ([`crate::hot_reload::StreamingEngine`]), behind `strata view`: the scene file (and
+//! the mesh and field files it names) is watched and hot-reloaded, the engine resamples
+//! every frame, and the GPU upload system ([`crate::gpu::upload`]) streams the samples
+//! into the renderer's buffer; the title shows the frame time and the sample count.
+//!
+//! Input: [`ViewerOptions`]. Output: the window until it closes, then a
+//! [`ViewerOutcome`]. Cost per frame: one sampling of the scene, one upload, one draw.
 //!
 //! Mouse: drag to orbit, wheel to zoom. Keys: `Up`/`Down` double or halve the count,
 //! `S` a new seed (both until the scene file sets them again), `C` the next colour
@@ -29,34 +32,50 @@ use crate::ecs::{
 use crate::gpu::headless::DEPTH_FORMAT;
 use crate::gpu::splat::{FrameTarget, TargetFormat};
 use crate::gpu::{
-    ColorMode, Footprint, GpuContext, GpuSplats, MeshMode, OrbitCamera, SplatRenderer, SplatStyle,
+    ColorMode, Footprint, GpuContext, GpuOptions, GpuSplats, MeshMode, OrbitCamera, SplatRenderer,
+    SplatStyle,
 };
 use crate::hot_reload::StreamingEngine;
-use crate::render::LookArgs;
 
-/// Arguments of `strata view`.
-#[derive(Debug, clap::Args)]
-pub struct ViewArgs {
-    /// Scene file (RON).
-    pub config: PathBuf,
-    /// Initial window width (logical pixels).
-    #[arg(long, default_value_t = 1280)]
-    pub width: u32,
-    /// Initial window height (logical pixels).
-    #[arg(long, default_value_t = 960)]
-    pub height: u32,
-    /// Close after this many frames and print the last frame's timings (for scripted
-    /// runs); default: run until the window closes.
-    #[arg(long)]
-    pub frames: Option<u64>,
-    /// Camera, colours and sample count.
-    #[command(flatten)]
-    pub look: LookArgs,
+/// What the viewer shows and how it starts.
+#[derive(Clone, Debug)]
+pub struct ViewerOptions {
+    /// The scene file (RON) to watch.
+    pub scene: PathBuf,
+    /// Initial window size, logical pixels (at least 1 each).
+    pub size: (u32, u32),
+    /// Close after this many frames (scripted runs); `None`: run until the window
+    /// closes.
+    pub max_frames: Option<u64>,
+    /// Sample count to start with instead of the scene's (until the scene sets it again).
+    pub count: Option<usize>,
+    /// Seed to start with instead of the scene's (until the scene sets it again).
+    pub seed: Option<u64>,
+    /// Which GPU adapter to use.
+    pub gpu: GpuOptions,
+    /// The camera's yaw, pitch and field of view; its target and distance are fitted
+    /// to the mesh ([`OrbitCamera::fitted_to_mesh`]).
+    pub camera: OrbitCamera,
+    /// The fitted distance is multiplied by this (> 0; < 1 is closer).
+    pub zoom: f32,
+    /// The splat style to start with (the keys change it; the density colour map is
+    /// refitted to the samples).
+    pub style: SplatStyle,
 }
 
-/// Runs `strata view` until the window closes.
-pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
-    args.look.validate()?;
+/// How a viewer run ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ViewerOutcome {
+    /// Frames drawn.
+    pub frames: u64,
+    /// The last frame's status line (count, frame, sampling and upload times, modes).
+    pub status: String,
+}
+
+/// Opens the window and runs it until it closes (or `options.max_frames` were drawn).
+/// Fails in one line without a display or a GPU; a scene that is bad at start-up is
+/// waited for (printing its errors), so the window opens on the first good save.
+pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
     // The display first: without one, fail in one line before the preprocessing.
     let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
     if cfg!(target_os = "linux")
@@ -71,8 +90,8 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow!("cannot open a window: {e} (no display; `strata render` draws without one)")
     })?;
-    let mut engine = StreamingEngine::watch(&args.config)
-        .with_context(|| format!("watching {}", args.config.display()))?;
+    let mut engine = StreamingEngine::watch(&options.scene)
+        .with_context(|| format!("watching {}", options.scene.display()))?;
     engine
         .world
         .resource_mut::<EngineSettings>()
@@ -89,26 +108,26 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
         }
         eprintln!(
             "waiting for a good save of {} (Ctrl-C quits)",
-            args.config.display()
+            options.scene.display()
         );
         engine.wait_for_change(Duration::from_secs(3600));
     };
-    if let Some(count) = args.look.count {
-        set_sampling(&mut engine, mesh_entity, |s| {
-            s.count = usize::try_from(count).unwrap_or(usize::MAX)
-        });
+    if let Some(count) = options.count {
+        set_sampling(&mut engine, mesh_entity, |s| s.count = count);
     }
-    if let Some(seed) = args.look.seed {
+    if let Some(seed) = options.seed {
         set_sampling(&mut engine, mesh_entity, |s| s.seed = seed);
     }
     let mut app = Viewer {
-        title: args.config.display().to_string(),
-        size: (args.width.max(1), args.height.max(1)),
-        look: args.look.clone(),
+        title: options.scene.display().to_string(),
+        size: (options.size.0.max(1), options.size.1.max(1)),
+        gpu_options: options.gpu.clone(),
+        camera_look: options.camera,
+        zoom: options.zoom,
         engine,
         mesh_entity,
         shown_mesh: None,
-        style: SplatStyle::default(),
+        style: options.style,
         camera: None,
         gpu: None,
         drag: None,
@@ -118,22 +137,19 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
         last_frame: None,
         frame_ms: 0.0,
         frames: 0,
-        max_frames: args.frames,
+        max_frames: options.max_frames,
         status: String::new(),
         refit_colors: true,
     };
-    app.style = args.look.style(&[]);
     event_loop
         .run_app(&mut app)
         .map_err(|e| anyhow!("window event loop: {e}"))?;
     match app.error {
         Some(e) => Err(e),
-        None => {
-            if args.frames.is_some() {
-                println!("{} frames; last: {}", app.frames, app.status);
-            }
-            Ok(())
-        }
+        None => Ok(ViewerOutcome {
+            frames: app.frames,
+            status: app.status,
+        }),
     }
 }
 
@@ -177,7 +193,10 @@ struct WindowGpu {
 struct Viewer {
     title: String,
     size: (u32, u32),
-    look: LookArgs,
+    gpu_options: GpuOptions,
+    /// Yaw, pitch and field of view of the camera fitted to each new mesh.
+    camera_look: OrbitCamera,
+    zoom: f32,
     engine: StreamingEngine,
     mesh_entity: bevy_ecs::entity::Entity,
     /// The source mesh and transform drawn under the splats (to notice a reloaded
@@ -232,14 +251,14 @@ impl Viewer {
         let mut desc = wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(
             event_loop.owned_display_handle(),
         ));
-        if let Some(b) = self.look.gpu_options().backends {
+        if let Some(b) = self.gpu_options.backends {
             desc.backends = b;
         }
         let instance = wgpu::Instance::new(desc);
         let surface = instance
             .create_surface(window.clone())
             .context("creating the window surface")?;
-        let ctx = GpuContext::with_instance(instance, &self.look.gpu_options(), Some(&surface))
+        let ctx = GpuContext::with_instance(instance, &self.gpu_options, Some(&surface))
             .context("opening a GPU")?;
         let size = window.inner_size();
         let caps = surface.get_capabilities(&ctx.adapter);
@@ -297,7 +316,7 @@ impl Viewer {
         let aspect = self.aspect();
         self.camera = self
             .current_mesh()
-            .map(|mesh| self.look.camera_for_mesh(&mesh, aspect));
+            .map(|mesh| self.camera_look.fitted_to_mesh(&mesh, aspect, self.zoom));
         Ok(())
     }
 
@@ -379,7 +398,7 @@ impl Viewer {
             )?;
             if mesh_changed && self.shown_mesh.is_some() {
                 let aspect = self.aspect();
-                self.camera = Some(self.look.camera_for_mesh(&placed, aspect));
+                self.camera = Some(self.camera_look.fitted_to_mesh(&placed, aspect, self.zoom));
             }
             self.shown_mesh = Some((mesh, transform));
             self.refit_colors = true;

@@ -1,15 +1,8 @@
-//! `strata render`: sample a scene and draw it headlessly to a PNG.
+//! The camera and look options that `strata render` and `strata view` share, and what
+//! they turn into: GPU options, a camera framing the mesh, a splat style.
 
-use std::path::PathBuf;
-
-use anyhow::Context;
-
-use crate::config::SceneConfig;
 use crate::gpu::layout::log_density_range;
-use crate::gpu::{
-    ColorMode, Footprint, GpuContext, GpuOptions, HeadlessTarget, MeshMode, OrbitCamera,
-    SplatRenderer, SplatStyle,
-};
+use crate::gpu::{ColorMode, Footprint, GpuOptions, MeshMode, OrbitCamera, SplatStyle};
 use crate::scene::Scene;
 
 /// Camera and look options shared by `strata render` and `strata view`.
@@ -90,16 +83,17 @@ impl LookArgs {
 
     /// The camera framing `mesh` for a target of `aspect` (width / height).
     pub fn camera_for_mesh(&self, mesh: &strata_engine::mesh::TriMesh, aspect: f32) -> OrbitCamera {
-        let (min, max) = mesh.bounds();
-        let mut camera = OrbitCamera {
+        self.orientation().fitted_to_mesh(mesh, aspect, self.zoom)
+    }
+
+    /// The camera's yaw, pitch and field of view (target and distance not yet fitted).
+    pub fn orientation(&self) -> OrbitCamera {
+        OrbitCamera {
             yaw: self.yaw.to_radians(),
             pitch: self.pitch.to_radians(),
             fov_y: self.fov.to_radians(),
             ..OrbitCamera::default()
-        };
-        camera.fit_box(min.as_vec3(), max.as_vec3(), aspect);
-        camera.distance *= self.zoom;
-        camera
+        }
     }
 
     /// The style these arguments ask for, with the colour map fitted to `samples`.
@@ -113,70 +107,4 @@ impl LookArgs {
             ..SplatStyle::default()
         }
     }
-}
-
-/// Arguments of `strata render`.
-#[derive(Debug, clap::Args)]
-pub struct RenderArgs {
-    /// Scene file (RON).
-    pub config: PathBuf,
-    /// Output image (PNG).
-    #[arg(long, short = 'o')]
-    pub out: PathBuf,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 1280)]
-    pub width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 960)]
-    pub height: u32,
-    /// Samples per pixel (1 or 4).
-    #[arg(long, default_value_t = 4)]
-    pub msaa: u32,
-    /// Camera, colours and sample count.
-    #[command(flatten)]
-    pub look: LookArgs,
-}
-
-/// Runs `strata render`.
-pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    args.look.validate()?;
-    if !matches!(args.msaa, 1 | 4) {
-        anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
-    }
-    let config = SceneConfig::load(&args.config)?;
-    // The GPU first: without one, fail before the preprocessing.
-    let ctx = GpuContext::headless(&args.look.gpu_options()).context("opening a GPU")?;
-    let target = HeadlessTarget::new(&ctx.device, args.width, args.height, args.msaa)?;
-    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
-    let count = usize::try_from(args.look.count.unwrap_or(config.sampling.count))
-        .context("sample count does not fit in memory")?;
-    let seed = args.look.seed.unwrap_or(config.sampling.seed);
-    let max = crate::gpu::buffers::max_samples(&ctx.device);
-    if count > max {
-        anyhow::bail!(
-            "{count} samples do not fit in one GPU buffer on this adapter (at most {max})"
-        );
-    }
-    let samples = scene.sampler.sample(count, seed);
-    let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
-    renderer.upload(&ctx.device, &ctx.queue, &samples)?;
-    if args.look.mesh != MeshMode::None {
-        let segments = crate::gpu::splat::face_segments(&scene.sampler);
-        renderer.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(&segments))?;
-    }
-    let camera = args
-        .look
-        .camera(&scene, args.width as f32 / args.height as f32);
-    let image = target.render(&ctx, &renderer, &camera, &args.look.style(&samples))?;
-    image
-        .write_png(&args.out)
-        .with_context(|| format!("writing {}", args.out.display()))?;
-    println!(
-        "rendered {count} samples (seed {seed}) at {}x{} on {}; wrote {}",
-        args.width,
-        args.height,
-        ctx.adapter_summary(),
-        args.out.display()
-    );
-    Ok(())
 }

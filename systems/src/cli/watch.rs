@@ -26,7 +26,7 @@ pub struct WatchArgs {
 }
 
 /// Runs `strata watch`.
-pub fn run(args: &WatchArgs) -> anyhow::Result<()> {
+pub(super) fn run(args: &WatchArgs) -> anyhow::Result<()> {
     let mut engine = StreamingEngine::watch(&args.config)
         .with_context(|| format!("watching {}", args.config.display()))?;
     eprintln!("watching {} (Ctrl-C to stop)", args.config.display());

@@ -376,7 +376,7 @@ pub fn face_map(
     encode(path, &buf, size)
 }
 
-/// Writes an RGB buffer as an indexed-colour PNG: the 255 most frequent colours form
+/// Writes an RGB buffer as an indexed-colour PNG, atomically: the 255 most frequent colours form
 /// the palette and every other colour takes its nearest palette entry (anti-aliased
 /// edges shift slightly; plots stay a few tens of KB).
 fn encode(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), PlotError> {
@@ -407,17 +407,17 @@ fn encode(path: &Path, rgb: &[u8], (w, h): (u32, u32)) -> Result<(), PlotError> 
         });
         indices.push(i);
     }
-    let file = std::fs::File::create(path).map_err(|e| draw_err(path, e))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    enc.set_color(png::ColorType::Indexed);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.set_palette(palette.concat());
-    enc.set_compression(png::Compression::High);
-    let mut writer = enc.write_header().map_err(|e| draw_err(path, e))?;
-    writer
-        .write_image_data(&indices)
-        .map_err(|e| draw_err(path, e))?;
-    writer.finish().map_err(|e| draw_err(path, e))
+    strata_engine::io::write_atomically(path, |file| {
+        let mut enc = png::Encoder::new(file, w, h);
+        enc.set_color(png::ColorType::Indexed);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_palette(palette.concat());
+        enc.set_compression(png::Compression::High);
+        let mut writer = enc.write_header()?;
+        writer.write_image_data(&indices)?;
+        writer.finish()
+    })
+    .map_err(|e: png::EncodingError| draw_err(path, e))
 }
 
 /// Blue (0) to red (1) through white; grey for NaN.

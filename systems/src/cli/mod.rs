@@ -1,0 +1,138 @@
+//! The `strata` command-line tool: the clap [`Cli`], [`run`], and one file per
+//! command holding its arguments and their handling (`sample`, `segment`, `bench`,
+//! `watch`, `render`, `view`, `analyze`; `look` holds the camera and look options that
+//! `render` and `view` share). What a command does beyond reading its arguments and
+//! printing its results lives in the library: [`crate::scene`], [`crate::report`],
+//! [`crate::hot_reload`], [`crate::gpu`] and [`crate::viewer`].
+
+mod analyze;
+mod bench;
+mod look;
+mod render;
+mod sample;
+mod segment;
+mod view;
+mod watch;
+
+use std::path::Path;
+
+use anyhow::bail;
+use clap::{Parser, Subcommand};
+
+pub use analyze::AnalyzeArgs;
+pub use bench::{BenchArgs, BenchReport};
+pub use look::LookArgs;
+pub use render::RenderArgs;
+pub use sample::SampleArgs;
+pub use segment::SegmentArgs;
+pub use view::ViewArgs;
+pub use watch::WatchArgs;
+
+/// strata: anisotropic, density-controlled stratified sampling of surfaces.
+#[derive(Debug, Parser)]
+#[command(name = "strata", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Sample a scene and optionally write the samples (PLY or CSV).
+    Sample(SampleArgs),
+    /// Segment a scene's mesh along its field; write the mesh coloured by segment.
+    Segment(SegmentArgs),
+    /// Preprocess a scene once, resample it several times, and report timings and memory.
+    Bench(BenchArgs),
+    /// Sample a scene and draw it as field-aligned splats into a PNG, without a window.
+    Render(RenderArgs),
+    /// Open a window that resamples and draws the scene every frame (orbit camera).
+    View(ViewArgs),
+    /// Watch a scene file: recompute what each change invalidates, print per stage what
+    /// reran, rewrite the samples file atomically after each change.
+    Watch(WatchArgs),
+    /// Measure samples: discrepancy, spectra, differential domain analysis (JSON + PNG).
+    Analyze(AnalyzeArgs),
+}
+
+/// An error and its causes in one line, joined by `": "`, leaving out causes whose
+/// text the line already holds (our error messages often quote their source).
+pub fn one_line(error: &anyhow::Error) -> String {
+    let mut line = error.to_string();
+    for cause in error.chain().skip(1) {
+        let text = cause.to_string();
+        if !line.contains(&text) {
+            line.push_str(": ");
+            line.push_str(&text);
+        }
+    }
+    line
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Sample(args) => sample::run(&args),
+        Command::Segment(args) => segment::run(&args),
+        Command::Bench(args) => bench::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::View(args) => view::run(&args),
+        Command::Watch(args) => watch::run(&args),
+        Command::Analyze(args) => analyze::run(&args),
+    }
+}
+
+/// Writes `bytes` to `path` atomically ([`strata_engine::io::write_atomically`]).
+fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    strata_engine::io::write_atomically(path, |w| std::io::Write::write_all(w, bytes))
+}
+
+/// The format of a samples file, chosen by its extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum OutputKind {
+    /// Binary little-endian PLY.
+    Ply,
+    /// CSV with a header row.
+    Csv,
+}
+
+/// The format `path` asks for: `.ply` or `.csv` (any case).
+fn output_kind(path: &Path) -> anyhow::Result<OutputKind> {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("ply") => Ok(OutputKind::Ply),
+        Some("csv") => Ok(OutputKind::Csv),
+        _ => bail!("{}: output must end in .ply or .csv", path.display()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn output_kind_follows_the_extension_in_any_case() {
+        assert_eq!(
+            output_kind(Path::new("a/s.ply")).ok(),
+            Some(OutputKind::Ply)
+        );
+        assert_eq!(output_kind(Path::new("S.CSV")).ok(), Some(OutputKind::Csv));
+        let e = output_kind(Path::new("s.txt")).expect_err("not a samples format");
+        assert_eq!(e.to_string(), "s.txt: output must end in .ply or .csv");
+        assert!(output_kind(Path::new("ply")).is_err());
+    }
+
+    #[test]
+    fn one_line_joins_causes_it_does_not_already_quote() {
+        let e = anyhow::anyhow!("inner")
+            .context("middle: inner")
+            .context("outer");
+        assert_eq!(one_line(&e), "outer: middle: inner");
+    }
+}

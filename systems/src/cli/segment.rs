@@ -1,0 +1,123 @@
+//! `strata segment`: segment a scene's mesh along its field, parameterize the segments
+//! (splitting invalid ones), print the counts, and write the mesh coloured by segment,
+//! the JSON report ([`SegmentReport`]) and the SVG atlas on request.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use strata_engine::surface::parameterize_with_splitting;
+
+use super::write_file;
+use crate::config::SceneConfig;
+use crate::report::segment::{SegmentReport, segment_colors};
+
+/// Arguments of `strata segment`.
+#[derive(Debug, clap::Args)]
+pub struct SegmentArgs {
+    /// Scene file (RON); its `mesh`, `field`, `segment`, `param` and `surface` sections
+    /// are used.
+    pub config: PathBuf,
+    /// Output mesh (binary PLY) with one colour per segment; singular faces are black.
+    #[arg(long, short = 'o')]
+    pub out: Option<PathBuf>,
+    /// JSON report (schema in the README).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Segmentation seed (overrides the scene's `segment.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// SVG drawing of every final segment's parameter layout with the mapped field.
+    #[arg(long)]
+    pub atlas: Option<PathBuf>,
+}
+
+/// Runs `strata segment`.
+pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
+    let config = SceneConfig::load(&args.config)?;
+    let name = args.config.display().to_string();
+    let t = Instant::now();
+    let mesh = crate::scene::load_mesh(&config).with_context(|| name.clone())?;
+    let field = config
+        .field
+        .build(&mesh)
+        .with_context(|| format!("{name}: field"))?;
+    let load_time = t.elapsed();
+    for w in mesh.warnings() {
+        eprintln!("warning: {name}: mesh: {w}");
+    }
+    let mut options = config.surface_options();
+    if let Some(seed) = args.seed {
+        options.segment.seed = seed;
+    }
+    let t = Instant::now();
+    let seg = strata_engine::segment::segment(&mesh, &field, &options.segment)
+        .with_context(|| format!("{name}: segmentation"))?;
+    let seg_time = t.elapsed();
+    let t = Instant::now();
+    let (params, split) = parameterize_with_splitting(&mesh, &field, &seg, &options)
+        .with_context(|| format!("{name}: parameterization"))?;
+    let param_time = t.elapsed();
+    let report = SegmentReport::new(
+        &mesh,
+        &seg,
+        &params,
+        split.splits,
+        seg_time.as_secs_f64(),
+        param_time.as_secs_f64(),
+    );
+    let plus = report
+        .singularities
+        .iter()
+        .filter(|s| s.index > 0.0)
+        .count();
+    let minus = report.singularities.len() - plus;
+    let index_sum: f64 = report.singularities.iter().map(|s| s.index).sum();
+    println!(
+        "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {index_sum}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
+        report.faces,
+        report.euler_characteristic,
+        report.segments_before_split,
+        report.singularities.len(),
+        report.cut_edges,
+        seg_time.as_secs_f64(),
+        load_time.as_secs_f64(),
+    );
+    let valid = report.segments.iter().filter(|s| s.valid).count();
+    let fallback = report
+        .segments
+        .iter()
+        .filter(|s| s.isotropic_fallback)
+        .count();
+    println!(
+        "parameterization: {} segments after {} splits, {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
+        report.segment_count,
+        report.splits,
+        param_time.as_secs_f64()
+    );
+    let not_discs = report
+        .segments
+        .iter()
+        .filter(|s| s.euler_characteristic != 1 || s.boundary_loops != 1)
+        .count();
+    if not_discs > 0 {
+        eprintln!("warning: {name}: {not_discs} segments are not topological discs");
+    }
+    if let Some(path) = &args.atlas {
+        crate::report::atlas::write_atlas_svg(path, &mesh, &field, &params)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.out {
+        let colors = segment_colors(&mesh, &seg, &params);
+        strata_engine::io::write_mesh_ply(path, &mesh, Some(&colors))
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.report {
+        let text = serde_json::to_string_pretty(&report)?;
+        write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}

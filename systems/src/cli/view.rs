@@ -1,0 +1,51 @@
+//! `strata view`: the arguments of the interactive window; the window itself is
+//! [`crate::viewer`].
+
+use std::path::PathBuf;
+
+use super::LookArgs;
+use crate::viewer::{self, ViewerOptions};
+
+/// Arguments of `strata view`.
+#[derive(Debug, clap::Args)]
+pub struct ViewArgs {
+    /// Scene file (RON).
+    pub config: PathBuf,
+    /// Initial window width (logical pixels).
+    #[arg(long, default_value_t = 1280)]
+    pub width: u32,
+    /// Initial window height (logical pixels).
+    #[arg(long, default_value_t = 960)]
+    pub height: u32,
+    /// Close after this many frames and print the last frame's timings (for scripted
+    /// runs); default: run until the window closes.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Camera, colours and sample count.
+    #[command(flatten)]
+    pub look: LookArgs,
+}
+
+/// Runs `strata view` until the window closes.
+pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
+    args.look.validate()?;
+    let options = ViewerOptions {
+        scene: args.config.clone(),
+        size: (args.width, args.height),
+        max_frames: args.frames,
+        count: args
+            .look
+            .count
+            .map(|c| usize::try_from(c).unwrap_or(usize::MAX)),
+        seed: args.look.seed,
+        gpu: args.look.gpu_options(),
+        camera: args.look.orientation(),
+        zoom: args.look.zoom,
+        style: args.look.style(&[]),
+    };
+    let outcome = viewer::run(&options)?;
+    if args.frames.is_some() {
+        println!("{} frames; last: {}", outcome.frames, outcome.status);
+    }
+    Ok(())
+}

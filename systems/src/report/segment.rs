@@ -1,0 +1,224 @@
+//! The report of `strata segment`: what the segmentation and the parameterization with
+//! splitting produced, per final segment, as serializable data (the JSON schema is in
+//! the README), and the per-face colours of the segment mesh.
+//!
+//! Input: the mesh, its [`Segmentation`] and the final [`SegmentParam`]s (segment id =
+//! index). Output: a [`SegmentReport`]; colours with [`segment_colors`]. Cost:
+//! O(faces + edges), one disc test per final segment.
+
+use strata_engine::mesh::TriMesh;
+use strata_engine::param::SegmentParam;
+use strata_engine::segment::Segmentation;
+
+/// The JSON report of `strata segment` (schema in the README).
+#[derive(Debug, serde::Serialize)]
+pub struct SegmentReport {
+    /// Faces of the mesh.
+    pub faces: usize,
+    /// Euler characteristic of the whole mesh.
+    pub euler_characteristic: i64,
+    /// Segments made by the segmentation (section 4), before splitting.
+    pub segments_before_split: usize,
+    /// Final segments, after splitting invalid ones (section 5.2).
+    pub segment_count: usize,
+    /// Splits of invalid segments.
+    pub splits: usize,
+    /// Singular faces with their index (+0.5 or -0.5).
+    pub singularities: Vec<SingularityReport>,
+    /// Edges cut inside segments (singularity trees and disc cuts).
+    pub cut_edges: usize,
+    /// Wall time of the segmentation, seconds.
+    pub segmentation_s: f64,
+    /// Wall time of parameterization with splitting, seconds.
+    pub parameterization_s: f64,
+    /// Per final segment.
+    pub segments: Vec<SegmentEntry>,
+}
+
+/// One singularity in the report.
+#[derive(Debug, serde::Serialize)]
+pub struct SingularityReport {
+    /// Face index.
+    pub face: u32,
+    /// Index of the line-field singularity.
+    pub index: f64,
+}
+
+/// One final segment in the report.
+#[derive(Debug, serde::Serialize)]
+pub struct SegmentEntry {
+    /// Segment id (as in the coloured mesh, the atlas and the samples).
+    pub id: usize,
+    /// Number of faces.
+    pub faces: usize,
+    /// Euler characteristic after cutting (1 for a disc).
+    pub euler_characteristic: i64,
+    /// Number of boundary loops after cutting (1 for a disc).
+    pub boundary_loops: usize,
+    /// Whether the segment holds a singular face.
+    pub has_singular_face: bool,
+    /// Valid parameterization: no flip, no overlap, mean angle under gamma.
+    pub valid: bool,
+    /// Faces flipped in the parameter plane.
+    pub flipped: usize,
+    /// Whether the parameter mesh overlaps itself.
+    pub overlaps: bool,
+    /// Area-weighted mean angle between the mapped major direction and the u axis.
+    pub mean_angle_deg: f64,
+    /// Largest per-face angle.
+    pub max_angle_deg: f64,
+    /// Parameterized with the isotropic fallback frame.
+    pub isotropic_fallback: bool,
+}
+
+impl SegmentReport {
+    /// Builds the report of a segmentation and its final parameterizations.
+    pub fn new(
+        mesh: &TriMesh,
+        seg: &Segmentation,
+        params: &[SegmentParam],
+        splits: usize,
+        segmentation_s: f64,
+        parameterization_s: f64,
+    ) -> Self {
+        let mut cut = vec![false; mesh.edge_count()];
+        for &e in &seg.cut_edges {
+            cut[e as usize] = true;
+        }
+        let mut singular = vec![false; mesh.face_count()];
+        for s in &seg.singularities {
+            singular[s.face as usize] = true;
+        }
+        Self {
+            faces: mesh.face_count(),
+            euler_characteristic: mesh.euler_characteristic(),
+            segments_before_split: seg.segments.len(),
+            segment_count: params.len(),
+            splits,
+            singularities: seg
+                .singularities
+                .iter()
+                .map(|s| SingularityReport {
+                    face: s.face,
+                    index: s.index,
+                })
+                .collect(),
+            cut_edges: seg.cut_edges.len(),
+            segmentation_s,
+            parameterization_s,
+            segments: params
+                .iter()
+                .enumerate()
+                .map(|(id, p)| {
+                    let topo = strata_engine::segment::patch_topology(mesh, &p.faces, &cut);
+                    let r = &p.report;
+                    SegmentEntry {
+                        id,
+                        faces: p.faces.len(),
+                        euler_characteristic: topo.euler_characteristic,
+                        boundary_loops: topo.boundary_loops.len(),
+                        has_singular_face: p.faces.iter().any(|&f| singular[f as usize]),
+                        valid: r.valid,
+                        flipped: r.flipped,
+                        overlaps: r.overlaps,
+                        mean_angle_deg: r.mean_angle_deg,
+                        max_angle_deg: r.max_angle_deg,
+                        isotropic_fallback: r.isotropic_fallback,
+                    }
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The colour of every face of the segment mesh: its final segment's colour
+/// ([`segment_color`]), singular faces near black.
+pub fn segment_colors(mesh: &TriMesh, seg: &Segmentation, params: &[SegmentParam]) -> Vec<[u8; 3]> {
+    let mut singular = vec![false; mesh.face_count()];
+    for s in &seg.singularities {
+        singular[s.face as usize] = true;
+    }
+    let mut final_segment = vec![0u32; mesh.face_count()];
+    for (id, p) in params.iter().enumerate() {
+        for &f in &p.faces {
+            final_segment[f as usize] = id as u32;
+        }
+    }
+    (0..mesh.face_count())
+        .map(|f| {
+            if singular[f] {
+                SINGULAR_COLOR
+            } else {
+                segment_color(final_segment[f])
+            }
+        })
+        .collect()
+}
+
+/// The colour of singular faces in the segment mesh.
+pub const SINGULAR_COLOR: [u8; 3] = [16, 16, 16];
+
+/// A bright, deterministic colour per segment id (the atlas's hues, lifted to
+/// 60..=255 per channel).
+pub fn segment_color(id: u32) -> [u8; 3] {
+    super::atlas::segment_hue(id as usize).map(|c| (60.0 + 195.0 * c) as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use strata_engine::field::FieldSpec;
+    use strata_engine::mesh::shapes;
+    use strata_engine::segment::{SegmentOptions, segment};
+    use strata_engine::surface::{SurfaceOptions, parameterize_with_splitting};
+
+    use super::*;
+
+    #[test]
+    fn colors_follow_the_final_segments_and_mark_singular_faces() {
+        let mesh = shapes::sphere(1.0, 4).expect("sphere");
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
+        let (params, split) =
+            parameterize_with_splitting(&mesh, &field, &seg, &SurfaceOptions::default())
+                .expect("parameterize");
+        // A constant direction on a sphere is singular somewhere (index sum 2).
+        assert!(!seg.singularities.is_empty());
+        let colors = segment_colors(&mesh, &seg, &params);
+        assert_eq!(colors.len(), mesh.face_count());
+        for s in &seg.singularities {
+            assert_eq!(colors[s.face as usize], SINGULAR_COLOR);
+        }
+        for (id, p) in params.iter().enumerate() {
+            for &f in &p.faces {
+                if !seg.singularities.iter().any(|s| s.face == f) {
+                    assert_eq!(colors[f as usize], segment_color(id as u32));
+                }
+            }
+        }
+        let report = SegmentReport::new(&mesh, &seg, &params, split.splits, 0.0, 0.0);
+        assert_eq!(report.faces, mesh.face_count());
+        assert_eq!(report.segment_count, params.len());
+        assert_eq!(
+            report.segments.iter().map(|s| s.faces).sum::<usize>(),
+            mesh.face_count()
+        );
+        assert_eq!(report.singularities.len(), seg.singularities.len());
+        let index_sum: f64 = report.singularities.iter().map(|s| s.index).sum();
+        assert_eq!(index_sum, mesh.euler_characteristic() as f64);
+    }
+
+    #[test]
+    fn segment_colors_are_bright_and_differ_between_neighbours() {
+        for id in 0..50 {
+            let c = segment_color(id);
+            assert!(c.iter().all(|&v| v >= 60), "{c:?}");
+            assert_ne!(c, segment_color(id + 1));
+        }
+    }
+}
