@@ -22,7 +22,3 @@ pub mod hot_reload;
 pub mod report;
 pub mod scene;
 pub mod viewer;
-
-/// The PNG plots, at their old path: new code names [`report::plot`] (kept for
-/// `bench/src/bin/experiments.rs`).
-pub use report::plot;

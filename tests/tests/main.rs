@@ -6,6 +6,7 @@ mod ecs;
 mod gpu;
 mod hot_reload;
 mod io;
+mod layout;
 mod param;
 mod pipeline;
 mod segment;

@@ -388,7 +388,9 @@ fn alignment_map(
     let Some(SampledScene { scene, config, .. }) = &input.scene else {
         bail!("--alignment needs a scene file");
     };
-    let pre = Preprocessed::build(
+    // The surface pipeline also on a flat scene: the map shows how the segments'
+    // parameterizations align with the field, which the planar path has none of.
+    let pre = Preprocessed::build_surface(
         scene.mesh.clone(),
         scene.field.clone(),
         &config.surface_options(),

@@ -8,7 +8,7 @@ use strata_engine::analysis::alignment;
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::param::ParamOptions;
 use strata_engine::surface::{AngleCriterion, Preprocessed, SurfaceOptions};
-use strata_systems::plot;
+use strata_systems::report::plot;
 
 use crate::BoxError;
 use crate::output::Ctx;
@@ -27,7 +27,9 @@ pub fn section_7_3_1(ctx: &mut Ctx) -> Result<Section, BoxError> {
         angle_criterion: AngleCriterion::Max,
         ..Default::default()
     };
-    let pre = Preprocessed::build(mesh.clone(), field.clone(), &options)?;
+    // The surface pipeline on purpose: this field turns, so the planar path's one
+    // linear map would not be aligned, and 7.3.1 measures the segmentation and splits.
+    let pre = Preprocessed::build_surface(mesh.clone(), field.clone(), &options)?;
     let angles = alignment::face_angles(&mesh, &field, &pre.params);
     let (max, mean) = max_and_mean(&mesh, &angles);
     // Segment map: faces coloured by segment id (scrambled so neighbours differ).

@@ -12,7 +12,7 @@ use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, baseline};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::sample::Sampler;
 use strata_engine::surface::{Preprocessed, SurfaceOptions, segmentation_from_labels};
-use strata_systems::plot::{self, Series};
+use strata_systems::report::plot::{self, Series};
 
 use crate::BoxError;
 use crate::output::{Ctx, discrepancy_axes};

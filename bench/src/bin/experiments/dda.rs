@@ -17,7 +17,7 @@ use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::planar;
 use strata_engine::sample::{Sample, Sampler};
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
-use strata_systems::plot::{self, Axes, Series};
+use strata_systems::report::plot::{self, Axes, Series};
 
 use crate::BoxError;
 use crate::output::Ctx;
@@ -87,7 +87,7 @@ fn planar_field_sampler(mesh: Arc<TriMesh>, spec: FieldSpec) -> Result<Sampler, 
 
 fn surface_sampler(mesh: Arc<TriMesh>, spec: FieldSpec) -> Result<Sampler, BoxError> {
     let field = Arc::new(spec.build(&mesh)?);
-    Ok(Preprocessed::build(mesh, field, &SurfaceOptions::default())?.sampler)
+    Ok(Preprocessed::build_surface(mesh, field, &SurfaceOptions::default())?.sampler)
 }
 
 /// A shared mesh scaled to unit area.

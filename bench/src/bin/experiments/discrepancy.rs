@@ -4,7 +4,7 @@
 
 use glam::DVec2;
 use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, ShapeFamily, baseline};
-use strata_systems::plot::{self, Series};
+use strata_systems::report::plot::{self, Series};
 
 use crate::BoxError;
 use crate::output::{Ctx, discrepancy_axes};

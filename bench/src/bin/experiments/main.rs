@@ -5,7 +5,7 @@
 //!
 //! `--quick` uses fewer sample counts and realizations (a smoke run, about a minute);
 //! the committed results are from the full run. Plots need a TrueType font (see
-//! `strata_systems::plot`); without one the numbers are still written.
+//! `strata_systems::report::plot`); without one the numbers are still written.
 //!
 //! One module per section of the paper, each returning a [`table::Section`]:
 //! [`discrepancy`] (7.2), [`alignment`] (7.3.1), [`boundary`] (7.3.2),
@@ -81,7 +81,9 @@ fn main() -> Result<(), BoxError> {
     } else {
         out.join("RESULTS.md")
     };
-    std::fs::write(&md_path, md)?;
+    strata_engine::io::write_atomically(&md_path, |w| {
+        std::io::Write::write_all(w, md.as_bytes())
+    })?;
     eprintln!("wrote {} and {}", md_path.display(), out.display());
     for e in &ctx.plot_errors {
         eprintln!("plot skipped: {e}");

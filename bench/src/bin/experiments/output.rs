@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use strata_systems::plot::{self, Axes};
+use strata_systems::report::plot::{self, Axes};
 
 use crate::BoxError;
 
@@ -43,7 +43,10 @@ impl Ctx {
 
     /// Writes `value` as pretty JSON to `name` in the output folder.
     pub fn json(&self, name: &str, value: &serde_json::Value) -> Result<(), BoxError> {
-        std::fs::write(self.out.join(name), serde_json::to_string_pretty(value)?)?;
+        let text = serde_json::to_string_pretty(value)?;
+        strata_engine::io::write_atomically(&self.out.join(name), |w| {
+            std::io::Write::write_all(w, text.as_bytes())
+        })?;
         Ok(())
     }
 }

@@ -12,7 +12,7 @@ use strata_engine::field::TensorField;
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::sample::Sample;
 use strata_engine::surface::{Preprocessed, SurfaceOptions, segmentation_from_labels};
-use strata_systems::plot::{self, Axes, Series};
+use strata_systems::report::plot::{self, Axes, Series};
 
 use crate::BoxError;
 use crate::output::Ctx;

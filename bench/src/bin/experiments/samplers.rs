@@ -9,7 +9,7 @@ use strata_engine::field::{FieldSpec, TensorField};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::planar;
 use strata_engine::sample::{Sample, Sampler};
-use strata_systems::plot::Series;
+use strata_systems::report::plot::Series;
 
 use crate::BoxError;
 

@@ -12,7 +12,7 @@ use strata_engine::analysis::strata::strata_second_moment;
 use strata_engine::curve::CurveOptions;
 use strata_engine::planar;
 use strata_engine::sample::{Sample, Sampler};
-use strata_systems::plot::{self, Axes, Series};
+use strata_systems::report::plot::{self, Axes, Series};
 
 use crate::BoxError;
 use crate::output::Ctx;
