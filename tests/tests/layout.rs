@@ -144,19 +144,31 @@ fn no_source_file_is_over_700_lines_of_non_test_code() {
 /// type with interior mutability.
 fn is_mutable_static(line: &str) -> bool {
     let t = line.trim_start();
-    let t = t.strip_prefix("pub(crate) ").or_else(|| t.strip_prefix("pub ")).unwrap_or(t);
+    let t = t
+        .strip_prefix("pub(crate) ")
+        .or_else(|| t.strip_prefix("pub "))
+        .unwrap_or(t);
     let Some(rest) = t.strip_prefix("static ") else {
         return false;
     };
     const INTERIOR: [&str; 8] = [
-        "Atomic", "Mutex", "RwLock", "Cell", "OnceLock", "LazyLock", "Lazy<", "thread_local",
+        "Atomic",
+        "Mutex",
+        "RwLock",
+        "Cell",
+        "OnceLock",
+        "LazyLock",
+        "Lazy<",
+        "thread_local",
     ];
     rest.starts_with("mut ") || INTERIOR.iter().any(|k| rest.contains(k))
 }
 
 #[test]
 fn the_engine_has_no_global_mutable_state() {
-    assert!(is_mutable_static("static NEXT: AtomicU64 = AtomicU64::new(0);"));
+    assert!(is_mutable_static(
+        "static NEXT: AtomicU64 = AtomicU64::new(0);"
+    ));
     assert!(is_mutable_static("pub static mut X: u32 = 0;"));
     assert!(!is_mutable_static("static TABLE: [u8; 4] = [0, 1, 2, 3];"));
     assert!(!is_mutable_static("fn f(x: &'static str) {}"));

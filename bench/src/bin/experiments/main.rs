@@ -81,9 +81,7 @@ fn main() -> Result<(), BoxError> {
     } else {
         out.join("RESULTS.md")
     };
-    strata_engine::io::write_atomically(&md_path, |w| {
-        std::io::Write::write_all(w, md.as_bytes())
-    })?;
+    strata_engine::io::write_atomically(&md_path, |w| std::io::Write::write_all(w, md.as_bytes()))?;
     eprintln!("wrote {} and {}", md_path.display(), out.display());
     for e in &ctx.plot_errors {
         eprintln!("plot skipped: {e}");
