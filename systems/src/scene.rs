@@ -5,7 +5,6 @@ use std::time::{Duration, Instant};
 
 use strata_engine::field::{FieldError, TensorField};
 use strata_engine::mesh::{MeshError, TriMesh};
-use strata_engine::planar::PlanarError;
 use strata_engine::sample::Sampler;
 use strata_engine::surface::{Preprocessed, SurfaceError};
 
@@ -51,10 +50,8 @@ pub enum SceneError {
     /// Building the field failed.
     #[error("field: {0}")]
     Field(#[from] FieldError),
-    /// Preprocessing a flat domain failed.
-    #[error("sampling: {0}")]
-    Planar(#[from] PlanarError),
-    /// Preprocessing a surface failed.
+    /// Preprocessing failed (a flat domain's fast path or a surface's pipeline; the
+    /// engine's front door picks which).
     #[error("{0}")]
     Surface(#[from] SurfaceError),
 }

@@ -293,29 +293,36 @@ impl Preprocessed {
         progress: &dyn Fn(Progress),
     ) -> Result<Self, SurfaceError> {
         let mut stages = Vec::new();
-        let mut stage = |name: &'static str, t: Instant| {
-            let d = t.elapsed();
-            progress(Progress::Done(name, d));
-            stages.push((name, d));
-        };
         progress(Progress::Start("segmentation"));
         let t = Instant::now();
         let segmentation = segment(&mesh, &field, &options.segment)?;
-        stage("segmentation", t);
+        record_stage(&mut stages, progress, "segmentation", t);
+        Self::after_segmentation(mesh, field, segmentation, options, progress, stages)
+    }
 
+    /// Parameterization with splitting and cells of a given segmentation (options
+    /// validated), after the stages already timed in `stages`.
+    fn after_segmentation(
+        mesh: Arc<TriMesh>,
+        field: Arc<TensorField>,
+        segmentation: Segmentation,
+        options: &SurfaceOptions,
+        progress: &dyn Fn(Progress),
+        mut stages: Vec<(&'static str, Duration)>,
+    ) -> Result<Self, SurfaceError> {
         progress(Progress::Start("parameterization"));
         let t = Instant::now();
         let (params, mut report) =
             parameterize_with_splitting(&mesh, &field, &segmentation, options)?;
         report.segments_before_split = segmentation.segments.len();
         report.segments = params.len();
-        stage("parameterization", t);
+        record_stage(&mut stages, progress, "parameterization", t);
 
         progress(Progress::Start("cells"));
         let t = Instant::now();
         let segments = build_cells(&mesh, &field, &params, &options.curve)?;
         report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
-        stage("cells", t);
+        record_stage(&mut stages, progress, "cells", t);
         let sampler = Sampler::new(mesh, field, segments)?;
         Ok(Self {
             segmentation,
@@ -356,25 +363,20 @@ impl Preprocessed {
         options: &SurfaceOptions,
     ) -> Result<Self, SurfaceError> {
         options.validate()?;
-        let t = Instant::now();
-        let (params, mut report) =
-            parameterize_with_splitting(&mesh, &field, &segmentation, options)?;
-        report.segments_before_split = segmentation.segments.len();
-        report.segments = params.len();
-        let mut stages = vec![("parameterization", t.elapsed())];
-        let t = Instant::now();
-        let segments = build_cells(&mesh, &field, &params, &options.curve)?;
-        report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
-        stages.push(("cells", t.elapsed()));
-        let sampler = Sampler::new(mesh, field, segments)?;
-        Ok(Self {
-            segmentation,
-            params,
-            sampler,
-            report,
-            stages,
-        })
+        Self::after_segmentation(mesh, field, segmentation, options, &|_| {}, Vec::new())
     }
+}
+
+/// Records the time since `start` of stage `name`, and reports it to `progress`.
+fn record_stage(
+    stages: &mut Vec<(&'static str, Duration)>,
+    progress: &dyn Fn(Progress),
+    name: &'static str,
+    start: Instant,
+) {
+    let took = start.elapsed();
+    progress(Progress::Done(name, took));
+    stages.push((name, took));
 }
 
 #[cfg(test)]
