@@ -14,8 +14,11 @@
 //! Sources: constant, planar test functions (Gaussian blob, ramp, Balzer et al.'s
 //! density; shear and perspective metrics via [`PlanarWarp`]), per-vertex tensors from
 //! a file ([`read_field_file`]) and principal curvatures ([`principal_curvatures`]).
+//! Field design ([`smoothest_line_field`], [`guided_line_field`]): smooth line fields
+//! with few singularities (Knöppel et al. 2013).
 
 mod curvature;
+pub mod design;
 mod eigen;
 mod error;
 mod file;
@@ -26,6 +29,9 @@ mod warp;
 
 pub use curvature::{
     CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
+};
+pub use design::{
+    LineField, LineFieldError, LineFieldOptions, guided_line_field, smoothest_line_field,
 };
 pub use eigen::{Eigen2, eigen_2x2, eigen_in_plane, principal_axis, tangent_frame};
 pub use error::FieldError;
