@@ -3,7 +3,7 @@
 //! direction fields" (SIGGRAPH 2013).
 //!
 //! # Representation
-//! Each vertex `v` has the tangent frame `(e1, e2)` of [`tangent_frame`] of its vertex
+//! Each vertex `v` has the tangent frame `(e1, e2)` of [`tangent_frame`](super::tangent_frame) of its vertex
 //! normal. A line field is a complex number per vertex, `z_v = r_v e^(2 i theta_v)`, in
 //! that frame: the doubled angle makes `theta` and `theta + pi` the same line, so no sign
 //! has to be chosen anywhere.
@@ -41,7 +41,8 @@
 //! Input: a [`TriMesh`] (and a guidance per vertex). Output: a [`LineField`], a unit
 //! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
 //! turns into a [`TensorField`]. Cost: O(V + E) assembly, one sparse Cholesky of a
-//! `2V x 2V` matrix (about O(V^1.5) on surface meshes), O(V log V) per iteration.
+//! `2V x 2V` matrix, and one solve with that factor per iteration (not yet timed on
+//! large meshes).
 //! Deterministic: fixed iteration order, sequential solves, fixed start vector.
 
 use faer::Mat;
@@ -51,7 +52,7 @@ use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use glam::DVec3;
 
-use super::{FieldError, TensorField, tangent_frame};
+use super::{FieldError, TensorField, frame_angle, vertex_frames};
 use crate::mesh::TriMesh;
 
 /// Floor of the cotangent edge weights (dimensionless).
@@ -214,11 +215,7 @@ impl System {
             return Err(LineFieldError::EmptyMesh);
         }
         let pos = mesh.positions();
-        let frames: Vec<(DVec3, DVec3)> = mesh
-            .vertex_normals()
-            .iter()
-            .map(|nv| tangent_frame(*nv))
-            .collect();
+        let frames = vertex_frames(mesh);
         let mut mass = vec![0.0; n];
         let mut cotan = vec![0.0; mesh.edge_count()];
         for ((t, fe), area) in mesh
@@ -250,7 +247,7 @@ impl System {
             .map(|(&[a, b], &c)| {
                 let (a, b) = (a as usize, b as usize);
                 let d = pos[b] - pos[a];
-                let psi = |v: usize| d.dot(frames[v].1).atan2(d.dot(frames[v].0));
+                let psi = |v: usize| frame_angle(d, frames[v]);
                 let (s, c2) = (2.0 * (psi(b) - psi(a))).sin_cos();
                 let weight = if c.is_finite() {
                     c.max(MIN_EDGE_WEIGHT)

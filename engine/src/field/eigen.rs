@@ -32,6 +32,20 @@ impl Eigen2 {
     }
 }
 
+/// The [`tangent_frame`] of every vertex normal of `mesh`: the frames in which
+/// per-vertex angles are measured (line fields, their transport along edges). O(V).
+pub fn vertex_frames(mesh: &crate::mesh::TriMesh) -> Vec<(DVec3, DVec3)> {
+    mesh.vertex_normals()
+        .iter()
+        .map(|n| tangent_frame(*n))
+        .collect()
+}
+
+/// The angle of `d` projected into the tangent frame `(e1, e2)`, in `(-pi, pi]`.
+pub fn frame_angle(d: DVec3, (e1, e2): (DVec3, DVec3)) -> f64 {
+    d.dot(e2).atan2(d.dot(e1))
+}
+
 /// A deterministic orthonormal frame `(e1, e2)` of the plane with unit normal `n`,
 /// with `e1 x e2 = n`. `e1` is the projection of the world axis least aligned with `n`.
 pub fn tangent_frame(n: DVec3) -> (DVec3, DVec3) {

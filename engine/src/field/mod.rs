@@ -33,7 +33,9 @@ pub use curvature::{
 pub use design::{
     LineField, LineFieldError, LineFieldOptions, guided_line_field, smoothest_line_field,
 };
-pub use eigen::{Eigen2, eigen_2x2, eigen_in_plane, principal_axis, tangent_frame};
+pub use eigen::{
+    Eigen2, eigen_2x2, eigen_in_plane, frame_angle, principal_axis, tangent_frame, vertex_frames,
+};
 pub use error::FieldError;
 pub use file::{format_field_file, parse_field_file, read_field_file};
 pub use isotropic::isotropic_copy;

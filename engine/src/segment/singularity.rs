@@ -9,7 +9,7 @@
 //! # Representation
 //! The field is a *line* field: eigenvectors have no sign, so they are never compared
 //! as vectors. At each vertex `v` the traceless part of the tensor in the tangent frame
-//! `(e1, e2)` of [`tangent_frame`] is the complex number
+//! `(e1, e2)` of [`tangent_frame`](crate::field::tangent_frame) is the complex number
 //! `z_v = (a - c)/2 + i b = (l1 - l2)/2 e^(2 i theta_v)`, which is sign-free; its
 //! argument `2 theta_v` is twice the angle of the major direction. The paper's test
 //! (barycentric zero of the projected eigenvectors, after Tricoche et al.) becomes: the
@@ -66,7 +66,7 @@ use std::f64::consts::{PI, TAU};
 use glam::{DMat3, DVec3};
 
 use super::Singularity;
-use crate::field::{TensorField, tangent_frame};
+use crate::field::{TensorField, frame_angle, vertex_frames};
 use crate::mesh::TriMesh;
 
 /// How the line field turns along edges and how the tangent planes turn around faces,
@@ -101,21 +101,11 @@ pub(crate) fn wrap_pi(x: f64) -> f64 {
     if y <= -PI { y + TAU } else { y }
 }
 
-/// Angle of `d` projected into the plane of frame `(n, e1, e2)`, in that frame.
-#[inline]
-fn frame_angle(d: DVec3, e1: DVec3, e2: DVec3) -> f64 {
-    d.dot(e2).atan2(d.dot(e1))
-}
-
 /// Builds the [`LineFieldTransport`] of `field` on `mesh`: one pass over edges (the
 /// field's turn) and one over faces (corner angles, holonomies). O(V + E + F).
 pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTransport {
     let pos = mesh.positions();
-    let frames: Vec<(DVec3, DVec3)> = mesh
-        .vertex_normals()
-        .iter()
-        .map(|n| tangent_frame(*n))
-        .collect();
+    let frames = vertex_frames(mesh);
     let two_theta: Vec<f64> = field
         .tensors()
         .iter()
@@ -130,7 +120,7 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
         .map(|&[a, b]| {
             let d = pos[b as usize] - pos[a as usize];
             let (fa, fb) = (frames[a as usize], frames[b as usize]);
-            [frame_angle(d, fa.0, fa.1), frame_angle(d, fb.0, fb.1)]
+            [frame_angle(d, fa), frame_angle(d, fb)]
         })
         .collect();
     let edge_turn: Vec<f64> = mesh
