@@ -243,7 +243,10 @@ impl SceneConfig {
     /// Parses a scene from RON text; `path` is used in error messages and to resolve
     /// relative mesh paths.
     pub fn from_ron(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        let mut scene: SceneConfig = ron::from_str(text).map_err(|e| ConfigError::Parse {
+        // `Designed(guidance: ..., weight: ...)` rather than `Designed((...))`.
+        let options = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES);
+        let mut scene: SceneConfig = options.from_str(text).map_err(|e| ConfigError::Parse {
             path: path.to_path_buf(),
             line: e.span.start.line,
             column: e.span.start.col,

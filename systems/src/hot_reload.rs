@@ -27,7 +27,6 @@ use bevy_ecs::prelude::*;
 use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, select};
 use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
 use notify::{RecursiveMode, Watcher};
-use strata_engine::field::FieldSpec;
 
 use crate::config::{ConfigError, MeshSource, SceneConfig};
 use crate::ecs::components::*;
@@ -261,7 +260,7 @@ fn watch_dir(
     Ok(())
 }
 
-/// The files a scene names (mesh file, field file), absolute.
+/// The files a scene names (mesh file, field files), absolute.
 fn dependencies(scene: &Result<SceneConfig, ConfigError>) -> Vec<PathBuf> {
     let Ok(scene) = scene else {
         return Vec::new();
@@ -270,7 +269,7 @@ fn dependencies(scene: &Result<SceneConfig, ConfigError>) -> Vec<PathBuf> {
     if let MeshSource::File(p) = &scene.mesh {
         out.extend(std::path::absolute(p).ok());
     }
-    if let FieldSpec::File { path } = &scene.field {
+    for path in scene.field.files() {
         out.extend(std::path::absolute(path).ok());
     }
     out
@@ -319,7 +318,7 @@ fn apply_scene(
     let old = state.config.clone();
     let entity = state.entity.filter(|e| world.get_entity(*e).is_ok());
     let mesh_file_changed = matches!(&config.mesh, MeshSource::File(p) if on_disk(p));
-    let field_file_changed = matches!(&config.field, FieldSpec::File { path } if on_disk(path));
+    let field_file_changed = config.field.files().into_iter().any(on_disk);
     let reload_mesh =
         entity.is_none() || old.as_ref().is_none_or(|o| o.mesh != config.mesh) || mesh_file_changed;
     let mesh = match (reload_mesh, entity.and_then(|e| world.get::<MeshData>(e))) {

@@ -217,6 +217,48 @@ pub(crate) struct Settings {
     pub isotropy_curvature: f64,
 }
 
+/// The normalization factor `c` of [`CurvatureNormalization`] for per-vertex
+/// `measures` on `mesh`.
+fn normalization_factor(
+    mesh: &TriMesh,
+    normalization: CurvatureNormalization,
+    measures: &[f64],
+) -> f64 {
+    let area_radius = (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt();
+    match normalization {
+        CurvatureNormalization::AreaRadius => area_radius,
+        CurvatureNormalization::Raw => 1.0,
+        CurvatureNormalization::Max => {
+            let max = measures.iter().copied().fold(0.0, f64::max);
+            if max * area_radius > FLAT_CURVATURE {
+                1.0 / max
+            } else {
+                0.0
+            }
+        }
+    }
+}
+
+/// Per-vertex density `floor + scale * c * measure(k1, k2)` (the density of
+/// [`FieldSpec::Curvature`](super::FieldSpec::Curvature), shared with the designed
+/// field's curvature density).
+pub(crate) fn densities(
+    mesh: &TriMesh,
+    k: &PrincipalCurvatures,
+    measure: CurvatureMeasure,
+    normalization: CurvatureNormalization,
+    floor: f64,
+    scale: f64,
+) -> Vec<f64> {
+    let measures: Vec<f64> =
+        k.k1.iter()
+            .zip(&k.k2)
+            .map(|(&k1, &k2)| measure.eval(k1, k2))
+            .collect();
+    let c = normalization_factor(mesh, normalization, &measures);
+    measures.iter().map(|m| floor + scale * c * m).collect()
+}
+
 /// The sampling tensor field of the curvature source (formulas on
 /// [`FieldSpec::Curvature`](super::FieldSpec::Curvature)).
 pub(crate) fn sampling_field(
@@ -229,19 +271,7 @@ pub(crate) fn sampling_field(
             .zip(&k.k2)
             .map(|(&k1, &k2)| s.measure.eval(k1, k2))
             .collect();
-    let area_radius = (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt();
-    let c = match s.normalization {
-        CurvatureNormalization::AreaRadius => area_radius,
-        CurvatureNormalization::Raw => 1.0,
-        CurvatureNormalization::Max => {
-            let max = measures.iter().copied().fold(0.0, f64::max);
-            if max * area_radius > FLAT_CURVATURE {
-                1.0 / max
-            } else {
-                0.0
-            }
-        }
-    };
+    let c = normalization_factor(mesh, s.normalization, &measures);
     let eps = s.isotropy_curvature;
     let eigen: Vec<[f64; 2]> = measures
         .iter()

@@ -34,9 +34,17 @@
 //!   of `A + sigma M` (`sigma` = [`SHIFT`] times the ratio of the traces of `A` and `M`),
 //!   from a fixed pseudo-random start, `M`-normalised each step, until the Rayleigh
 //!   quotient settles or the iteration budget is spent.
-//! - Guided field ([`guided_line_field`]): given a guidance `q` (direction and
-//!   confidence per vertex) and a weight, one solve of `(A + w M) z = w M q`, the
-//!   minimiser of `E(z) + w |z - q|_M^2`. Weight 0 gives the smoothest field.
+//! - Guided field ([`guided_line_field`], [`constrained_line_field`]): given a guidance
+//!   per vertex (a unit line `u_v` and a confidence `c_v >= 0`), a weight and optional
+//!   hard constraints, one solve for the minimiser of
+//!   `E(z) + w sum_v m_v c_v |z_v - u_v|^2` with `z_k = u_k` fixed at constrained
+//!   vertices (they are eliminated: their terms move to the right-hand side). Where the
+//!   confidence is 0 the field is free and interpolates its surroundings harmonically,
+//!   so regions without guidance follow their neighbours instead of shrinking to zero
+//!   (a plain `w |z - q|^2` pull toward `q = 0` would). A tiny shift `sigma M` (as for
+//!   the smoothest field) keeps the system definite in a connected component that
+//!   nothing pins (its field is then zero, and its directions are the frames' first
+//!   axes). Weight 0 and no constraints give the smoothest field.
 //!
 //! Input: a [`TriMesh`] (and a guidance per vertex). Output: a [`LineField`], a unit
 //! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
@@ -52,7 +60,7 @@ use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use glam::DVec3;
 
-use super::{FieldError, TensorField, frame_angle, vertex_frames};
+use super::{FieldError, TensorField, frame_angle, tangent_frame, vertex_frames};
 use crate::mesh::TriMesh;
 
 /// Floor of the cotangent edge weights (dimensionless).
@@ -72,6 +80,12 @@ pub struct LineFieldOptions {
     /// `w |z - q|_M^2` scales with area). Range `[0, inf)`, 0 meaning the smoothest field;
     /// default 10.
     pub weight: f64,
+    /// Length over which the surface's normals are smoothed before they define the
+    /// connection, as a fraction of the mesh's area radius `R = sqrt(area / 4 pi)`:
+    /// bumps smaller than about `smoothing R` then create no singularities (see
+    /// [`smoothed_normals`]). Range `[0, inf)`, 0 using the mesh's own normals;
+    /// default 0.
+    pub smoothing: f64,
     /// Most inverse power iterations of the smoothest field. Range `[1, inf)`; default 200.
     pub iterations: usize,
     /// The iteration stops when the Rayleigh quotient changes by at most `tolerance`
@@ -83,6 +97,7 @@ impl Default for LineFieldOptions {
     fn default() -> Self {
         Self {
             weight: 10.0,
+            smoothing: 0.0,
             iterations: 200,
             tolerance: 1e-12,
         }
@@ -96,6 +111,13 @@ impl LineFieldOptions {
             return Err(LineFieldError::InvalidOption {
                 option: "weight",
                 value: self.weight,
+                expected: "finite and >= 0",
+            });
+        }
+        if !(self.smoothing.is_finite() && self.smoothing >= 0.0) {
+            return Err(LineFieldError::InvalidOption {
+                option: "smoothing",
+                value: self.smoothing,
                 expected: "finite and >= 0",
             });
         }
@@ -138,6 +160,36 @@ pub enum LineFieldError {
         /// Vertex index.
         vertex: usize,
     },
+    /// A constraint names a vertex the mesh does not have.
+    #[error("constraint {index} names vertex {vertex}, but the mesh has {vertices} vertices")]
+    ConstraintVertex {
+        /// Position of the constraint in the list.
+        index: usize,
+        /// The vertex it names.
+        vertex: u32,
+        /// Mesh vertex count.
+        vertices: usize,
+    },
+    /// A constraint's direction is not finite or has no part in the tangent plane.
+    #[error(
+        "constraint {index} at vertex {vertex}: the direction is not finite or is normal to the surface"
+    )]
+    ConstraintDirection {
+        /// Position of the constraint in the list.
+        index: usize,
+        /// Its vertex.
+        vertex: u32,
+    },
+    /// Two constraints fix the same vertex.
+    #[error("constraints {first} and {second} both fix vertex {vertex}")]
+    DuplicateConstraint {
+        /// The earlier constraint.
+        first: usize,
+        /// The later one.
+        second: usize,
+        /// The vertex both fix.
+        vertex: u32,
+    },
     /// A setting is out of its range.
     #[error("line-field option `{option}` = {value} is invalid: {expected}")]
     InvalidOption {
@@ -156,6 +208,17 @@ pub enum LineFieldError {
     },
 }
 
+/// A hard constraint of [`constrained_line_field`]: the field's line at `vertex` is
+/// exactly `direction`'s (projected into the vertex's tangent plane; its sign does not
+/// matter).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineConstraint {
+    /// Mesh vertex index.
+    pub vertex: u32,
+    /// World-space direction, not parallel to the vertex normal.
+    pub direction: DVec3,
+}
+
 /// A line field: per vertex, a unit tangent direction (world space; its negation is the
 /// same line) and the magnitude `|z_v|` of the solution.
 #[derive(Clone, Debug, PartialEq)]
@@ -164,8 +227,8 @@ pub struct LineField {
     /// tangent frame where the magnitude is 0).
     pub directions: Vec<DVec3>,
     /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1`; for a
-    /// guided field in the guidance's units (small where guidance is weak or
-    /// contradictory).
+    /// guided field about 1 where it follows confident guidance or a constraint, smaller
+    /// where guidance is contradictory (near singularities).
     pub magnitudes: Vec<f64>,
     /// The smoothness energy `E(z) = z^H A z` of the solution.
     pub energy: f64,
@@ -209,13 +272,14 @@ struct System {
 }
 
 impl System {
-    fn build(mesh: &TriMesh) -> Result<Self, LineFieldError> {
+    /// The system of `mesh`, with its connection measured in the tangent planes of the
+    /// normals smoothed over `smoothing` (a length; 0 keeps the mesh's own normals).
+    fn build(mesh: &TriMesh, smoothing: f64) -> Result<Self, LineFieldError> {
         let n = mesh.vertex_count();
         if n == 0 {
             return Err(LineFieldError::EmptyMesh);
         }
         let pos = mesh.positions();
-        let frames = vertex_frames(mesh);
         let mut mass = vec![0.0; n];
         let mut cotan = vec![0.0; mesh.edge_count()];
         for ((t, fe), area) in mesh
@@ -239,21 +303,34 @@ impl System {
         if !(mass.iter().sum::<f64>() > 0.0) {
             return Err(LineFieldError::EmptyMesh);
         }
+        let weights: Vec<f64> = cotan
+            .iter()
+            .map(|&c| {
+                if c.is_finite() {
+                    c.max(MIN_EDGE_WEIGHT)
+                } else {
+                    MIN_EDGE_WEIGHT
+                }
+            })
+            .collect();
+        let frames: Vec<(DVec3, DVec3)> = if smoothing > 0.0 {
+            smoothed_normals(mesh, &weights, &mass, smoothing)?
+                .into_iter()
+                .map(tangent_frame)
+                .collect()
+        } else {
+            vertex_frames(mesh)
+        };
         let mut diagonal = vec![0.0; n];
         let edges: Vec<EdgeTerm> = mesh
             .edges()
             .iter()
-            .zip(&cotan)
-            .map(|(&[a, b], &c)| {
+            .zip(&weights)
+            .map(|(&[a, b], &weight)| {
                 let (a, b) = (a as usize, b as usize);
                 let d = pos[b] - pos[a];
                 let psi = |v: usize| frame_angle(d, frames[v]);
                 let (s, c2) = (2.0 * (psi(b) - psi(a))).sin_cos();
-                let weight = if c.is_finite() {
-                    c.max(MIN_EDGE_WEIGHT)
-                } else {
-                    MIN_EDGE_WEIGHT
-                };
                 diagonal[a] += weight;
                 diagonal[b] += weight;
                 EdgeTerm {
@@ -278,27 +355,41 @@ impl System {
 
     /// The lower triangle of the real form of `A + shift M`.
     fn matrix(&self, shift: f64) -> Result<SparseColMat<usize, f64>, LineFieldError> {
-        let n = self.len();
-        let mut triplets = Vec::with_capacity(2 * n + 4 * self.edges.len());
-        for v in 0..n {
-            let d = self.diagonal[v] + shift * self.mass[v];
-            triplets.push(Triplet::new(2 * v, 2 * v, d));
-            triplets.push(Triplet::new(2 * v + 1, 2 * v + 1, d));
+        let extra: Vec<f64> = self.mass.iter().map(|m| shift * m).collect();
+        let slots: Vec<usize> = (0..self.len()).collect();
+        self.reduced_matrix(&extra, &slots, self.len())
+    }
+
+    /// The lower triangle of the real form of `A + diag(extra)` restricted to the
+    /// vertices with `slots[v] < free` (vertex `v` becomes unknown `slots[v]`).
+    fn reduced_matrix(
+        &self,
+        extra: &[f64],
+        slots: &[usize],
+        free: usize,
+    ) -> Result<SparseColMat<usize, f64>, LineFieldError> {
+        let mut triplets = Vec::with_capacity(2 * free + 4 * self.edges.len());
+        for (v, &i) in slots.iter().enumerate() {
+            if i < free {
+                let d = self.diagonal[v] + extra[v];
+                triplets.push(Triplet::new(2 * i, 2 * i, d));
+                triplets.push(Triplet::new(2 * i + 1, 2 * i + 1, d));
+            }
         }
         for e in &self.edges {
+            let (sa, sb) = (slots[e.a], slots[e.b]);
+            if sa >= free || sb >= free {
+                continue;
+            }
             // Entry (b, a) of A is c = -w r_ab = p + i q; entry (a, b) is its conjugate.
             let (p, q) = (-e.weight * e.rotation[0], -e.weight * e.rotation[1]);
-            let (row, col, q) = if e.b > e.a {
-                (e.b, e.a, q)
-            } else {
-                (e.a, e.b, -q)
-            };
+            let (row, col, q) = if sb > sa { (sb, sa, q) } else { (sa, sb, -q) };
             triplets.push(Triplet::new(2 * row, 2 * col, p));
             triplets.push(Triplet::new(2 * row, 2 * col + 1, -q));
             triplets.push(Triplet::new(2 * row + 1, 2 * col, q));
             triplets.push(Triplet::new(2 * row + 1, 2 * col + 1, p));
         }
-        SparseColMat::try_new_from_triplets(2 * n, 2 * n, &triplets)
+        SparseColMat::try_new_from_triplets(2 * free, 2 * free, &triplets)
             .map_err(|_| LineFieldError::Factorization { stage: "assembly" })
     }
 
@@ -329,10 +420,8 @@ impl System {
     }
 
     /// `M x`.
-    fn apply_mass(&self, x: &Mat<f64>, scale: f64) -> Mat<f64> {
-        Mat::from_fn(2 * self.len(), 1, |r, _| {
-            scale * self.mass[r / 2] * x[(r, 0)]
-        })
+    fn apply_mass(&self, x: &Mat<f64>) -> Mat<f64> {
+        Mat::from_fn(2 * self.len(), 1, |r, _| self.mass[r / 2] * x[(r, 0)])
     }
 
     fn output(&self, x: &Mat<f64>, iterations: usize) -> LineField {
@@ -356,6 +445,48 @@ impl System {
     }
 }
 
+/// The vertex normals after one implicit heat step of time `length^2`,
+/// `(M + length^2 L) N = M N0` with the (clamped) cotangent Laplacian `L`, normalised:
+/// details of the surface smaller than about `length` no longer turn the normals, and
+/// so no longer turn the connection (Ray, Vallet, Alonso and Lévy 2009 make fields
+/// ignore small geometric details the same way). One sparse Cholesky, three columns.
+fn smoothed_normals(
+    mesh: &TriMesh,
+    weights: &[f64],
+    mass: &[f64],
+    length: f64,
+) -> Result<Vec<DVec3>, LineFieldError> {
+    let t = length * length;
+    let n = mesh.vertex_count();
+    let mut triplets = Vec::with_capacity(n + mesh.edge_count());
+    let mut diagonal: Vec<f64> = mass.to_vec();
+    for (&[a, b], &w) in mesh.edges().iter().zip(weights) {
+        let (a, b) = (a as usize, b as usize);
+        diagonal[a] += t * w;
+        diagonal[b] += t * w;
+        triplets.push(Triplet::new(a.max(b), a.min(b), -t * w));
+    }
+    triplets.extend(
+        diagonal
+            .iter()
+            .enumerate()
+            .map(|(v, &d)| Triplet::new(v, v, d)),
+    );
+    let matrix = SparseColMat::try_new_from_triplets(n, n, &triplets)
+        .map_err(|_| LineFieldError::Factorization { stage: "assembly" })?;
+    let normals = mesh.vertex_normals();
+    let mut rhs = Mat::from_fn(n, 3, |v, k| mass[v] * normals[v][k]);
+    factor(&matrix)?.solve_in_place(rhs.as_mut());
+    check_finite(&rhs)?;
+    Ok((0..n)
+        .map(|v| {
+            let smooth = DVec3::new(rhs[(v, 0)], rhs[(v, 1)], rhs[(v, 2)]);
+            // Where opposite normals cancel (a thin sheet) keep the mesh's own.
+            smooth.try_normalize().unwrap_or(normals[v])
+        })
+        .collect())
+}
+
 /// Sparse Cholesky of `matrix` (lower triangle), sequential.
 fn factor(matrix: &SparseColMat<usize, f64>) -> Result<Llt<usize, f64>, LineFieldError> {
     let symbolic = SymbolicLlt::try_new(matrix.symbolic(), Side::Lower).map_err(|_| {
@@ -371,14 +502,18 @@ fn factor(matrix: &SparseColMat<usize, f64>) -> Result<Llt<usize, f64>, LineFiel
 }
 
 fn check_finite(x: &Mat<f64>) -> Result<(), LineFieldError> {
-    let n = x.nrows();
-    if (0..n).all(|r| x[(r, 0)].is_finite()) {
+    if (0..x.ncols()).all(|c| (0..x.nrows()).all(|r| x[(r, c)].is_finite())) {
         Ok(())
     } else {
         Err(LineFieldError::Factorization {
             stage: "solve (non-finite solution)",
         })
     }
+}
+
+/// `sqrt(area / 4 pi)`: the radius of the sphere with the mesh's area.
+fn area_radius(mesh: &TriMesh) -> f64 {
+    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
 }
 
 /// A fixed pseudo-random value in `[-1, 1)` for index `i` (SplitMix64 finaliser).
@@ -400,7 +535,7 @@ pub fn smoothest_line_field(
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
-    let system = System::build(mesh)?;
+    let system = System::build(mesh, options.smoothing * area_radius(mesh))?;
     let n = system.len();
     let trace_a: f64 = system.diagonal.iter().sum();
     let trace_m: f64 = system.mass.iter().sum();
@@ -412,7 +547,7 @@ pub fn smoothest_line_field(
     let mut previous = f64::INFINITY;
     let mut iterations = 0;
     for _ in 0..options.iterations {
-        let mut y = system.apply_mass(&x, 1.0);
+        let mut y = system.apply_mass(&x);
         llt.solve_in_place(y.as_mut());
         check_finite(&y)?;
         let norm2 = system.mass_norm2(&y);
@@ -435,10 +570,11 @@ pub fn smoothest_line_field(
 }
 
 /// The line field that balances smoothness against `guidance`: the minimiser of
-/// `E(z) + w |z - q|_M^2`, `w = options.weight / area`, one solve of
-/// `(A + w M) z = w M q`. Each guidance vector is projected into its vertex's tangent
-/// plane; its direction gives the line (its sign does not matter) and its length the
-/// confidence `|q_v|` (a zero vector: no guidance there). A weight of 0 gives
+/// `E(z) + w sum_v m_v c_v |z_v - u_v|^2`, `w = options.weight / area` (see the
+/// [module docs](self)). Each guidance vector is projected into its vertex's tangent
+/// plane; its direction gives the line `u_v` (its sign does not matter) and its length
+/// the confidence `c_v` (a zero vector: no guidance there, the field follows its
+/// neighbours). A weight of 0, or no guidance anywhere, gives
 /// [`smoothest_line_field`].
 ///
 /// Errors: invalid options, an empty mesh, a guidance of the wrong length or with a
@@ -448,44 +584,203 @@ pub fn guided_line_field(
     guidance: &[DVec3],
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
+    constrained_line_field(mesh, guidance, &[], options)
+}
+
+/// [`guided_line_field`] with hard constraints: the field's line at each constrained
+/// vertex is exactly the constraint's, and the rest minimises the same energy. With
+/// constraints and weight 0 (or no guidance) the field is the smoothest one through
+/// the constraints. `guidance` may be empty, meaning no soft guidance at all.
+///
+/// ```
+/// use glam::DVec3;
+/// use strata_engine::field::{LineConstraint, LineFieldOptions, constrained_line_field};
+/// use strata_engine::mesh::shapes;
+/// let mesh = shapes::plane(1.0, 8)?;
+/// let pin = LineConstraint { vertex: 0, direction: DVec3::new(1.0, 1.0, 0.0) };
+/// let field = constrained_line_field(&mesh, &[], &[pin], &LineFieldOptions::default())?;
+/// // One constraint on a flat square: the smoothest field through it is constant.
+/// let diagonal = DVec3::new(1.0, 1.0, 0.0).normalize();
+/// assert!(field.directions.iter().all(|d| d.dot(diagonal).abs() > 1.0 - 1e-9));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// Errors: those of [`guided_line_field`], and a constraint naming a missing vertex,
+/// with a direction normal to the surface (or not finite), or fixing a vertex that
+/// another constraint fixes.
+pub fn constrained_line_field(
+    mesh: &TriMesh,
+    guidance: &[DVec3],
+    constraints: &[LineConstraint],
+    options: &LineFieldOptions,
+) -> Result<LineField, LineFieldError> {
     options.validate()?;
-    if guidance.len() != mesh.vertex_count() {
+    let n = mesh.vertex_count();
+    if !guidance.is_empty() && guidance.len() != n {
         return Err(LineFieldError::GuidanceLength {
-            expected: mesh.vertex_count(),
+            expected: n,
             found: guidance.len(),
         });
     }
     if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
         return Err(LineFieldError::NonFiniteGuidance { vertex });
     }
-    if options.weight == 0.0 {
+    let system = System::build(mesh, options.smoothing * area_radius(mesh))?;
+    let fixed = fixed_values(mesh, &system, constraints)?;
+    let q = if options.weight > 0.0 && !guidance.is_empty() {
+        guidance_lines(mesh, &system, guidance)
+    } else {
+        vec![None; n]
+    };
+    if constraints.is_empty() && q.iter().all(Option::is_none) {
         return smoothest_line_field(mesh, options);
     }
-    let system = System::build(mesh)?;
-    let w = options.weight / system.mass.iter().sum::<f64>();
-    let llt = factor(&system.matrix(w)?)?;
-    let q = guidance_values(mesh, &system, guidance);
-    let mut x = system.apply_mass(&q, w);
-    llt.solve_in_place(x.as_mut());
-    check_finite(&x)?;
+
+    // Unknowns: the free vertices in index order, then the fixed ones (slots >= free).
+    let mut slots = vec![0; n];
+    let mut free = 0;
+    for v in 0..n {
+        if fixed[v].is_none() {
+            slots[v] = free;
+            free += 1;
+        }
+    }
+    let mut next = free;
+    for v in 0..n {
+        if fixed[v].is_some() {
+            slots[v] = next;
+            next += 1;
+        }
+    }
+    let area: f64 = system.mass.iter().sum();
+    let w = options.weight / area;
+    // Only a connected component with no guidance and no constraint leaves the system
+    // singular (its field is free up to a rotation); the shift pins it to zero there and
+    // leaves every other component exact.
+    let shift = SHIFT * system.diagonal.iter().sum::<f64>() / area;
+    let component = |v: usize| mesh.face_components()[mesh.vertex_faces(v as u32)[0] as usize];
+    let mut pinned = vec![false; mesh.component_count()];
+    for v in 0..n {
+        if fixed[v].is_some() || q[v].is_some() {
+            pinned[component(v) as usize] = true;
+        }
+    }
+    let mut extra = vec![0.0; n];
+    let mut rhs = Mat::zeros(2 * free, 1);
+    for v in 0..n {
+        let mut d = if pinned[component(v) as usize] {
+            0.0
+        } else {
+            shift * system.mass[v]
+        };
+        if let Some((c, [ur, ui])) = q[v] {
+            let k = w * system.mass[v] * c;
+            d += k;
+            if fixed[v].is_none() {
+                rhs[(2 * slots[v], 0)] += k * ur;
+                rhs[(2 * slots[v] + 1, 0)] += k * ui;
+            }
+        }
+        extra[v] = d;
+    }
+    // Edges with one fixed end: their coupling moves to the right-hand side.
+    for e in &system.edges {
+        let [c, s] = e.rotation;
+        match (fixed[e.a], fixed[e.b]) {
+            (Some([xr, xi]), None) => {
+                // rhs_b += w r z_a
+                let i = slots[e.b];
+                rhs[(2 * i, 0)] += e.weight * (c * xr - s * xi);
+                rhs[(2 * i + 1, 0)] += e.weight * (s * xr + c * xi);
+            }
+            (None, Some([xr, xi])) => {
+                // rhs_a += w conj(r) z_b
+                let i = slots[e.a];
+                rhs[(2 * i, 0)] += e.weight * (c * xr + s * xi);
+                rhs[(2 * i + 1, 0)] += e.weight * (c * xi - s * xr);
+            }
+            _ => {}
+        }
+    }
+    let mut x = Mat::zeros(2 * n, 1);
+    if free > 0 {
+        let llt = factor(&system.reduced_matrix(&extra, &slots, free)?)?;
+        llt.solve_in_place(rhs.as_mut());
+        check_finite(&rhs)?;
+    }
+    for v in 0..n {
+        let [re, im] = match fixed[v] {
+            Some(z) => z,
+            None => [rhs[(2 * slots[v], 0)], rhs[(2 * slots[v] + 1, 0)]],
+        };
+        x[(2 * v, 0)] = re;
+        x[(2 * v + 1, 0)] = im;
+    }
     Ok(system.output(&x, 0))
 }
 
-/// The guidance as doubled-angle complex numbers in the vertex frames, real form:
-/// `t = |t| (cos phi e1 + sin phi e2)` becomes `|t| e^(2 i phi)`.
-fn guidance_values(mesh: &TriMesh, system: &System, guidance: &[DVec3]) -> Mat<f64> {
-    let mut q = Mat::zeros(2 * system.len(), 1);
-    for (v, (d, nv)) in guidance.iter().zip(mesh.vertex_normals()).enumerate() {
-        let t = *d - *nv * d.dot(*nv);
-        let (e1, e2) = system.frames[v];
-        let (c, s) = (t.dot(e1), t.dot(e2));
-        let len = c.hypot(s);
-        if len > 0.0 {
-            q[(2 * v, 0)] = (c * c - s * s) / len;
-            q[(2 * v + 1, 0)] = 2.0 * c * s / len;
+/// `t` in the frame `(e1, e2)` as a unit doubled-angle complex number, with its
+/// tangent length; `None` where `t` has no tangent part.
+fn doubled_unit(t: DVec3, (e1, e2): (DVec3, DVec3)) -> Option<(f64, [f64; 2])> {
+    let (c, s) = (t.dot(e1), t.dot(e2));
+    let len2 = c * c + s * s;
+    (len2 > 0.0).then(|| (len2.sqrt(), [(c * c - s * s) / len2, 2.0 * c * s / len2]))
+}
+
+/// Per vertex, the guidance's confidence and unit doubled-angle line in the vertex
+/// frame; `None` where there is no guidance.
+fn guidance_lines(
+    mesh: &TriMesh,
+    system: &System,
+    guidance: &[DVec3],
+) -> Vec<Option<(f64, [f64; 2])>> {
+    guidance
+        .iter()
+        .zip(mesh.vertex_normals())
+        .zip(&system.frames)
+        .map(|((d, nv), frame)| doubled_unit(*d - *nv * d.dot(*nv), *frame))
+        .collect()
+}
+
+/// Per vertex, the fixed unit doubled-angle value of its constraint, if any.
+fn fixed_values(
+    mesh: &TriMesh,
+    system: &System,
+    constraints: &[LineConstraint],
+) -> Result<Vec<Option<[f64; 2]>>, LineFieldError> {
+    let n = mesh.vertex_count();
+    let mut fixed = vec![None; n];
+    let mut owner = vec![usize::MAX; n];
+    for (index, c) in constraints.iter().enumerate() {
+        let v = c.vertex as usize;
+        if v >= n {
+            return Err(LineFieldError::ConstraintVertex {
+                index,
+                vertex: c.vertex,
+                vertices: n,
+            });
         }
+        if owner[v] != usize::MAX {
+            return Err(LineFieldError::DuplicateConstraint {
+                first: owner[v],
+                second: index,
+                vertex: c.vertex,
+            });
+        }
+        let nv = mesh.vertex_normals()[v];
+        let d = c.direction;
+        let tangent = d - nv * d.dot(nv);
+        let usable = d.is_finite() && tangent.length_squared() > 1e-12 * d.length_squared();
+        let Some((_, z)) = doubled_unit(tangent, system.frames[v]).filter(|_| usable) else {
+            return Err(LineFieldError::ConstraintDirection {
+                index,
+                vertex: c.vertex,
+            });
+        };
+        owner[v] = index;
+        fixed[v] = Some(z);
     }
-    q
+    Ok(fixed)
 }
 
 #[cfg(test)]

@@ -62,8 +62,9 @@ fn guided_field_on_a_flat_square_follows_a_constant_guidance() {
         assert_eq!(field.iterations, 0);
         let spread = largest_spread(&field.directions, want);
         assert!(spread < 1e-9, "weight {weight}: off by {spread} rad");
+        // The confidence (2) weighs the pull; the solution is the unit line.
         for m in &field.magnitudes {
-            assert!((m - 2.0).abs() < 1e-9, "weight {weight}: magnitude {m}");
+            assert!((m - 1.0).abs() < 1e-6, "weight {weight}: magnitude {m}");
         }
     }
 }

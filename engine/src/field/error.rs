@@ -94,4 +94,7 @@ pub enum FieldError {
         /// What must hold, in words.
         what: &'static str,
     },
+    /// The designed field's line-field solve failed (see [`LineFieldError`](super::LineFieldError)).
+    #[error("field design: {0}")]
+    Design(#[from] super::LineFieldError),
 }

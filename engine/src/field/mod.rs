@@ -19,9 +19,11 @@
 
 mod curvature;
 pub mod design;
+mod designed;
 mod eigen;
 mod error;
 mod file;
+mod guidance;
 mod isotropic;
 mod params;
 mod spec;
@@ -31,13 +33,16 @@ pub use curvature::{
     CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
 };
 pub use design::{
-    LineField, LineFieldError, LineFieldOptions, guided_line_field, smoothest_line_field,
+    LineConstraint, LineField, LineFieldError, LineFieldOptions, constrained_line_field,
+    guided_line_field, smoothest_line_field,
 };
+pub use designed::{Anisotropy, Constraint, Density, Design, Guidance, Site};
 pub use eigen::{
     Eigen2, eigen_2x2, eigen_in_plane, frame_angle, principal_axis, tangent_frame, vertex_frames,
 };
 pub use error::FieldError;
 pub use file::{format_field_file, parse_field_file, read_field_file};
+pub use guidance::{curvature_guidance, direction_guidance};
 pub use isotropic::isotropic_copy;
 pub use spec::{FieldSpec, PlanarDensity};
 pub use warp::PlanarWarp;

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
+use super::designed::Design;
 use super::params::{eigenvalues, finite_point, invalid, positive};
 use super::warp::PlanarWarp;
 use super::{FieldError, TensorField};
@@ -149,6 +150,12 @@ pub enum FieldSpec {
         )]
         smoothing_iterations: u32,
     },
+    /// A designed field ([`Design`]): the direction is a smooth line field with few
+    /// singularities (Knöppel et al. 2013) aligned to a guidance (curvature, a world
+    /// direction, or none) and to hard constraints; spacing ratio and density come from
+    /// their own sources (constant, curvature, or a field file's densities). In a scene
+    /// file: `Designed(guidance: Curvature(), weight: 1.0, anisotropy: Constant(3.0))`.
+    Designed(Design),
 }
 
 #[cfg(feature = "serde")]
@@ -328,6 +335,7 @@ impl FieldSpec {
                 positive("density", *density)
             }
             Self::File { .. } => Ok(()),
+            Self::Designed(design) => design.validate(),
             Self::Curvature {
                 floor,
                 scale,
@@ -387,10 +395,20 @@ impl FieldSpec {
     /// assert_eq!(spec, FieldSpec::File { path: Path::new("configs").join("wing.field") });
     /// ```
     pub fn resolve_paths(&mut self, base_dir: &Path) {
-        if let Self::File { path } = self
-            && path.is_relative()
-        {
-            *path = base_dir.join(&*path);
+        match self {
+            Self::File { path } if path.is_relative() => *path = base_dir.join(&*path),
+            Self::Designed(design) => design.resolve_paths(base_dir),
+            _ => {}
+        }
+    }
+
+    /// The files this spec reads when it is built (a field file, a designed field's
+    /// density file), for hot reload to watch.
+    pub fn files(&self) -> Vec<&Path> {
+        match self {
+            Self::File { path } => vec![path.as_path()],
+            Self::Designed(design) => design.files(),
+            _ => Vec::new(),
         }
     }
 
@@ -433,6 +451,7 @@ impl FieldSpec {
             }
             Self::Warp { warp, density } => warp.build(mesh, *density),
             Self::File { path } => super::read_field_file(path, mesh),
+            Self::Designed(design) => design.build(mesh),
             Self::Curvature {
                 measure,
                 normalization,

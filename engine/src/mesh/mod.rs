@@ -13,11 +13,13 @@
 mod error;
 pub(crate) mod face_set;
 pub mod shapes;
+mod subdivide;
 mod topology;
 
 pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};
 pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label};
+pub use subdivide::loop_subdivide;
 
 use glam::DVec3;
 

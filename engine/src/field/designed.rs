@@ -1,0 +1,437 @@
+//! The designed field source ([`FieldSpec::Designed`](super::FieldSpec::Designed)): a
+//! smooth line field with few singularities ([`constrained_line_field`]) for the
+//! direction, and per-vertex anisotropy and density from their own sources.
+//!
+//! Input: a mesh and a [`Design`]. Output: a [`TensorField`] and the [`LineField`]
+//! behind it. Cost: one sparse Cholesky of a `2V x 2V` system (plus one of `V x V` for
+//! the smoothed normals, and inverse power iterations for the smoothest field), and
+//! O(V) per curvature estimate.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+
+use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
+use super::design::{LineConstraint, LineField, LineFieldOptions, constrained_line_field};
+use super::guidance::{curvature_guidance, direction_guidance};
+use super::params::{eigenvalues, invalid, positive};
+use super::{FieldError, PrincipalCurvatures, TensorField, principal_curvatures};
+use crate::mesh::TriMesh;
+
+/// What a designed line field aligns to.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum Guidance {
+    /// Nothing: the smoothest line field of the surface (Knöppel et al. 2013), or, with
+    /// constraints, the smoothest one through them.
+    Smoothest,
+    /// The direction of largest signed principal curvature, trusted in proportion to
+    /// `|k1 - k2|` (see [`curvature_guidance`]): umbilic regions follow their
+    /// neighbours instead of noise.
+    Curvature {
+        /// Rounds of one-ring smoothing of the curvature tensors before use; at most
+        /// 1000. Default 2.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_smoothing_iterations")
+        )]
+        smoothing_iterations: u32,
+    },
+    /// A world direction projected into each tangent plane, trusted where it lies in
+    /// the surface (see [`direction_guidance`]); unlike
+    /// [`FieldSpec::Constant`](super::FieldSpec::Constant) the field turns smoothly
+    /// where the surface faces the direction instead of flipping.
+    Direction(
+        /// World direction, finite and non-zero.
+        [f64; 3],
+    ),
+}
+
+impl Default for Guidance {
+    fn default() -> Self {
+        Self::Curvature {
+            smoothing_iterations: curvature::DEFAULT_SMOOTHING_ITERATIONS,
+        }
+    }
+}
+
+/// Where a [`Constraint`] applies.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum Site {
+    /// A mesh vertex, by index (after the loader's repairs).
+    Vertex(u32),
+    /// The mesh vertex nearest to a world point.
+    Point([f64; 3]),
+}
+
+/// A hard constraint of a designed field: its line at `at` is exactly `direction`'s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct Constraint {
+    /// The vertex.
+    pub at: Site,
+    /// The world direction (projected into the vertex's tangent plane; sign ignored).
+    pub direction: [f64; 3],
+}
+
+/// The spacing ratio `sqrt(l1 / l2)` of a designed field.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum Anisotropy {
+    /// The same ratio everywhere, finite and >= 1.
+    Constant(f64),
+    /// `clamp((R |k1| + eps) / (R |k2| + eps), min, max)` from principal curvatures
+    /// smoothed `smoothing_iterations` times (`R` the area radius, `eps` =
+    /// `isotropy_curvature`): high where the surface bends one way only, 1 where it
+    /// is flat or umbilic (as [`FieldSpec::Curvature`](super::FieldSpec::Curvature)).
+    Curvature {
+        /// Smallest ratio, >= 1. Default 1.
+        #[cfg_attr(feature = "serde", serde(default = "one"))]
+        min: f64,
+        /// Largest ratio, >= `min`. Default 3.
+        #[cfg_attr(feature = "serde", serde(default = "three"))]
+        max: f64,
+        /// `eps`, > 0. Default 0.05.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_isotropy_curvature")
+        )]
+        isotropy_curvature: f64,
+        /// Rounds of one-ring smoothing; at most 1000. Default 2.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_smoothing_iterations")
+        )]
+        smoothing_iterations: u32,
+    },
+}
+
+impl Default for Anisotropy {
+    fn default() -> Self {
+        Self::Constant(3.0)
+    }
+}
+
+/// The density `sqrt(l1 l2)` of a designed field.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub enum Density {
+    /// The same density everywhere, finite and > 0.
+    Constant(f64),
+    /// `floor + scale * c * measure(k1, k2)`, as
+    /// [`FieldSpec::Curvature`](super::FieldSpec::Curvature).
+    Curvature {
+        /// Which curvature measure. Default RMS.
+        #[cfg_attr(feature = "serde", serde(default))]
+        measure: CurvatureMeasure,
+        /// The factor `c`. Default the area radius.
+        #[cfg_attr(feature = "serde", serde(default))]
+        normalization: CurvatureNormalization,
+        /// Density where flat, > 0. Default 0.2.
+        #[cfg_attr(feature = "serde", serde(default = "curvature::default_floor"))]
+        floor: f64,
+        /// Density per unit of normalized curvature, >= 0. Default 1.
+        #[cfg_attr(feature = "serde", serde(default = "one"))]
+        scale: f64,
+        /// Rounds of one-ring smoothing; at most 1000. Default 2.
+        #[cfg_attr(
+            feature = "serde",
+            serde(default = "curvature::default_smoothing_iterations")
+        )]
+        smoothing_iterations: u32,
+    },
+    /// The densities `sqrt(l1 l2)` of the tensors in a field file (see
+    /// [`read_field_file`](super::read_field_file)); its directions are not used.
+    File(
+        /// The field file (relative paths as for `FieldSpec::File`).
+        PathBuf,
+    ),
+}
+
+impl Default for Density {
+    fn default() -> Self {
+        Self::Constant(1.0)
+    }
+}
+
+/// The settings of a designed field ([`FieldSpec::Designed`](super::FieldSpec::Designed)).
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
+pub struct Design {
+    /// What the direction aligns to. Default curvature.
+    pub guidance: Guidance,
+    /// Weight of the guidance against smoothness, >= 0 (0: the smoothest field, larger:
+    /// closer to the guidance; see [`LineFieldOptions::weight`]). Default 1.
+    pub weight: f64,
+    /// Length over which the surface is smoothed for the field's connection, as a
+    /// fraction of the area radius, >= 0 (see [`LineFieldOptions::smoothing`]).
+    /// Default 0.05.
+    pub smoothing: f64,
+    /// Hard constraints (for example strokes along feature lines). Default none.
+    pub constraints: Vec<Constraint>,
+    /// Spacing ratio. Default `Constant(3.0)`.
+    pub anisotropy: Anisotropy,
+    /// Density. Default `Constant(1.0)`.
+    pub density: Density,
+}
+
+impl Default for Design {
+    fn default() -> Self {
+        Self {
+            guidance: Guidance::default(),
+            weight: 1.0,
+            smoothing: 0.05,
+            constraints: Vec::new(),
+            anisotropy: Anisotropy::default(),
+            density: Density::default(),
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+fn one() -> f64 {
+    1.0
+}
+
+#[cfg(feature = "serde")]
+fn three() -> f64 {
+    3.0
+}
+
+fn smoothing_ok(iterations: u32) -> Result<(), FieldError> {
+    if iterations > curvature::MAX_SMOOTHING_ITERATIONS {
+        Err(invalid(
+            "smoothing_iterations",
+            f64::from(iterations),
+            "at most 1000",
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+fn finite_direction(name: &'static str, d: [f64; 3]) -> Result<(), FieldError> {
+    let v = DVec3::from(d);
+    if v.is_finite() && v.length_squared() > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(name, v.length(), "a finite non-zero vector"))
+    }
+}
+
+impl Design {
+    /// Checks every setting (not the constraints' vertices, which need the mesh).
+    pub fn validate(&self) -> Result<(), FieldError> {
+        match &self.guidance {
+            Guidance::Smoothest => {}
+            Guidance::Curvature {
+                smoothing_iterations,
+            } => smoothing_ok(*smoothing_iterations)?,
+            Guidance::Direction(d) => finite_direction("guidance direction", *d)?,
+        }
+        if !(self.weight >= 0.0 && self.weight.is_finite()) {
+            return Err(invalid("weight", self.weight, "a finite value >= 0"));
+        }
+        if !(self.smoothing >= 0.0 && self.smoothing.is_finite()) {
+            return Err(invalid("smoothing", self.smoothing, "a finite value >= 0"));
+        }
+        for c in &self.constraints {
+            finite_direction("constraint direction", c.direction)?;
+            if let Site::Point(p) = c.at
+                && !DVec3::from(p).is_finite()
+            {
+                return Err(invalid(
+                    "constraint point",
+                    DVec3::from(p).length(),
+                    "finite coordinates",
+                ));
+            }
+        }
+        match &self.anisotropy {
+            Anisotropy::Constant(a) => {
+                if !(*a >= 1.0 && a.is_finite()) {
+                    return Err(invalid("anisotropy", *a, "a finite spacing ratio >= 1"));
+                }
+            }
+            Anisotropy::Curvature {
+                min,
+                max,
+                isotropy_curvature,
+                smoothing_iterations,
+            } => {
+                if !(*min >= 1.0 && min.is_finite()) {
+                    return Err(invalid("min", *min, "a finite spacing ratio >= 1"));
+                }
+                if !(*max >= *min && max.is_finite()) {
+                    return Err(invalid("max", *max, "a finite spacing ratio >= min"));
+                }
+                positive("isotropy_curvature", *isotropy_curvature)?;
+                smoothing_ok(*smoothing_iterations)?;
+            }
+        }
+        match &self.density {
+            Density::Constant(d) => positive("density", *d)?,
+            Density::Curvature {
+                floor,
+                scale,
+                smoothing_iterations,
+                ..
+            } => {
+                positive("floor", *floor)?;
+                if !(*scale >= 0.0 && scale.is_finite()) {
+                    return Err(invalid("scale", *scale, "a finite value >= 0"));
+                }
+                smoothing_ok(*smoothing_iterations)?;
+            }
+            Density::File(_) => {}
+        }
+        Ok(())
+    }
+
+    /// The files this design reads (the density file, if any).
+    pub fn files(&self) -> Vec<&Path> {
+        match &self.density {
+            Density::File(path) => vec![path.as_path()],
+            _ => Vec::new(),
+        }
+    }
+
+    /// Makes a relative density file path relative to `base_dir`.
+    pub fn resolve_paths(&mut self, base_dir: &Path) {
+        if let Density::File(path) = &mut self.density
+            && path.is_relative()
+        {
+            *path = base_dir.join(&*path);
+        }
+    }
+
+    /// The line field of this design on `mesh`.
+    pub fn line_field(&self, mesh: &TriMesh) -> Result<LineField, FieldError> {
+        self.validate()?;
+        let mut curvatures = CurvatureCache::default();
+        let guidance = match &self.guidance {
+            Guidance::Smoothest => Vec::new(),
+            Guidance::Curvature {
+                smoothing_iterations,
+            } => curvature_guidance(mesh, curvatures.get(mesh, *smoothing_iterations)),
+            Guidance::Direction(d) => direction_guidance(mesh, DVec3::from(*d)),
+        };
+        let constraints: Vec<LineConstraint> = self
+            .constraints
+            .iter()
+            .map(|c| LineConstraint {
+                vertex: match c.at {
+                    Site::Vertex(v) => v,
+                    Site::Point(p) => nearest_vertex(mesh, DVec3::from(p)),
+                },
+                direction: DVec3::from(c.direction),
+            })
+            .collect();
+        let options = LineFieldOptions {
+            weight: self.weight,
+            smoothing: self.smoothing,
+            ..LineFieldOptions::default()
+        };
+        Ok(constrained_line_field(
+            mesh,
+            &guidance,
+            &constraints,
+            &options,
+        )?)
+    }
+
+    /// The tensor field of this design on `mesh`: direction from
+    /// [`line_field`](Self::line_field), spacing ratio and density from their sources.
+    pub fn build(&self, mesh: &TriMesh) -> Result<TensorField, FieldError> {
+        let lines = self.line_field(mesh)?;
+        let mut curvatures = CurvatureCache::default();
+        let ratios: Vec<f64> = match &self.anisotropy {
+            Anisotropy::Constant(a) => vec![*a; mesh.vertex_count()],
+            Anisotropy::Curvature {
+                min,
+                max,
+                isotropy_curvature,
+                smoothing_iterations,
+            } => {
+                let k = curvatures.get(mesh, *smoothing_iterations);
+                let c = area_radius(mesh);
+                k.k1.iter()
+                    .zip(&k.k2)
+                    .map(|(k1, k2)| {
+                        let r = (c * k1.abs() + isotropy_curvature)
+                            / (c * k2.abs() + isotropy_curvature);
+                        r.clamp(*min, *max)
+                    })
+                    .collect()
+            }
+        };
+        let densities: Vec<f64> = match &self.density {
+            Density::Constant(d) => vec![*d; mesh.vertex_count()],
+            Density::Curvature {
+                measure,
+                normalization,
+                floor,
+                scale,
+                smoothing_iterations,
+            } => {
+                let k = curvatures.get(mesh, *smoothing_iterations);
+                curvature::densities(mesh, k, *measure, *normalization, *floor, *scale)
+            }
+            Density::File(path) => super::read_field_file(path, mesh)?.vertex_densities(mesh),
+        };
+        let eigen: Vec<[f64; 2]> = densities
+            .iter()
+            .zip(&ratios)
+            .map(|(&d, &a)| eigenvalues(d, a))
+            .collect();
+        lines.to_tensor_field(mesh, &eigen)
+    }
+}
+
+/// Principal curvatures computed once per smoothing count.
+#[derive(Default)]
+struct CurvatureCache {
+    computed: Vec<(u32, PrincipalCurvatures)>,
+}
+
+impl CurvatureCache {
+    fn get(&mut self, mesh: &TriMesh, iterations: u32) -> &PrincipalCurvatures {
+        let index = match self.computed.iter().position(|(i, _)| *i == iterations) {
+            Some(i) => i,
+            None => {
+                self.computed
+                    .push((iterations, principal_curvatures(mesh, iterations)));
+                self.computed.len() - 1
+            }
+        };
+        &self.computed[index].1
+    }
+}
+
+/// `sqrt(area / 4 pi)`.
+fn area_radius(mesh: &TriMesh) -> f64 {
+    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
+}
+
+/// The vertex nearest to `p` (the lowest index among ties). O(V).
+fn nearest_vertex(mesh: &TriMesh, p: DVec3) -> u32 {
+    let mut best = (f64::INFINITY, 0);
+    for (v, q) in mesh.positions().iter().enumerate() {
+        let d = q.distance_squared(p);
+        if d < best.0 {
+            best = (d, v as u32);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+#[path = "designed_tests.rs"]
+mod tests;
