@@ -3,8 +3,8 @@
 //! direction, and per-vertex anisotropy and density from their own sources.
 //!
 //! Input: a mesh and a [`Design`]. Output: a [`TensorField`] and the [`LineField`]
-//! behind it. Cost: one sparse Cholesky of a `2V x 2V` system (plus one of `V x V` for
-//! the smoothed normals, and inverse power iterations for the smoothest field), and
+//! behind it. Cost: one complex sparse Cholesky of a `V x V` system (plus a real one
+//! for the smoothed normals, and inverse power iterations for the smoothest field), and
 //! O(V) per curvature estimate.
 
 use std::path::{Path, PathBuf};

@@ -17,6 +17,7 @@
 //! Field design ([`smoothest_line_field`], [`guided_line_field`]): smooth line fields
 //! with few singularities (Knöppel et al. 2013).
 
+mod connection;
 mod curvature;
 pub mod design;
 mod designed;
@@ -34,7 +35,7 @@ pub use curvature::{
 };
 pub use design::{
     LineConstraint, LineField, LineFieldError, LineFieldOptions, constrained_line_field,
-    guided_line_field, smoothest_line_field,
+    guided_line_field, line_field_energy, smoothest_line_field,
 };
 pub use designed::{Anisotropy, Constraint, Density, Design, Guidance, Site};
 pub use eigen::{

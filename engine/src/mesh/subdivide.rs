@@ -20,7 +20,8 @@ use glam::DVec3;
 
 use super::{MeshError, NONE, TriMesh};
 
-/// One round of Loop subdivision of `mesh` (see the [module docs](self)).
+/// One round of Loop subdivision of `mesh` (Loop 1987; crease rules on boundary and
+/// non-manifold edges, corners kept).
 ///
 /// ```
 /// use strata_engine::mesh::{loop_subdivide, shapes};

@@ -152,6 +152,20 @@ impl SegmentOptions {
     }
 }
 
+/// `v` turned by the smallest rotation that takes unit normal `from` onto unit normal
+/// `to` (Rodrigues): for two faces sharing an edge this is the rotation about that edge
+/// that unfolds one face's plane onto the other's, the discrete Levi-Civita transport
+/// between faces. Opposite normals (a folded edge) give `v` unchanged.
+#[inline]
+pub fn unfold(v: glam::DVec3, from: glam::DVec3, to: glam::DVec3) -> glam::DVec3 {
+    let c = from.cross(to);
+    let d = from.dot(to);
+    if d <= -1.0 + 1e-12 {
+        return v;
+    }
+    v * d + c.cross(v) + c * (c.dot(v) / (1.0 + d))
+}
+
 /// The angle between two line-field directions (unit vectors, sign ignored), in
 /// `[0, pi/2]`.
 #[inline]

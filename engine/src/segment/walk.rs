@@ -866,7 +866,13 @@ mod tests {
             let field = spec.build(&mesh).expect("field");
             let blocked = no_blocks(&mesh);
             let (_, seeds, labels) = segment(&mesh, &field, FRAC_PI_4, &blocked, 0);
-            assert!(seeds.len() > 1);
+            // Seeding measures the field's turn intrinsically (unfolded across edges):
+            // the projected field turns little enough on the sphere for one region,
+            // while the torus needs several.
+            assert!(!seeds.is_empty());
+            if mesh.euler_characteristic() == 0 {
+                assert!(seeds.len() > 1, "{} seeds on the torus", seeds.len());
+            }
             assert!(labels.iter().all(|&l| (l as usize) < seeds.len()));
             let parts = connected_parts(&mesh, &labels, &blocked);
             assert!(parts.iter().all(|&p| p != NONE));
