@@ -1,5 +1,5 @@
 // Field-aligned elliptical splats (paper Figs. 4f and 12), one instanced quad per
-// sample. Appended to common.wgsl. Vertex buffer 0 holds the samples at instance rate
+// sample, or line glyphs along the field (hatching). Appended to common.wgsl. Vertex buffer 0 holds the samples at instance rate
 // (layout: SAMPLE_ATTRIBUTES in systems/src/gpu/layout.rs); the four vertices of a
 // triangle strip are the quad's corners.
 
@@ -38,6 +38,22 @@ fn splat_color(s: Sample) -> vec3<f32> {
     }
 }
 
+// The field's major axis made a unit tangent of the plane with unit normal n (any
+// tangent where the axis is missing or normal to the plane).
+fn tangent_major(axis: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var major = axis - dot(axis, n) * n;
+    if dot(major, major) < 1e-12 {
+        major = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(n.x) > 0.9);
+        major = major - dot(major, n) * n;
+    }
+    return normalize(major);
+}
+
+// Whether a sample faces away from the camera (dropped: a closed surface hides it).
+fn faces_away(s: Sample, n: vec3<f32>) -> bool {
+    return dot(n, frame.eye.xyz - s.position) <= 0.0;
+}
+
 @vertex
 fn vs_splat(@builtin(vertex_index) corner: u32, input: SampleInput) -> SplatVarying {
     let s = to_sample(input);
@@ -51,18 +67,12 @@ fn vs_splat(@builtin(vertex_index) corner: u32, input: SampleInput) -> SplatVary
     out.q = q * extent;
     let n = normalize(s.normal);
     // Back-facing splats are dropped (clipped away), as a closed surface hides them.
-    if dot(n, frame.eye.xyz - s.position) <= 0.0 {
+    if faces_away(s, n) {
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         out.color = vec3<f32>(0.0);
         return out;
     }
-    // Orthonormal tangent frame from the field's major axis, made tangent to n.
-    var major = s.major_axis - dot(s.major_axis, n) * n;
-    if dot(major, major) < 1e-12 {
-        major = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(n.x) > 0.9);
-        major = major - dot(major, n) * n;
-    }
-    major = normalize(major);
+    let major = tangent_major(s.major_axis, n);
     let minor = cross(n, major);
     let radius = 0.5 * frame.splat_scale * s.spacing;
     let lift = frame.normal_offset * min(s.spacing.x, s.spacing.y);
@@ -92,4 +102,61 @@ fn fs_gaussian(v: SplatVarying) -> @location(0) vec4<f32> {
     let a = exp(-2.0 * r2);
     // Premultiplied alpha.
     return vec4<f32>(v.color * a, a);
+}
+
+// Line glyphs: per sample a thin stroke through the sample along its major axis, of
+// length splat_scale times the larger of its two spacings (the distance between rows
+// across the field), lifted off the mesh like the splats. With the spacing along the
+// field (the shorter one on anisotropic fields) strokes were dashes too short to show
+// a direction; this length makes neighbouring strokes overlap into streamlines. The stroke is a quad whose width is fixed in pixels
+// (GLYPH_WIDTH_PX up to a 960-pixel-high target, in proportion above), so that strokes
+// stay thin lines at any distance: its two ends are projected and the quad is widened
+// across their screen-space direction.
+const GLYPH_WIDTH_PX: f32 = 1.6;
+
+struct GlyphVarying {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(flat) color: vec3<f32>,
+}
+
+@vertex
+fn vs_glyph(@builtin(vertex_index) corner: u32, input: SampleInput) -> GlyphVarying {
+    let s = to_sample(input);
+    var out: GlyphVarying;
+    let n = normalize(s.normal);
+    if faces_away(s, n) {
+        out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
+        out.color = vec3<f32>(0.0);
+        return out;
+    }
+    let major = tangent_major(s.major_axis, n);
+    let half_length = 0.5 * frame.splat_scale * max(s.spacing.x, s.spacing.y);
+    let centre = s.position + n * (frame.normal_offset * min(s.spacing.x, s.spacing.y));
+    let a = frame.view_proj * vec4<f32>(centre - major * half_length, 1.0);
+    let b = frame.view_proj * vec4<f32>(centre + major * half_length, 1.0);
+    // Screen-space direction of the stroke in pixels; a stroke seen end-on is a dot.
+    let pixels = 0.5 * frame.viewport;
+    var along = (b.xy / b.w - a.xy / a.w) * pixels;
+    if dot(along, along) < 1e-8 {
+        along = vec2<f32>(1.0, 0.0);
+    }
+    along = normalize(along);
+    let width = GLYPH_WIDTH_PX * max(frame.viewport.y / 960.0, 1.0);
+    // Half the width, from pixels to normalized device coordinates.
+    let offset = vec2<f32>(-along.y, along.x) * (0.5 * width) / pixels;
+    let end = select(a, b, (corner & 1u) == 1u);
+    let side = f32(corner >> 1u) * 2.0 - 1.0;
+    out.clip = vec4<f32>(end.xy + offset * side * end.w, end.zw);
+    out.color = srgb_to_linear(glyph_color(s)) * shade(n, s.position);
+    return out;
+}
+
+// Strokes take the splats' colours, darkened so that they read as ink on the lit mesh.
+fn glyph_color(s: Sample) -> vec3<f32> {
+    return splat_color(s) * 0.3;
+}
+
+@fragment
+fn fs_glyph(v: GlyphVarying) -> @location(0) vec4<f32> {
+    return vec4<f32>(v.color, 1.0);
 }

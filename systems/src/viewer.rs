@@ -531,7 +531,8 @@ impl Viewer {
                 "f" | "F" => {
                     self.style.footprint = match self.style.footprint {
                         Footprint::Disc => Footprint::Gaussian,
-                        Footprint::Gaussian => Footprint::Disc,
+                        Footprint::Gaussian => Footprint::Glyph,
+                        Footprint::Glyph => Footprint::Disc,
                     }
                 }
                 _ => {}

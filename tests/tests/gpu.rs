@@ -12,8 +12,8 @@ use strata_systems::gpu::buffers::{MIN_CAPACITY, next_capacity};
 use strata_systems::gpu::context::scoped;
 use strata_systems::gpu::wgpu;
 use strata_systems::gpu::{
-    ColorMode, GpuContext, GpuError, GpuOptions, HeadlessTarget, MeshMode, OrbitCamera, RgbaImage,
-    SiteExpander, SplatRenderer, SplatStyle,
+    ColorMode, Footprint, GpuContext, GpuError, GpuOptions, HeadlessTarget, MeshMode, OrbitCamera,
+    RgbaImage, SiteExpander, SplatRenderer, SplatStyle,
 };
 use strata_systems::scene::Scene;
 
@@ -335,6 +335,64 @@ fn footprints_and_mesh_modes_draw_what_they_say() {
         "{gauss_bright} >= {disc_bright}"
     );
     assert_eq!(mesh_cover, 1.0);
+}
+
+/// Glyphs draw the field's direction: on the plane with its field along x, seen
+/// head-on, the glyph image is not blank, differs from the disc image of the same
+/// samples, covers less (thin strokes, not ellipses), and its covered pixels run along
+/// x: covered pairs 4 pixels apart (more than a stroke's width, less than its length)
+/// are far more often side by side than one above the other.
+#[test]
+fn glyphs_draw_thin_strokes_along_the_field() {
+    let Some(ctx) = gpu("glyphs_draw_thin_strokes_along_the_field") else {
+        return;
+    };
+    let scene = scene(PLANE);
+    let samples = scene.sampler.sample(400, 9);
+    let (w, h) = (256, 256);
+    let camera = OrbitCamera {
+        yaw: 0.0,
+        pitch: 0.0,
+        ..OrbitCamera::framing(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), 1.0, 0.0, 0.0)
+    };
+    let discs = SplatStyle {
+        color_mode: ColorMode::Constant,
+        mesh_mode: MeshMode::None,
+        background: BACKGROUND,
+        base_color: [1.0, 1.0, 1.0],
+        ..SplatStyle::default()
+    };
+    let glyphs = SplatStyle {
+        footprint: Footprint::Glyph,
+        ..discs
+    };
+    let disc_image = render(&ctx, &scene, &samples, &camera, &discs, (w, h));
+    let glyph_image = render(&ctx, &scene, &samples, &camera, &glyphs, (w, h));
+    let covered = |im: &RgbaImage, x: u32, y: u32| !is_background(im.pixel(x, y));
+    let coverage = |im: &RgbaImage| {
+        (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| covered(im, x, y))
+            .count()
+    };
+    let (disc_cover, glyph_cover) = (coverage(&disc_image), coverage(&glyph_image));
+    const GAP: u32 = 4;
+    let (mut along, mut across) = (0usize, 0usize);
+    for y in 0..h - GAP {
+        for x in 0..w - GAP {
+            if covered(&glyph_image, x, y) {
+                along += usize::from(covered(&glyph_image, x + GAP, y));
+                across += usize::from(covered(&glyph_image, x, y + GAP));
+            }
+        }
+    }
+    println!(
+        "discs cover {disc_cover} pixels, glyphs {glyph_cover}; covered pairs {GAP} pixels apart: {along} along x, {across} along y"
+    );
+    assert!(glyph_cover > 0, "the glyph image is blank");
+    assert_ne!(glyph_image.pixels, disc_image.pixels);
+    assert!(glyph_cover < disc_cover, "{glyph_cover} >= {disc_cover}");
+    assert!(along > 4 * across, "{along} along x, {across} across");
 }
 
 /// Uploads of changing sizes: the buffer follows the capacity policy and reads back

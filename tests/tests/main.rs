@@ -3,6 +3,7 @@ mod analysis;
 mod chains;
 mod discrepancy;
 mod ecs;
+mod field;
 mod gpu;
 mod hot_reload;
 mod io;

@@ -32,10 +32,15 @@ pub struct LookArgs {
     /// Splat shape.
     #[arg(long, value_enum, default_value_t = Footprint::Disc)]
     pub footprint: Footprint,
+    /// Draw each sample as a thin line along the field's major direction instead of an
+    /// ellipse (hatching that shows the field; the same as `--footprint glyph`).
+    #[arg(long, conflicts_with = "footprint")]
+    pub glyphs: bool,
     /// The mesh under the splats.
     #[arg(long, value_enum, default_value_t = MeshMode::Plain)]
     pub mesh: MeshMode,
-    /// Splat size as a fraction of the sample spacing (1: neighbours touch on average).
+    /// Splat size as a fraction of the sample spacing (1: neighbours touch on average);
+    /// with glyphs, their length as a fraction of the larger spacing.
     #[arg(long, default_value_t = 0.8)]
     pub scale: f32,
     /// Use the GPU adapter whose name contains this (case-insensitive); default:
@@ -96,15 +101,62 @@ impl LookArgs {
         }
     }
 
+    /// The footprint asked for: [`Footprint::Glyph`] with `--glyphs`, else `--footprint`.
+    pub fn footprint(&self) -> Footprint {
+        if self.glyphs {
+            Footprint::Glyph
+        } else {
+            self.footprint
+        }
+    }
+
     /// The style these arguments ask for, with the colour map fitted to `samples`.
     pub fn style(&self, samples: &[strata_engine::sample::Sample]) -> SplatStyle {
         SplatStyle {
             color_mode: self.color,
-            footprint: self.footprint,
+            footprint: self.footprint(),
             mesh_mode: self.mesh,
             splat_scale: self.scale,
             log_density_range: log_density_range(samples),
             ..SplatStyle::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Debug, Parser)]
+    struct Args {
+        #[command(flatten)]
+        look: LookArgs,
+    }
+
+    fn parse(args: &[&str]) -> Result<LookArgs, clap::Error> {
+        Args::try_parse_from(std::iter::once("strata").chain(args.iter().copied())).map(|a| a.look)
+    }
+
+    #[test]
+    fn glyphs_flag_picks_the_glyph_footprint() {
+        assert_eq!(parse(&[]).expect("defaults").footprint(), Footprint::Disc);
+        assert_eq!(
+            parse(&["--glyphs"]).expect("glyphs").footprint(),
+            Footprint::Glyph
+        );
+        assert_eq!(
+            parse(&["--footprint", "glyph"]).expect("glyph").footprint(),
+            Footprint::Glyph
+        );
+        let style = parse(&["--glyphs", "--scale", "1.5"])
+            .expect("glyphs")
+            .style(&[]);
+        assert_eq!(
+            (style.footprint, style.splat_scale),
+            (Footprint::Glyph, 1.5)
+        );
+        assert!(parse(&["--glyphs", "--footprint", "gaussian"]).is_err());
     }
 }

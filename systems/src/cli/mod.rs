@@ -1,12 +1,13 @@
 //! The `strata` command-line tool: the clap [`Cli`], [`run`], and one file per
-//! command holding its arguments and their handling (`sample`, `segment`, `bench`,
-//! `watch`, `render`, `view`, `analyze`; `look` holds the camera and look options that
+//! command holding its arguments and their handling (`sample`, `segment`, `field`,
+//! `bench`, `watch`, `render`, `view`, `analyze`; `look` holds the camera and look options that
 //! `render` and `view` share). What a command does beyond reading its arguments and
 //! printing its results lives in the library: [`crate::scene`], [`crate::report`],
 //! [`crate::hot_reload`], [`crate::gpu`] and [`crate::viewer`].
 
 mod analyze;
 mod bench;
+mod field;
 mod look;
 mod render;
 mod sample;
@@ -21,6 +22,7 @@ use clap::{Parser, Subcommand};
 
 pub use analyze::AnalyzeArgs;
 pub use bench::{BenchArgs, BenchReport};
+pub use field::FieldArgs;
 pub use look::LookArgs;
 pub use render::RenderArgs;
 pub use sample::SampleArgs;
@@ -44,6 +46,8 @@ pub enum Command {
     Sample(SampleArgs),
     /// Segment a scene's mesh along its field; write the mesh coloured by segment.
     Segment(SegmentArgs),
+    /// Build a scene's field and find its singularities; write the field as a PLY mesh.
+    Field(FieldArgs),
     /// Preprocess a scene once, resample it several times, and report timings and memory.
     Bench(BenchArgs),
     /// Sample a scene and draw it as field-aligned splats into a PNG, without a window.
@@ -76,6 +80,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Sample(args) => sample::run(&args),
         Command::Segment(args) => segment::run(&args),
+        Command::Field(args) => field::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Render(args) => render::run(&args),
         Command::View(args) => view::run(&args),

@@ -41,6 +41,21 @@ pub enum Footprint {
     Disc,
     /// A Gaussian blob blended over what is behind it (depth-tested, not written).
     Gaussian,
+    /// A thin line along the sample's major axis (the field's direction), `splat_scale`
+    /// times the larger spacing long and a couple of pixels wide, in the splat colour
+    /// darkened: hatching that shows the field. Depth-written.
+    Glyph,
+}
+
+impl Footprint {
+    /// The value of [`FrameUniforms::footprint`].
+    pub fn code(self) -> u32 {
+        match self {
+            Self::Disc => 0,
+            Self::Gaussian => 1,
+            Self::Glyph => 2,
+        }
+    }
 }
 
 /// How the mesh under the splats is drawn.
@@ -85,10 +100,11 @@ pub struct FrameUniforms {
     pub viewport: [f32; 2],
     /// Splat semi-axes as a fraction of the sample spacings: semi-axis k is
     /// `splat_scale * spacing[k] / 2`, so 1 makes neighbours just touch on average.
+    /// A glyph is `splat_scale * max(spacing[0], spacing[1])` long.
     pub splat_scale: f32,
     /// [`ColorMode::code`].
     pub color_mode: u32,
-    /// 0 for [`Footprint::Disc`], 1 for [`Footprint::Gaussian`].
+    /// [`Footprint::code`].
     pub footprint: u32,
     /// [`MeshMode::code`].
     pub mesh_mode: u32,

@@ -35,7 +35,11 @@ mod tests {
     fn every_wgsl_module_validates() {
         for (name, source, entry_points) in [
             ("common", COMMON, &[][..]),
-            ("splat", SPLAT, &["vs_splat", "fs_disc", "fs_gaussian"][..]),
+            (
+                "splat",
+                SPLAT,
+                &["vs_splat", "fs_disc", "fs_gaussian", "vs_glyph", "fs_glyph"][..],
+            ),
             ("mesh", MESH, &["vs_mesh", "fs_mesh"][..]),
             ("expand", EXPAND, &["cs_expand"][..]),
         ] {

@@ -1,5 +1,5 @@
-//! The splat renderer: field-aligned elliptical splats (paper Figs. 4f and 12), one
-//! instanced quad per sample, optionally over the mesh.
+//! The splat renderer: field-aligned elliptical splats (paper Figs. 4f and 12) or line
+//! glyphs along the field, one instanced quad per sample, optionally over the mesh.
 //!
 //! Plain data in, draw commands out: [`SplatRenderer::upload`] takes `&[Sample]` (from
 //! any sampler, an ECS resource or a file) and [`SplatRenderer::encode`] records one
@@ -8,8 +8,12 @@
 //!
 //! Each quad spans the ellipse with semi-axes `splat_scale * spacing / 2` along the
 //! sample's major axis (projected into its tangent plane) and `normal x major`; the
-//! fragment stage cuts the ellipse (disc) or weighs it (Gaussian). Depth-tested; splats
-//! facing away from the camera are dropped in the vertex stage.
+//! fragment stage cuts the ellipse (disc) or weighs it (Gaussian). A glyph
+//! ([`Footprint::Glyph`]) is instead a thin quad along the major axis, `splat_scale`
+//! times the larger spacing long and a fixed number of pixels wide (its ends are
+//! projected and the quad widened across them on screen), in the splat colour darkened:
+//! hatching that shows the field's direction. Depth-tested; samples facing away from the camera
+//! are dropped in the vertex stage.
 
 use glam::Vec3;
 use strata_engine::mesh::TriMesh;
@@ -43,8 +47,8 @@ pub struct SplatStyle {
     pub footprint: Footprint,
     /// The mesh under the splats.
     pub mesh_mode: MeshMode,
-    /// Semi-axes as a fraction of half the spacings (1: neighbours touch on average).
-    /// Default 0.8.
+    /// Semi-axes as a fraction of half the spacings (1: neighbours touch on average);
+    /// a glyph's length as a fraction of the larger spacing. Default 0.8.
     pub splat_scale: f32,
     /// Colour of [`ColorMode::Constant`], sRGB. Default a warm orange.
     pub base_color: [f32; 3],
@@ -106,6 +110,7 @@ pub struct SplatRenderer {
     bind_group: wgpu::BindGroup,
     disc: wgpu::RenderPipeline,
     gaussian: wgpu::RenderPipeline,
+    glyph: wgpu::RenderPipeline,
     mesh_pipeline: wgpu::RenderPipeline,
     samples: GpuSampleBuffer,
     mesh: Option<(wgpu::Buffer, u32)>,
@@ -115,16 +120,23 @@ impl SplatRenderer {
     /// Builds the pipelines for targets of `format`.
     pub fn new(device: &wgpu::Device, format: TargetFormat) -> Result<Self, GpuError> {
         let samples = GpuSampleBuffer::new(device)?;
-        let (uniforms, bind_group, disc, gaussian, mesh_pipeline) =
-            scoped(device, "building the splat pipelines", || {
-                build_pipelines(device, format)
-            })?;
+        let Pipelines {
+            uniforms,
+            bind_group,
+            disc,
+            gaussian,
+            glyph,
+            mesh_pipeline,
+        } = scoped(device, "building the splat pipelines", || {
+            build_pipelines(device, format)
+        })?;
         Ok(Self {
             format,
             uniforms,
             bind_group,
             disc,
             gaussian,
+            glyph,
             mesh_pipeline,
             samples,
             mesh: None,
@@ -213,10 +225,7 @@ impl SplatRenderer {
             viewport: [w as f32, h as f32],
             splat_scale: style.splat_scale,
             color_mode: style.color_mode.code(),
-            footprint: match style.footprint {
-                Footprint::Disc => 0,
-                Footprint::Gaussian => 1,
-            },
+            footprint: style.footprint.code(),
             mesh_mode: style.mesh_mode.code(),
             // Lifted only over a mesh, where flat splats would otherwise cut into it.
             normal_offset: if style.mesh_mode == MeshMode::None || self.mesh.is_none() {
@@ -262,6 +271,7 @@ impl SplatRenderer {
                 pass.set_pipeline(match style.footprint {
                     Footprint::Disc => &self.disc,
                     Footprint::Gaussian => &self.gaussian,
+                    Footprint::Glyph => &self.glyph,
                 });
                 pass.set_vertex_buffer(0, self.samples.buffer().slice(..));
                 pass.draw(0..4, 0..n);
@@ -305,13 +315,15 @@ fn mesh_vertices(mesh: &TriMesh, face_segments: Option<&[u32]>) -> Vec<MeshVerte
     out
 }
 
-type Pipelines = (
-    wgpu::Buffer,
-    wgpu::BindGroup,
-    wgpu::RenderPipeline,
-    wgpu::RenderPipeline,
-    wgpu::RenderPipeline,
-);
+/// What [`build_pipelines`] makes.
+struct Pipelines {
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    disc: wgpu::RenderPipeline,
+    gaussian: wgpu::RenderPipeline,
+    glyph: wgpu::RenderPipeline,
+    mesh_pipeline: wgpu::RenderPipeline,
+}
 
 fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
     let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
@@ -372,13 +384,13 @@ fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
         mask: !0,
         alpha_to_coverage_enabled: false,
     };
-    let splat = |fs: &str, blend: Option<wgpu::BlendState>, depth_write: bool| {
+    let splat = |vs: &str, fs: &str, blend: Option<wgpu::BlendState>, depth_write: bool| {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(fs),
             layout: Some(&pipeline_layout),
             vertex: wgpu::VertexState {
                 module: &splat_module,
-                entry_point: Some("vs_splat"),
+                entry_point: Some(vs),
                 compilation_options: Default::default(),
                 buffers: &[Some(sample_layout.clone())],
             },
@@ -409,8 +421,10 @@ fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
             cache: None,
         })
     };
-    let disc = splat("fs_disc", None, true);
+    let disc = splat("vs_splat", "fs_disc", None, true);
+    let glyph = splat("vs_glyph", "fs_glyph", None, true);
     let gaussian = splat(
+        "vs_splat",
         "fs_gaussian",
         Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
         false,
@@ -455,5 +469,12 @@ fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
         multiview_mask: None,
         cache: None,
     });
-    (uniforms, bind_group, disc, gaussian, mesh_pipeline)
+    Pipelines {
+        uniforms,
+        bind_group,
+        disc,
+        gaussian,
+        glyph,
+        mesh_pipeline,
+    }
 }

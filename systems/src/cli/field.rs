@@ -1,0 +1,63 @@
+//! `strata field`: build a scene's field, find the singularities of its major line
+//! field, print one summary line ([`FieldReport::summary`]), and write the field as a
+//! PLY mesh and the JSON report on request ([`crate::report::field`]).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+
+use super::write_file;
+use crate::config::SceneConfig;
+use crate::report::field::{FieldReport, write_field_ply};
+
+/// Arguments of `strata field`.
+#[derive(Debug, clap::Args)]
+pub struct FieldArgs {
+    /// Scene file (RON); its `mesh` and `field` sections are used, and `param`'s
+    /// `isotropy_threshold` says which vertices count as near-isotropic.
+    pub config: PathBuf,
+    /// Output mesh (binary PLY) with per-vertex normal, major direction, anisotropy and
+    /// density, and per-face singularity index.
+    #[arg(long, short = 'o')]
+    pub out: Option<PathBuf>,
+    /// JSON report (schema in the README).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+/// Runs `strata field`.
+pub(super) fn run(args: &FieldArgs) -> anyhow::Result<()> {
+    let config = SceneConfig::load(&args.config)?;
+    let name = args.config.display().to_string();
+    let mesh = crate::scene::load_mesh(&config).with_context(|| name.clone())?;
+    for w in mesh.warnings() {
+        eprintln!("warning: {name}: mesh: {w}");
+    }
+    let t = Instant::now();
+    let field = config
+        .field
+        .build(&mesh)
+        .with_context(|| format!("{name}: field"))?;
+    let field_s = t.elapsed().as_secs_f64();
+    let singularities = strata_engine::segment::detect_singularities(&mesh, &field);
+    let report = FieldReport::new(
+        &mesh,
+        &field,
+        &singularities,
+        config.param.isotropy_threshold,
+        field_s,
+    );
+    println!("{}", report.summary());
+    if let Some(path) = &args.out {
+        write_field_ply(path, &mesh, &field, &singularities)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.report {
+        let text = serde_json::to_string_pretty(&report)?;
+        write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
