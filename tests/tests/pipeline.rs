@@ -46,8 +46,9 @@ fn every_bundled_config_samples_exactly_its_count() {
     }
 }
 
-/// Issue 5: an isotropic, a 3:1 anisotropic and a curvature-driven scene for every
-/// shared mesh and every built-in shape, named `<mesh>-<field>.ron`.
+/// Issues 5 and 17: an isotropic, a 3:1 anisotropic, a curvature-driven and a designed
+/// ("smooth") scene for every shared mesh and every built-in shape, named
+/// `<mesh>-<field>.ron`.
 #[test]
 fn every_mesh_has_its_three_bundled_scenes() {
     let files = config_files();
@@ -58,7 +59,7 @@ fn every_mesh_has_its_three_bundled_scenes() {
     let built_ins = ["plane", "sphere", "cylinder", "torus", "genus2"];
     let mut missing = Vec::new();
     for mesh in strata_tests::SHARED_MESHES.iter().chain(&built_ins) {
-        for field in ["isotropic", "anisotropic", "curvature"] {
+        for field in ["isotropic", "anisotropic", "curvature", "smooth"] {
             let name = format!("{mesh}-{field}.ron");
             if !names.contains(&name) {
                 missing.push(name);

@@ -76,6 +76,9 @@ pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
 pub const SHIFT: f64 = 1e-8;
 
+/// Inverse iterations behind the estimate of `lambda_1` for [`LineFieldOptions::smoothness`].
+pub const LAMBDA_ITERATIONS: usize = 12;
+
 /// Settings of the line-field solvers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -87,6 +90,13 @@ pub struct LineFieldOptions {
     /// `w |z - q|_M^2` scales with area). Range `[0, inf)`, 0 meaning the smoothest field;
     /// default 10.
     pub weight: f64,
+    /// Shift `s` toward the smoothest field in guided solves: the system becomes
+    /// `A - s lambda_1 M + w M C` (Knöppel et al. 2013's `lambda_t`), where `lambda_1` is
+    /// the smallest eigenvalue of the connection Laplacian (estimated from above by
+    /// [`LAMBDA_ITERATIONS`] inverse iterations). 0 is the plain guided solve; near 1
+    /// the field keeps the smoothest field's few singularities and takes only its
+    /// rotation and local detail from the guidance. Range `[0, 0.95]`; default 0.
+    pub smoothness: f64,
     /// Length over which the surface's normals are smoothed before they define the
     /// connection, as a fraction of the mesh's area radius `R = sqrt(area / 4 pi)`:
     /// bumps smaller than about `smoothing R` then create no singularities (one
@@ -104,6 +114,7 @@ impl Default for LineFieldOptions {
     fn default() -> Self {
         Self {
             weight: 10.0,
+            smoothness: 0.0,
             smoothing: 0.0,
             iterations: 200,
             tolerance: 1e-8,
@@ -119,6 +130,13 @@ impl LineFieldOptions {
                 option: "weight",
                 value: self.weight,
                 expected: "finite and >= 0",
+            });
+        }
+        if !(self.smoothness >= 0.0 && self.smoothness <= 0.95) {
+            return Err(LineFieldError::InvalidOption {
+                option: "smoothness",
+                value: self.smoothness,
+                expected: "in [0, 0.95]",
             });
         }
         if !(self.smoothing.is_finite() && self.smoothing >= 0.0) {
@@ -291,19 +309,34 @@ pub fn smoothest_line_field(
     let identity: Vec<usize> = (0..n).collect();
     let llt = system.factor(mesh, &extra, &identity, n)?;
 
-    let mut x: Vec<c64> = (0..n as u64)
+    let start: Vec<c64> = (0..n as u64)
         .map(|v| c64::new(start_value(2 * v), start_value(2 * v + 1)))
         .collect();
-    let scale = 1.0 / system.mass_norm2(&x).sqrt();
-    x.iter_mut().for_each(|z| *z *= scale);
-    let mut previous = f64::INFINITY;
-    let mut iterations = 0;
-    for _ in 0..options.iterations {
-        for (z, m) in x.iter_mut().zip(&system.mass) {
-            *z *= *m;
-        }
-        solve(&llt, &mut x)?;
-        let norm2 = system.mass_norm2(&x);
+    let (x, iterations) = inverse_iteration(
+        &system,
+        &llt,
+        start,
+        options.iterations,
+        options.tolerance,
+        shift,
+    )?;
+    Ok(system.output(&x, iterations))
+}
+
+/// Inverse power iteration for the smallest eigenpair of `A z = lambda M z` with the
+/// factor `llt` of `A + shift M`, from `x`, `M`-normalised each step, until the
+/// Rayleigh quotient changes by at most `tolerance` times its value (or `shift`) or
+/// after `max` steps. Returns the iterate (`z^H M z = 1`) and the steps taken.
+fn inverse_iteration(
+    system: &Connection,
+    llt: &faer::sparse::linalg::solvers::Llt<usize, c64>,
+    mut x: Vec<c64>,
+    max: usize,
+    tolerance: f64,
+    shift: f64,
+) -> Result<(Vec<c64>, usize), LineFieldError> {
+    let normalise = |x: &mut Vec<c64>| -> Result<(), LineFieldError> {
+        let norm2 = system.mass_norm2(x);
         if !(norm2 > 0.0 && norm2.is_finite()) {
             return Err(LineFieldError::Factorization {
                 stage: "solve (zero iterate)",
@@ -311,15 +344,26 @@ pub fn smoothest_line_field(
         }
         let scale = 1.0 / norm2.sqrt();
         x.iter_mut().for_each(|z| *z *= scale);
+        Ok(())
+    };
+    normalise(&mut x)?;
+    let mut previous = f64::INFINITY;
+    let mut iterations = 0;
+    for _ in 0..max {
+        for (z, m) in x.iter_mut().zip(&system.mass) {
+            *z *= *m;
+        }
+        solve(llt, &mut x)?;
+        normalise(&mut x)?;
         iterations += 1;
         let rayleigh = system.energy(&x);
-        let settled = (rayleigh - previous).abs() <= options.tolerance * rayleigh.abs().max(shift);
+        let settled = (rayleigh - previous).abs() <= tolerance * rayleigh.abs().max(shift);
         previous = rayleigh;
         if settled {
             break;
         }
     }
-    Ok(system.output(&x, iterations))
+    Ok((x, iterations))
 }
 
 /// The smoothness energy `E(z) = sum_edges w_ab |z_b - r_ab z_a|^2` of the unit line
@@ -444,11 +488,19 @@ pub fn constrained_line_field(
             pinned[component(v) as usize] = true;
         }
     }
+    // Knöppel et al.'s shift toward the smoothest field: `A - s lambda_1 M` weighs each
+    // eigenvector of the connection Laplacian by `1 / (lambda_k - s lambda_1)`, so with
+    // `s` near 1 the smoothest one dominates wherever the guidance leaves room.
+    let pull = if options.smoothness > 0.0 && pinned.iter().all(|&p| p) {
+        options.smoothness * smallest_eigenvalue(mesh, &system, shift)?
+    } else {
+        0.0
+    };
     let mut extra = vec![0.0; n];
     let mut rhs = vec![c64::new(0.0, 0.0); free];
     for v in 0..n {
         let mut d = if pinned[component(v) as usize] {
-            0.0
+            -pull * system.mass[v]
         } else {
             shift * system.mass[v]
         };
@@ -471,13 +523,55 @@ pub fn constrained_line_field(
         }
     }
     if free > 0 {
-        let llt = system.factor(mesh, &extra, &slots, free)?;
+        // An estimate of lambda_1 slightly too high could leave the shifted system
+        // indefinite: then halve the shift (three times at most, then none).
+        let mut attempt = 0;
+        let llt = loop {
+            let shifted: Vec<f64> = if attempt < 4 {
+                let back = pull * (1.0 - 0.5f64.powi(attempt));
+                extra
+                    .iter()
+                    .zip(&system.mass)
+                    .map(|(d, m)| d + back * m)
+                    .collect()
+            } else {
+                extra
+                    .iter()
+                    .zip(&system.mass)
+                    .map(|(d, m)| d + pull * m)
+                    .collect()
+            };
+            match system.factor(mesh, &shifted, &slots, free) {
+                Ok(llt) => break llt,
+                Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
+                Err(_) => attempt += 1,
+            }
+        };
         solve(&llt, &mut rhs)?;
     }
     let x: Vec<c64> = (0..n)
         .map(|v| fixed[v].unwrap_or_else(|| rhs[slots[v]]))
         .collect();
     Ok(system.output(&x, 0))
+}
+
+/// An estimate from above of the smallest eigenvalue `lambda_1` of `A z = lambda M z`
+/// (the Rayleigh quotient after [`LAMBDA_ITERATIONS`] inverse iterations; the quotient
+/// of any vector is at least `lambda_1`, and it converges from above).
+fn smallest_eigenvalue(
+    mesh: &TriMesh,
+    system: &Connection,
+    shift: f64,
+) -> Result<f64, LineFieldError> {
+    let n = system.len();
+    let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
+    let identity: Vec<usize> = (0..n).collect();
+    let llt = system.factor(mesh, &extra, &identity, n)?;
+    let start: Vec<c64> = (0..n as u64)
+        .map(|v| c64::new(start_value(2 * v), start_value(2 * v + 1)))
+        .collect();
+    let (x, _) = inverse_iteration(system, &llt, start, LAMBDA_ITERATIONS, 1e-6, shift)?;
+    Ok(system.energy(&x))
 }
 
 /// `t` in the frame `(e1, e2)` as a unit doubled-angle complex number, with its

@@ -275,3 +275,45 @@ fn bunny_singularities_of_the_smoothest_and_the_projected_field() {
     // beyond a successful solve.
     assert!(field.directions.iter().all(|d| d.is_finite()));
 }
+
+#[test]
+fn the_smoothness_shift_trades_guidance_for_smoothness() {
+    // A noisy guidance on a sphere: the larger the shift toward the smoothest field, the
+    // lower the field's energy and the farther it is from the guidance.
+    let mesh = shapes::sphere(1.0, 6).expect("sphere");
+    let guidance: Vec<DVec3> = mesh
+        .positions()
+        .iter()
+        .enumerate()
+        .map(|(v, p)| {
+            let a = 6.0 * start_value(v as u64);
+            p.cross(DVec3::new(a.cos(), a.sin(), 0.3))
+        })
+        .collect();
+    let mut energies = Vec::new();
+    for smoothness in [0.0, 0.5, 0.9] {
+        let options = LineFieldOptions {
+            weight: 1.0,
+            smoothness,
+            ..LineFieldOptions::default()
+        };
+        let field = guided_line_field(&mesh, &guidance, &options).expect("field");
+        let unit = line_field_energy(&mesh, &field.directions).expect("energy");
+        energies.push(unit);
+    }
+    assert!(
+        energies[0] > energies[1] && energies[1] > energies[2],
+        "{energies:?}"
+    );
+    let bad = LineFieldOptions {
+        smoothness: 0.99,
+        ..LineFieldOptions::default()
+    };
+    assert!(matches!(
+        guided_line_field(&mesh, &guidance, &bad),
+        Err(LineFieldError::InvalidOption {
+            option: "smoothness",
+            ..
+        })
+    ));
+}

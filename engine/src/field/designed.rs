@@ -170,9 +170,12 @@ pub struct Design {
     /// Weight of the guidance against smoothness, >= 0 (0: the smoothest field, larger:
     /// closer to the guidance; see [`LineFieldOptions::weight`]). Default 1.
     pub weight: f64,
+    /// Shift toward the smoothest field, in `[0, 0.95]` (see
+    /// [`LineFieldOptions::smoothness`]). Default 0.5.
+    pub smoothness: f64,
     /// Length over which the surface is smoothed for the field's connection, as a
     /// fraction of the area radius, >= 0 (see [`LineFieldOptions::smoothing`]).
-    /// Default 0.05.
+    /// Default 0.3.
     pub smoothing: f64,
     /// Hard constraints (for example strokes along feature lines). Default none.
     pub constraints: Vec<Constraint>,
@@ -187,7 +190,8 @@ impl Default for Design {
         Self {
             guidance: Guidance::default(),
             weight: 1.0,
-            smoothing: 0.05,
+            smoothness: 0.5,
+            smoothing: 0.3,
             constraints: Vec::new(),
             anisotropy: Anisotropy::default(),
             density: Density::default(),
@@ -238,6 +242,9 @@ impl Design {
         }
         if !(self.weight >= 0.0 && self.weight.is_finite()) {
             return Err(invalid("weight", self.weight, "a finite value >= 0"));
+        }
+        if !(self.smoothness >= 0.0 && self.smoothness <= 0.95) {
+            return Err(invalid("smoothness", self.smoothness, "in [0, 0.95]"));
         }
         if !(self.smoothing >= 0.0 && self.smoothing.is_finite()) {
             return Err(invalid("smoothing", self.smoothing, "a finite value >= 0"));
@@ -336,6 +343,7 @@ impl Design {
             .collect();
         let options = LineFieldOptions {
             weight: self.weight,
+            smoothness: self.smoothness,
             smoothing: self.smoothing,
             ..LineFieldOptions::default()
         };

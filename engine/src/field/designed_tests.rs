@@ -191,9 +191,8 @@ fn bunny_singularities_do_not_depend_on_the_resolution() {
         b.len()
     );
     assert!(a.len().abs_diff(b.len()) <= 2, "{} vs {}", a.len(), b.len());
-    // Issue 17 asks for "a few" mean edge lengths; measured 18.4 (the subdivided bunny
-    // moves a dipole of the ear's base), so this only guards against regressions.
-    assert!(far <= 20.0, "a singularity moved {far} mean edge lengths");
+    // Issue 17 asks for "a few" mean edge lengths: measured 5.5 with the defaults.
+    assert!(far <= 8.0, "a singularity moved {far} mean edge lengths");
 }
 
 #[test]
@@ -261,12 +260,15 @@ fn designed_fields_are_smoother_than_the_projected_constant_and_follow_strong_cu
     println!(
         "mean angle to the curvature guidance where |k1 - k2| R >= {strong:.2}: smoothest {smoothest_angle:.1}, weights 1, 100, 1000: {angles:.1?} degrees"
     );
+    // Measured with the defaults (smoothing 0.3, smoothness 0.5): smoothest 48.2,
+    // weights 1, 100, 1000: 35.7, 23.4, 18.1 degrees. A scan's principal directions are
+    // noisy, so a field that follows them closer has many more singularities.
     assert!(
-        angles[0] < smoothest_angle - 5.0,
+        angles[0] < smoothest_angle - 10.0,
         "{angles:?} vs {smoothest_angle}"
     );
     assert!(angles[1] < angles[0] && angles[2] < angles[1], "{angles:?}");
-    assert!(angles[2] < 10.0, "{angles:?}");
+    assert!(angles[2] < 20.0, "{angles:?}");
 }
 
 #[test]

@@ -16,6 +16,7 @@
 //!    minimum spanning tree the walk may not cross;
 //! 4. cuts that make every segment a disc.
 
+mod clusters;
 mod from_labels;
 pub mod paths;
 mod pipeline;
@@ -25,6 +26,7 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use clusters::{SingularityCluster, singularity_clusters};
 pub use from_labels::segmentation_from_labels;
 pub use pipeline::segment;
 pub use region::{RegionError, segment_region};

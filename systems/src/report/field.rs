@@ -19,7 +19,7 @@ use std::path::Path;
 
 use strata_engine::field::{TensorField, eigen_in_plane};
 use strata_engine::mesh::TriMesh;
-use strata_engine::segment::Singularity;
+use strata_engine::segment::{Singularity, singularity_clusters};
 
 /// The `float` properties of a vertex of the field PLY, in file order.
 pub const FIELD_VERTEX_PROPERTIES: [&str; 11] = [
@@ -51,6 +51,12 @@ pub struct FieldReport {
     pub singularities: Vec<SingularityEntry>,
     /// Sum of the singularities' indices.
     pub index_sum: f64,
+    /// The singularities grouped into clusters of faces that share a vertex
+    /// ([`singularity_clusters`]): the singularities seen at the scale of the mesh.
+    pub clusters: Vec<ClusterEntry>,
+    /// Clusters whose index is not zero: the field's singularities once dipoles
+    /// (touching +1/2 and -1/2 faces, no winding around both) are set aside.
+    pub net_singularities: usize,
     /// Vertices whose anisotropy `sqrt(l1 / l2)` is below the isotropy threshold given
     /// to [`FieldReport::new`]: there the major direction is barely defined.
     pub near_isotropic_vertices: usize,
@@ -71,6 +77,17 @@ pub struct SingularityEntry {
     pub position: [f64; 3],
 }
 
+/// One cluster of touching singular faces in the report.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ClusterEntry {
+    /// Its faces, ascending.
+    pub faces: Vec<u32>,
+    /// The sum of their indices (0 for a dipole).
+    pub index: f64,
+    /// The mean of its faces' barycentres, world space.
+    pub position: [f64; 3],
+}
+
 impl FieldReport {
     /// The report of `field` on `mesh` with its `singularities`; vertices with an
     /// anisotropy below `isotropy_threshold` count as near-isotropic. `field_s` is the
@@ -88,6 +105,7 @@ impl FieldReport {
             .zip(mesh.vertex_normals())
             .filter(|(t, n)| eigen_in_plane(t, **n).anisotropy() < isotropy_threshold)
             .count();
+        let clusters = singularity_clusters(mesh, singularities);
         Self {
             faces: mesh.face_count(),
             vertices: mesh.vertex_count(),
@@ -106,13 +124,31 @@ impl FieldReport {
                 .collect(),
             // A fold from +0, not `sum` (which starts at -0 and prints "-0" for none).
             index_sum: singularities.iter().fold(0.0, |sum, s| sum + s.index),
+            net_singularities: clusters.iter().filter(|c| c.is_singular()).count(),
+            clusters: clusters
+                .iter()
+                .map(|c| {
+                    let centre = c
+                        .faces
+                        .iter()
+                        .map(|&f| mesh.face_positions(f).iter().sum::<glam::DVec3>() / 3.0)
+                        .sum::<glam::DVec3>()
+                        / c.faces.len() as f64;
+                    ClusterEntry {
+                        faces: c.faces.clone(),
+                        index: c.index,
+                        position: centre.to_array(),
+                    }
+                })
+                .collect(),
             near_isotropic_vertices,
             isotropy_threshold,
             field_s,
         }
     }
 
-    /// The one-line summary `strata field` prints: counts, the singularities by index,
+    /// The one-line summary `strata field` prints: counts, the singularities by index
+    /// and net of dipoles,
     /// their sum and, on a closed mesh, whether it equals the Euler characteristic
     /// (Poincare-Hopf), the near-isotropic vertices if any, and the build time.
     pub fn summary(&self) -> String {
@@ -142,11 +178,13 @@ impl FieldReport {
             String::new()
         };
         format!(
-            "{} faces, {} vertices (Euler characteristic {chi}, {} boundary loops): {} singularities ({plus} of +1/2, {minus} of -1/2, {other} other), index sum {sum} {check}{isotropic}; field {:.3} s",
+            "{} faces, {} vertices (Euler characteristic {chi}, {} boundary loops): {} singularities ({plus} of +1/2, {minus} of -1/2, {other} other) in {} clusters of touching faces, {} with a non-zero index, index sum {sum} {check}{isotropic}; field {:.3} s",
             self.faces,
             self.vertices,
             self.boundary_loops,
             self.singularities.len(),
+            self.clusters.len(),
+            self.net_singularities,
             self.field_s,
         )
     }
