@@ -17,7 +17,7 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, traits::ComplexField};
 use glam::DVec3;
 
-use super::design::{LineField, LineFieldError, MIN_EDGE_WEIGHT};
+use super::line_field::{LineField, LineFieldError, MIN_EDGE_WEIGHT};
 use super::{frame_angle, tangent_frame, vertex_frames};
 use crate::mesh::TriMesh;
 

@@ -36,7 +36,8 @@
 //! clamped cotangent Laplacian): bumps smaller than about `l` no longer turn the
 //! connection, so they no longer attract singularities (Ray, Vallet, Alonso and Lévy
 //! 2009 make fields ignore small details in the same spirit). Output directions lie in
-//! the smoothed planes; [`TensorField::from_frames`] projects them into the mesh's.
+//! the smoothed planes; [`TensorField::from_frames`](super::TensorField::from_frames)
+//! projects them into the mesh's.
 //! - Smoothest field ([`smoothest_line_field`]): the eigenvector of the smallest
 //!   eigenvalue of `A z = lambda M z`, by inverse power iteration with one factorization
 //!   of `A + sigma M` (`sigma` = [`SHIFT`] times the ratio of the traces of `A` and `M`),
@@ -56,7 +57,7 @@
 //!
 //! Input: a [`TriMesh`] (and a guidance per vertex). Output: a [`LineField`], a unit
 //! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
-//! turns into a [`TensorField`]. Cost: O(V + E) assembly, one AMD ordering, one
+//! turns into a [`TensorField`](super::TensorField). Cost: O(V + E) assembly, one AMD ordering, one
 //! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
 //! solve with that factor per inverse iteration. Measured on the Stanford bunny (35k
 //! vertices, 2 cores, release): a guided solve 0.17 s (0.19 s with smoothing), the
@@ -67,11 +68,8 @@ use faer::c64;
 use glam::DVec3;
 
 use super::connection::{Connection, solve};
-use super::{FieldError, TensorField};
+pub use super::line_field::{LineField, LineFieldError, MIN_EDGE_WEIGHT};
 use crate::mesh::TriMesh;
-
-/// Floor of the cotangent edge weights (dimensionless).
-pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
 
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
 pub const SHIFT: f64 = 1e-8;
@@ -164,75 +162,6 @@ impl LineFieldOptions {
     }
 }
 
-/// Everything that can go wrong designing a line field.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum LineFieldError {
-    /// The mesh has no vertices or no area.
-    #[error("the mesh has no vertices or zero area")]
-    EmptyMesh,
-    /// The guidance has a different length from the mesh's vertex count.
-    #[error("guidance has {found} values but the mesh has {expected} vertices")]
-    GuidanceLength {
-        /// Mesh vertex count.
-        expected: usize,
-        /// Values given.
-        found: usize,
-    },
-    /// A guidance vector has a NaN or infinite coordinate.
-    #[error("guidance at vertex {vertex} is not finite")]
-    NonFiniteGuidance {
-        /// Vertex index.
-        vertex: usize,
-    },
-    /// A constraint names a vertex the mesh does not have.
-    #[error("constraint {index} names vertex {vertex}, but the mesh has {vertices} vertices")]
-    ConstraintVertex {
-        /// Position of the constraint in the list.
-        index: usize,
-        /// The vertex it names.
-        vertex: u32,
-        /// Mesh vertex count.
-        vertices: usize,
-    },
-    /// A constraint's direction is not finite or has no part in the tangent plane.
-    #[error(
-        "constraint {index} at vertex {vertex}: the direction is not finite or is normal to the surface"
-    )]
-    ConstraintDirection {
-        /// Position of the constraint in the list.
-        index: usize,
-        /// Its vertex.
-        vertex: u32,
-    },
-    /// Two constraints fix the same vertex.
-    #[error("constraints {first} and {second} both fix vertex {vertex}")]
-    DuplicateConstraint {
-        /// The earlier constraint.
-        first: usize,
-        /// The later one.
-        second: usize,
-        /// The vertex both fix.
-        vertex: u32,
-    },
-    /// A setting is out of its range.
-    #[error("line-field option `{option}` = {value} is invalid: {expected}")]
-    InvalidOption {
-        /// The option's name.
-        option: &'static str,
-        /// The value given.
-        value: f64,
-        /// The valid range, in words.
-        expected: &'static str,
-    },
-    /// The sparse solve failed.
-    #[error("line-field solve failed in the {stage}")]
-    Factorization {
-        /// The step that failed.
-        stage: &'static str,
-    },
-}
-
 /// A hard constraint of [`constrained_line_field`]: the field's line at `vertex` is
 /// exactly `direction`'s (projected into the vertex's tangent plane; its sign does not
 /// matter).
@@ -242,38 +171,6 @@ pub struct LineConstraint {
     pub vertex: u32,
     /// World-space direction, not parallel to the vertex normal.
     pub direction: DVec3,
-}
-
-/// A line field: per vertex, a unit tangent direction (world space; its negation is the
-/// same line) and the magnitude `|z_v|` of the solution.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LineField {
-    /// Unit direction per vertex, in the vertex's tangent plane (the first axis of the
-    /// tangent frame where the magnitude is 0).
-    pub directions: Vec<DVec3>,
-    /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1`; for a
-    /// guided field about 1 where it follows confident guidance or a constraint, smaller
-    /// where guidance is contradictory (near singularities).
-    pub magnitudes: Vec<f64>,
-    /// The smoothness energy `E(z) = z^H A z` of the solution.
-    pub energy: f64,
-    /// The Rayleigh quotient `E(z) / (z^H M z)` (0 for a zero field); for the smoothest
-    /// field, the estimate of the smallest eigenvalue.
-    pub rayleigh: f64,
-    /// Inverse power iterations done (0 for a guided field).
-    pub iterations: usize,
-}
-
-impl LineField {
-    /// A tensor field whose major direction is this field's, with the per-vertex
-    /// eigenvalues `[l1, l2]` (`l1 >= l2 > 0`; see [`TensorField::from_frames`]).
-    pub fn to_tensor_field(
-        &self,
-        mesh: &TriMesh,
-        eigenvalues: &[[f64; 2]],
-    ) -> Result<TensorField, FieldError> {
-        TensorField::from_frames(mesh, &self.directions, eigenvalues)
-    }
 }
 
 /// `sqrt(area / 4 pi)`: the radius of the sphere with the mesh's area.

@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use super::*;
-use crate::field::tangent_frame;
+use crate::field::{TensorField, tangent_frame};
 use crate::mesh::shapes;
 use crate::segment::detect_singularities;
 

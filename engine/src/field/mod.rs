@@ -26,6 +26,7 @@ mod error;
 mod file;
 mod guidance;
 mod isotropic;
+mod line_field;
 mod params;
 mod spec;
 mod warp;

@@ -1,0 +1,112 @@
+//! The line-field types shared by the solver ([`design`](super::design)) and its
+//! system (`connection.rs`): the result [`LineField`], the error [`LineFieldError`]
+//! and the floor of the edge weights. Kept below both so neither depends on the other.
+
+use glam::DVec3;
+
+use super::{FieldError, TensorField};
+use crate::mesh::TriMesh;
+
+/// Floor of the cotangent edge weights (dimensionless).
+pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
+
+/// Everything that can go wrong designing a line field.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LineFieldError {
+    /// The mesh has no vertices or no area.
+    #[error("the mesh has no vertices or zero area")]
+    EmptyMesh,
+    /// The guidance has a different length from the mesh's vertex count.
+    #[error("guidance has {found} values but the mesh has {expected} vertices")]
+    GuidanceLength {
+        /// Mesh vertex count.
+        expected: usize,
+        /// Values given.
+        found: usize,
+    },
+    /// A guidance vector has a NaN or infinite coordinate.
+    #[error("guidance at vertex {vertex} is not finite")]
+    NonFiniteGuidance {
+        /// Vertex index.
+        vertex: usize,
+    },
+    /// A constraint names a vertex the mesh does not have.
+    #[error("constraint {index} names vertex {vertex}, but the mesh has {vertices} vertices")]
+    ConstraintVertex {
+        /// Position of the constraint in the list.
+        index: usize,
+        /// The vertex it names.
+        vertex: u32,
+        /// Mesh vertex count.
+        vertices: usize,
+    },
+    /// A constraint's direction is not finite or has no part in the tangent plane.
+    #[error(
+        "constraint {index} at vertex {vertex}: the direction is not finite or is normal to the surface"
+    )]
+    ConstraintDirection {
+        /// Position of the constraint in the list.
+        index: usize,
+        /// Its vertex.
+        vertex: u32,
+    },
+    /// Two constraints fix the same vertex.
+    #[error("constraints {first} and {second} both fix vertex {vertex}")]
+    DuplicateConstraint {
+        /// The earlier constraint.
+        first: usize,
+        /// The later one.
+        second: usize,
+        /// The vertex both fix.
+        vertex: u32,
+    },
+    /// A setting is out of its range.
+    #[error("line-field option `{option}` = {value} is invalid: {expected}")]
+    InvalidOption {
+        /// The option's name.
+        option: &'static str,
+        /// The value given.
+        value: f64,
+        /// The valid range, in words.
+        expected: &'static str,
+    },
+    /// The sparse solve failed.
+    #[error("line-field solve failed in the {stage}")]
+    Factorization {
+        /// The step that failed.
+        stage: &'static str,
+    },
+}
+
+/// A line field, the output of the solvers in [`design`](super::design): per vertex, a unit tangent direction (world space; its negation is the
+/// same line) and the magnitude `|z_v|` of the solution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LineField {
+    /// Unit direction per vertex, in the vertex's tangent plane (the first axis of the
+    /// tangent frame where the magnitude is 0).
+    pub directions: Vec<DVec3>,
+    /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1`; for a
+    /// guided field about 1 where it follows confident guidance or a constraint, smaller
+    /// where guidance is contradictory (near singularities).
+    pub magnitudes: Vec<f64>,
+    /// The smoothness energy `E(z) = z^H A z` of the solution.
+    pub energy: f64,
+    /// The Rayleigh quotient `E(z) / (z^H M z)` (0 for a zero field); for the smoothest
+    /// field, the estimate of the smallest eigenvalue.
+    pub rayleigh: f64,
+    /// Inverse power iterations done (0 for a guided field).
+    pub iterations: usize,
+}
+
+impl LineField {
+    /// A tensor field whose major direction is this field's, with the per-vertex
+    /// eigenvalues `[l1, l2]` (`l1 >= l2 > 0`; see [`TensorField::from_frames`]).
+    pub fn to_tensor_field(
+        &self,
+        mesh: &TriMesh,
+        eigenvalues: &[[f64; 2]],
+    ) -> Result<TensorField, FieldError> {
+        TensorField::from_frames(mesh, &self.directions, eigenvalues)
+    }
+}
