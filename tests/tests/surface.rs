@@ -272,12 +272,25 @@ fn cylinder_four_to_one_along_the_axis() {
     assert!((ratio - 4.0).abs() <= 0.4, "ratio {ratio}");
 }
 
+/// The designed field of the `<mesh>-smooth.ron` scenes (issue 17): curvature-aligned,
+/// 3:1, uniform density.
+fn designed() -> FieldSpec {
+    FieldSpec::Designed(strata_engine::field::Design::default())
+}
+
 #[test]
 fn seams_show_neither_gaps_nor_clusters() {
     // Samples per unit of measure in thin bands along segment boundaries against the
-    // interior: within 10%. Uniform density on a torus with a field that segments it.
-    let mesh = Arc::new(shapes::torus(1.0, 0.4, 40).expect("torus"));
-    let field = Arc::new(projected().build(&mesh).expect("field"));
+    // interior: within 10%. Uniform density on a torus with a field that segments it,
+    // and on the genus-2 surface with a designed field (issue 17: the checks keep
+    // passing on the new scenes).
+    seam_check(shapes::torus(1.0, 0.4, 40).expect("torus"), projected());
+    seam_check(shapes::genus2(2.0, 3).expect("genus2"), designed());
+}
+
+fn seam_check(mesh: TriMesh, spec: FieldSpec) {
+    let mesh = Arc::new(mesh);
+    let field = Arc::new(spec.build(&mesh).expect("field"));
     let pre =
         Preprocessed::build(mesh.clone(), field, &SurfaceOptions::default()).expect("preprocess");
     assert!(pre.params.len() > 4, "the test needs several segments");
@@ -330,9 +343,14 @@ fn counts_over_random_patches_beat_random_sampling_threefold() {
     // segments. Expected count: N times the patch's share of the measure (uniform
     // density: of the area). Random sampling of the same density: faces by area,
     // uniform inside. The RMS deviation of strata's counts must be at most a third of
-    // random sampling's.
+    // random sampling's, with the projected field and with a designed one (issue 17).
+    patch_check(projected());
+    patch_check(designed());
+}
+
+fn patch_check(spec: FieldSpec) {
     let mesh = Arc::new(shapes::genus2(2.0, 3).expect("genus2"));
-    let field = Arc::new(projected().build(&mesh).expect("field"));
+    let field = Arc::new(spec.build(&mesh).expect("field"));
     let pre =
         Preprocessed::build(mesh.clone(), field, &SurfaceOptions::default()).expect("preprocess");
     let n = 100_000;
