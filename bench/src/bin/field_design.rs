@@ -1,5 +1,6 @@
 //! Issue 17's table: designed fields on the bundled `configs/<mesh>-smooth.ron` scenes
-//! (and on the shared bunny Loop-subdivided once, made in code), with the field's build
+//! (and on the shared bunny Loop-subdivided once, made in code; for the bunny also the
+//! smoothest field, without guidance), with the field's build
 //! time, its singularities (singular faces, and clusters of touching faces with a
 //! non-zero index) and the segments the surface pipeline makes of it, as a Markdown
 //! table: `cargo run --release -p strata-bench --bin field_design [-- repeats]`.
@@ -14,7 +15,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use strata_engine::field::FieldSpec;
+use strata_engine::field::{Design, FieldSpec, Guidance};
 use strata_engine::mesh::{TriMesh, loop_subdivide};
 use strata_engine::segment::{detect_singularities, singularity_clusters};
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
@@ -63,12 +64,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mesh = strata_systems::scene::load_mesh(&config)?;
         let options = config.surface_options();
         if name == "stanford-bunny" {
+            // Also the smoothest field (no guidance), the issue's "smooth field".
+            let smoothest = FieldSpec::Designed(Design {
+                guidance: Guidance::Smoothest,
+                ..Design::default()
+            });
             let fine = loop_subdivide(&mesh)?;
-            row(name, mesh, &config.field, &options, repeats)?;
+            row(name, mesh.clone(), &config.field, &options, repeats)?;
             row(
                 "stanford-bunny, Loop-subdivided once",
-                fine,
+                fine.clone(),
                 &config.field,
+                &options,
+                repeats.min(3),
+            )?;
+            row(
+                "stanford-bunny, smoothest",
+                mesh,
+                &smoothest,
+                &options,
+                repeats.min(3),
+            )?;
+            row(
+                "stanford-bunny, Loop-subdivided once, smoothest",
+                fine,
+                &smoothest,
                 &options,
                 repeats.min(3),
             )?;
