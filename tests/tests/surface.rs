@@ -217,16 +217,32 @@ fn cylinder_four_to_one_along_the_axis() {
     // A 4:1 field along the axis of an open cylinder: samples four times closer along
     // z than around. Measured like the planar test: spacing from the nearest
     // neighbours in the field's metric, in the unrolled (angle * r, z) plane.
+    let spec = FieldSpec::Constant {
+        direction: [0.0, 0.0, 1.0],
+        anisotropy: 4.0,
+        density: 1.0,
+    };
+    // sqrt(l): 2 along z, 1/2 around (the metric stretches z by 2 and the angle by 1/2).
+    let ratio = cylinder_spacing_ratio(spec, [0.5, 2.0]);
+    assert!((ratio - 4.0).abs() <= 0.4, "ratio {ratio}");
+}
+
+#[test]
+fn designed_cylinder_field_spaces_samples_three_to_one_around() {
+    // Issue 17: the designed (curvature-aligned, 3:1) field runs its major direction
+    // around the cylinder, so samples are three times closer around than along z.
+    // sqrt(l): sqrt(3) around, 1/sqrt(3) along.
+    let ratio = cylinder_spacing_ratio(designed(), [3f64.sqrt(), 1.0 / 3f64.sqrt()]);
+    assert!((ratio - 1.0 / 3.0).abs() <= 1.0 / 30.0, "ratio {ratio}");
+}
+
+/// Samples 6000 points of `spec` on an open cylinder (radius 1, height 6) and returns
+/// the mean spacing around over the mean spacing along the axis, from the 4 nearest
+/// neighbours of each sample away from the ends in the metric that scales the unrolled
+/// `(angle, z)` offsets by `metric`.
+fn cylinder_spacing_ratio(spec: FieldSpec, metric: [f64; 2]) -> f64 {
     let mesh = Arc::new(shapes::cylinder(1.0, 6.0, 96).expect("cylinder"));
-    let field = Arc::new(
-        FieldSpec::Constant {
-            direction: [0.0, 0.0, 1.0],
-            anisotropy: 4.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field"),
-    );
+    let field = Arc::new(spec.build(&mesh).expect("field"));
     let pre = Preprocessed::build(mesh, field, &SurfaceOptions::default()).expect("preprocess");
     assert!(
         pre.params.iter().all(|p| p.report.valid),
@@ -243,7 +259,6 @@ fn cylinder_four_to_one_along_the_axis() {
             )
         })
         .collect();
-    // sqrt(l): 2 along z, 1/2 around (the metric stretches z by 2 and the angle by 1/2).
     let (mut around, mut along, mut count) = (0.0, 0.0, 0usize);
     for (i, p) in pts.iter().enumerate() {
         if p.y.abs() > 2.0 {
@@ -257,7 +272,10 @@ fn cylinder_four_to_one_along_the_axis() {
                 let mut d = *q - *p;
                 d.x = (d.x + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
                     - std::f64::consts::PI;
-                (glam::DVec2::new(d.x * 0.5, d.y * 2.0).length(), d)
+                (
+                    glam::DVec2::new(d.x * metric[0], d.y * metric[1]).length(),
+                    d,
+                )
             })
             .collect();
         near.select_nth_unstable_by(4, |a, b| a.0.total_cmp(&b.0));
@@ -269,7 +287,7 @@ fn cylinder_four_to_one_along_the_axis() {
     }
     let ratio = around / along;
     println!("cylinder spacing ratio around/along = {ratio:.3} over {count} neighbours");
-    assert!((ratio - 4.0).abs() <= 0.4, "ratio {ratio}");
+    ratio
 }
 
 /// The designed field of the `<mesh>-smooth.ron` scenes (issue 17): curvature-aligned,

@@ -198,25 +198,11 @@ pub fn smoothest_line_field(
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let system = Connection::build(mesh, options.smoothing * area_radius(mesh))?;
-    let n = system.len();
     let trace_a: f64 = system.diagonal.iter().sum();
     let trace_m: f64 = system.mass.iter().sum();
     let shift = SHIFT * trace_a / trace_m;
-    let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
-    let identity: Vec<usize> = (0..n).collect();
-    let llt = system.factor(mesh, &extra, &identity, n)?;
-
-    let start: Vec<c64> = (0..n as u64)
-        .map(|v| c64::new(start_value(2 * v), start_value(2 * v + 1)))
-        .collect();
-    let (x, iterations) = inverse_iteration(
-        &system,
-        &llt,
-        start,
-        options.iterations,
-        options.tolerance,
-        shift,
-    )?;
+    let (x, iterations) =
+        smallest_eigenvector(mesh, &system, shift, options.iterations, options.tolerance)?;
     Ok(system.output(&x, iterations))
 }
 
@@ -460,6 +446,20 @@ fn smallest_eigenvalue(
     system: &Connection,
     shift: f64,
 ) -> Result<f64, LineFieldError> {
+    let (x, _) = smallest_eigenvector(mesh, system, shift, LAMBDA_ITERATIONS, 1e-6)?;
+    Ok(system.energy(&x))
+}
+
+/// [`inverse_iteration`] on the whole mesh with the factor of `A + shift M`, from the
+/// fixed pseudo-random start: the eigenvector of the smallest eigenvalue and the steps
+/// taken.
+fn smallest_eigenvector(
+    mesh: &TriMesh,
+    system: &Connection,
+    shift: f64,
+    max: usize,
+    tolerance: f64,
+) -> Result<(Vec<c64>, usize), LineFieldError> {
     let n = system.len();
     let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
     let identity: Vec<usize> = (0..n).collect();
@@ -467,8 +467,7 @@ fn smallest_eigenvalue(
     let start: Vec<c64> = (0..n as u64)
         .map(|v| c64::new(start_value(2 * v), start_value(2 * v + 1)))
         .collect();
-    let (x, _) = inverse_iteration(system, &llt, start, LAMBDA_ITERATIONS, 1e-6, shift)?;
-    Ok(system.energy(&x))
+    inverse_iteration(system, &llt, start, max, tolerance, shift)
 }
 
 /// `t` in the frame `(e1, e2)` as a unit doubled-angle complex number, with its
