@@ -41,8 +41,6 @@ pub(crate) const DEFAULT_MAX_ANISOTROPY: f64 = 4.0;
 pub(crate) const DEFAULT_ISOTROPY_CURVATURE: f64 = 0.05;
 /// Default `smoothing_iterations`.
 pub(crate) const DEFAULT_SMOOTHING_ITERATIONS: u32 = 2;
-/// Largest accepted `smoothing_iterations`.
-pub(crate) const MAX_SMOOTHING_ITERATIONS: u32 = 1000;
 
 /// Below this (after multiplying by the mesh's area radius) the largest curvature of a
 /// mesh counts as zero, so [`CurvatureNormalization::Max`] does not blow round-off up.

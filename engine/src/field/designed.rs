@@ -14,7 +14,10 @@ use glam::DVec3;
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
 use super::design::{LineConstraint, LineField, LineFieldOptions, constrained_line_field};
 use super::guidance::{curvature_guidance, direction_guidance};
-use super::params::{eigenvalues, invalid, positive};
+use super::params::{
+    direction, eigenvalues, invalid, non_negative, positive,
+    smoothing_iterations as smoothing_iterations_ok, spacing_ratio,
+};
 use super::{FieldError, PrincipalCurvatures, TensorField, principal_curvatures};
 use crate::mesh::TriMesh;
 
@@ -209,27 +212,6 @@ fn three() -> f64 {
     3.0
 }
 
-fn smoothing_ok(iterations: u32) -> Result<(), FieldError> {
-    if iterations > curvature::MAX_SMOOTHING_ITERATIONS {
-        Err(invalid(
-            "smoothing_iterations",
-            f64::from(iterations),
-            "at most 1000",
-        ))
-    } else {
-        Ok(())
-    }
-}
-
-fn finite_direction(name: &'static str, d: [f64; 3]) -> Result<(), FieldError> {
-    let v = DVec3::from(d);
-    if v.is_finite() && v.length_squared() > 0.0 {
-        Ok(())
-    } else {
-        Err(invalid(name, v.length(), "a finite non-zero vector"))
-    }
-}
-
 impl Design {
     /// Checks every setting (not the constraints' vertices, which need the mesh).
     pub fn validate(&self) -> Result<(), FieldError> {
@@ -237,20 +219,16 @@ impl Design {
             Guidance::Smoothest => {}
             Guidance::Curvature {
                 smoothing_iterations,
-            } => smoothing_ok(*smoothing_iterations)?,
-            Guidance::Direction(d) => finite_direction("guidance direction", *d)?,
+            } => smoothing_iterations_ok(*smoothing_iterations)?,
+            Guidance::Direction(d) => direction("guidance direction", *d)?,
         }
-        if !(self.weight >= 0.0 && self.weight.is_finite()) {
-            return Err(invalid("weight", self.weight, "a finite value >= 0"));
-        }
+        non_negative("weight", self.weight)?;
         if !(self.smoothness >= 0.0 && self.smoothness <= 0.95) {
             return Err(invalid("smoothness", self.smoothness, "in [0, 0.95]"));
         }
-        if !(self.smoothing >= 0.0 && self.smoothing.is_finite()) {
-            return Err(invalid("smoothing", self.smoothing, "a finite value >= 0"));
-        }
+        non_negative("smoothing", self.smoothing)?;
         for c in &self.constraints {
-            finite_direction("constraint direction", c.direction)?;
+            direction("constraint direction", c.direction)?;
             if let Site::Point(p) = c.at
                 && !DVec3::from(p).is_finite()
             {
@@ -263,9 +241,7 @@ impl Design {
         }
         match &self.anisotropy {
             Anisotropy::Constant(a) => {
-                if !(*a >= 1.0 && a.is_finite()) {
-                    return Err(invalid("anisotropy", *a, "a finite spacing ratio >= 1"));
-                }
+                spacing_ratio("anisotropy", *a)?;
             }
             Anisotropy::Curvature {
                 min,
@@ -273,14 +249,12 @@ impl Design {
                 isotropy_curvature,
                 smoothing_iterations,
             } => {
-                if !(*min >= 1.0 && min.is_finite()) {
-                    return Err(invalid("min", *min, "a finite spacing ratio >= 1"));
-                }
+                spacing_ratio("min", *min)?;
                 if !(*max >= *min && max.is_finite()) {
                     return Err(invalid("max", *max, "a finite spacing ratio >= min"));
                 }
                 positive("isotropy_curvature", *isotropy_curvature)?;
-                smoothing_ok(*smoothing_iterations)?;
+                smoothing_iterations_ok(*smoothing_iterations)?;
             }
         }
         match &self.density {
@@ -292,10 +266,8 @@ impl Design {
                 ..
             } => {
                 positive("floor", *floor)?;
-                if !(*scale >= 0.0 && scale.is_finite()) {
-                    return Err(invalid("scale", *scale, "a finite value >= 0"));
-                }
-                smoothing_ok(*smoothing_iterations)?;
+                non_negative("scale", *scale)?;
+                smoothing_iterations_ok(*smoothing_iterations)?;
             }
             Density::File(_) => {}
         }

@@ -31,6 +31,51 @@ pub(crate) fn finite_point(parameter: &'static str, p: [f64; 2]) -> Result<(), F
     }
 }
 
+/// Largest accepted `smoothing_iterations` of a curvature estimate.
+pub(crate) const MAX_SMOOTHING_ITERATIONS: u32 = 1000;
+
+/// Checks that option `parameter` is finite and `>= 0`.
+pub(crate) fn non_negative(parameter: &'static str, value: f64) -> Result<(), FieldError> {
+    if value >= 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(parameter, value, "a finite value >= 0"))
+    }
+}
+
+/// Checks a spacing ratio option: finite and `>= 1`.
+pub(crate) fn spacing_ratio(parameter: &'static str, value: f64) -> Result<(), FieldError> {
+    if value >= 1.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(parameter, value, "a finite spacing ratio >= 1"))
+    }
+}
+
+/// Checks a world direction option: finite and non-zero (the error carries its length).
+pub(crate) fn direction(parameter: &'static str, d: [f64; 3]) -> Result<(), FieldError> {
+    let v = glam::DVec3::from(d);
+    if v.is_finite() && v.length_squared() > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(parameter, v.length(), "a finite non-zero vector"))
+    }
+}
+
+/// Checks `smoothing_iterations` of a curvature estimate: at most
+/// [`MAX_SMOOTHING_ITERATIONS`].
+pub(crate) fn smoothing_iterations(value: u32) -> Result<(), FieldError> {
+    if value > MAX_SMOOTHING_ITERATIONS {
+        Err(invalid(
+            "smoothing_iterations",
+            f64::from(value),
+            "at most 1000",
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// Checks that option `parameter` is finite and strictly positive.
 pub(crate) fn positive(parameter: &'static str, value: f64) -> Result<(), FieldError> {
     if value > 0.0 && value.is_finite() {
@@ -69,6 +114,29 @@ mod tests {
             Err(FieldError::InvalidParameter { value, .. }) => assert!(value.is_nan()),
             other => panic!("expected InvalidParameter, got {other:?}"),
         }
+    }
+
+    #[test]
+    fn shared_checks_accept_their_ranges_and_name_the_option() {
+        assert!(non_negative("scale", 0.0).is_ok() && non_negative("scale", 5.0).is_ok());
+        assert!(spacing_ratio("min", 1.0).is_ok() && direction("d", [0.0, 0.0, 2.0]).is_ok());
+        assert!(smoothing_iterations(MAX_SMOOTHING_ITERATIONS).is_ok());
+        let name = |r: Result<(), FieldError>| match r {
+            Err(FieldError::InvalidParameter { parameter, .. }) => parameter,
+            other => panic!("expected InvalidParameter, got {other:?}"),
+        };
+        assert_eq!(name(non_negative("scale", -1e-300)), "scale");
+        assert_eq!(name(non_negative("weight", f64::NAN)), "weight");
+        assert_eq!(name(spacing_ratio("max", 0.999)), "max");
+        assert_eq!(
+            name(direction("guidance direction", [0.0; 3])),
+            "guidance direction"
+        );
+        assert_eq!(name(direction("d", [f64::INFINITY, 0.0, 0.0])), "d");
+        assert_eq!(
+            name(smoothing_iterations(MAX_SMOOTHING_ITERATIONS + 1)),
+            "smoothing_iterations"
+        );
     }
 
     #[test]

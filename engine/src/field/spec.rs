@@ -10,7 +10,10 @@ use glam::{DVec2, DVec3};
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
 use super::designed::Design;
-use super::params::{eigenvalues, finite_point, invalid, positive};
+use super::params::{
+    self, eigenvalues, finite_point, invalid, non_negative, positive,
+    smoothing_iterations as smoothing_iterations_ok, spacing_ratio,
+};
 use super::warp::PlanarWarp;
 use super::{FieldError, TensorField};
 use crate::mesh::TriMesh;
@@ -317,8 +320,8 @@ impl FieldSpec {
                 anisotropy,
                 density,
             } => {
-                direction_ok(direction)?;
-                anisotropy_ok(*anisotropy)?;
+                params::direction("direction", *direction)?;
+                spacing_ratio("anisotropy", *anisotropy)?;
                 positive("density", *density)
             }
             Self::Planar {
@@ -326,8 +329,8 @@ impl FieldSpec {
                 direction,
                 anisotropy,
             } => {
-                direction_ok(direction)?;
-                anisotropy_ok(*anisotropy)?;
+                params::direction("direction", *direction)?;
+                spacing_ratio("anisotropy", *anisotropy)?;
                 density.validate()
             }
             Self::Warp { warp, density } => {
@@ -345,24 +348,10 @@ impl FieldSpec {
                 ..
             } => {
                 positive("floor", *floor)?;
-                if !(*scale >= 0.0) || !scale.is_finite() {
-                    return Err(invalid("scale", *scale, "a finite value >= 0"));
-                }
-                if !(*max_anisotropy >= 1.0) || !max_anisotropy.is_finite() {
-                    return Err(invalid(
-                        "max_anisotropy",
-                        *max_anisotropy,
-                        "a finite spacing ratio >= 1",
-                    ));
-                }
+                non_negative("scale", *scale)?;
+                spacing_ratio("max_anisotropy", *max_anisotropy)?;
                 positive("isotropy_curvature", *isotropy_curvature)?;
-                if *smoothing_iterations > curvature::MAX_SMOOTHING_ITERATIONS {
-                    return Err(invalid(
-                        "smoothing_iterations",
-                        f64::from(*smoothing_iterations),
-                        "at most 1000",
-                    ));
-                }
+                smoothing_iterations_ok(*smoothing_iterations)?;
                 Ok(())
             }
         }
@@ -473,22 +462,5 @@ impl FieldSpec {
                 curvature::sampling_field(mesh, &k, &settings)
             }
         }
-    }
-}
-
-fn anisotropy_ok(a: f64) -> Result<(), FieldError> {
-    if a >= 1.0 && a.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid("anisotropy", a, "a finite spacing ratio >= 1"))
-    }
-}
-
-fn direction_ok(d: &[f64; 3]) -> Result<(), FieldError> {
-    let v = DVec3::from(*d);
-    if v.is_finite() && v.length_squared() > 0.0 {
-        Ok(())
-    } else {
-        Err(invalid("direction", v.length(), "a finite non-zero vector"))
     }
 }
