@@ -9,6 +9,8 @@
 //! pattern is computed once and shared by the normal smoothing and the field solves.
 //! Cost: O(V + E) assembly, one AMD ordering, one numeric factorization per solve.
 
+use std::cell::OnceCell;
+
 use faer::Side;
 use faer::c64;
 use faer::prelude::*;
@@ -38,8 +40,9 @@ pub(crate) struct Connection {
     pub(crate) diagonal: Vec<f64>,
     /// Per vertex, the lumped mass.
     pub(crate) mass: Vec<f64>,
-    /// The symbolic Cholesky of the whole mesh's pattern.
-    symbolic: SymbolicLlt<usize>,
+    /// The symbolic Cholesky of the whole mesh's pattern, made on first use (an energy
+    /// evaluation never needs it).
+    symbolic: OnceCell<SymbolicLlt<usize>>,
 }
 
 /// Cotangent weight per edge (clamped below at [`MIN_EDGE_WEIGHT`]) and lumped mass per
@@ -112,6 +115,19 @@ fn symbolic(
     })
 }
 
+/// The symbolic factorization in `cell`, made from `matrix`'s pattern (the whole mesh's)
+/// on first use.
+fn shared_symbolic<T: ComplexField>(
+    cell: &OnceCell<SymbolicLlt<usize>>,
+    matrix: &SparseColMat<usize, T>,
+) -> Result<SymbolicLlt<usize>, LineFieldError> {
+    if let Some(s) = cell.get() {
+        return Ok(s.clone());
+    }
+    let s = symbolic(matrix.symbolic())?;
+    Ok(cell.get_or_init(|| s).clone())
+}
+
 fn numeric<T: ComplexField>(
     symbolic: SymbolicLlt<usize>,
     matrix: &SparseColMat<usize, T>,
@@ -143,9 +159,7 @@ impl Connection {
         if !(mass.iter().sum::<f64>() > 0.0) {
             return Err(LineFieldError::EmptyMesh);
         }
-        let all: Vec<usize> = (0..n).collect();
-        let pattern = assemble(n, &triplets(mesh, &all, n, |_| 1.0, |_, _| 0.0))?;
-        let symbolic = symbolic(pattern.symbolic())?;
+        let symbolic = OnceCell::new();
         let frames: Vec<(DVec3, DVec3)> = if smoothing > 0.0 {
             smoothed_normals(mesh, &weights, &mass, smoothing, &symbolic)?
                 .into_iter()
@@ -212,7 +226,7 @@ impl Connection {
         );
         let matrix = assemble(free, &t)?;
         let symbolic = if free == self.len() {
-            self.symbolic.clone()
+            shared_symbolic(&self.symbolic, &matrix)?
         } else {
             symbolic(matrix.symbolic())?
         };
@@ -281,7 +295,7 @@ fn smoothed_normals(
     weights: &[f64],
     mass: &[f64],
     length: f64,
-    symbolic: &SymbolicLlt<usize>,
+    symbolic: &OnceCell<SymbolicLlt<usize>>,
 ) -> Result<Vec<DVec3>, LineFieldError> {
     let t = length * length;
     let n = mesh.vertex_count();
@@ -295,7 +309,7 @@ fn smoothed_normals(
         n,
         &triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]),
     )?;
-    let llt = numeric(symbolic.clone(), &matrix)?;
+    let llt = numeric(shared_symbolic(symbolic, &matrix)?, &matrix)?;
     let normals = mesh.vertex_normals();
     let mut rhs = Mat::from_fn(n, 3, |v, k| mass[v] * normals[v][k]);
     llt.solve_in_place(rhs.as_mut());

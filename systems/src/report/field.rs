@@ -480,6 +480,43 @@ mod tests {
     }
 
     #[test]
+    fn touching_opposite_singularities_count_as_one_dipole_cluster() {
+        let mesh = shapes::plane(1.0, 4).expect("plane");
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        // Faces 0 and 1 share an edge; face 31 is at the far corner.
+        let found = [
+            Singularity {
+                face: 0,
+                index: 0.5,
+            },
+            Singularity {
+                face: 1,
+                index: -0.5,
+            },
+            Singularity {
+                face: 31,
+                index: 0.5,
+            },
+        ];
+        let report = FieldReport::new(&mesh, &field, &found, 1.05, 0.0);
+        assert_eq!(report.clusters.len(), 2);
+        assert_eq!(report.net_singularities, 1);
+        assert_eq!(report.clusters[0].faces, vec![0, 1]);
+        assert_eq!(report.clusters[0].index, 0.0);
+        let line = report.summary();
+        assert!(
+            line.contains("3 singularities (2 of +1/2, 1 of -1/2, 0 other) in 2 clusters of touching faces, 1 with a non-zero index"),
+            "{line}"
+        );
+    }
+
+    #[test]
     fn singularities_outside_the_mesh_are_refused() {
         let mesh = shapes::plane(1.0, 2).expect("plane");
         let field = FieldSpec::Constant {
