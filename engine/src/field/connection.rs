@@ -198,6 +198,11 @@ impl Connection {
         })
     }
 
+    /// The tiny shift `sigma = SHIFT tr(A) / tr(M)` that keeps `A + sigma M` definite.
+    pub(crate) fn shift(&self) -> f64 {
+        super::design::SHIFT * self.diagonal.iter().sum::<f64>() / self.mass.iter().sum::<f64>()
+    }
+
     pub(crate) fn len(&self) -> usize {
         self.mass.len()
     }

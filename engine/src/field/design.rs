@@ -61,8 +61,14 @@
 //! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
 //! solve with that factor per inverse iteration. Measured on the Stanford bunny (35k
 //! vertices, 2 cores, release): a guided solve 0.17 s (0.19 s with smoothing), the
-//! smoothest field about 1 s (48 iterations at the default tolerance).
-//! Deterministic: fixed iteration order, sequential solves, fixed start vector.
+//! smoothest field about 1 s (48 iterations at the default tolerance). With a
+//! smoothness shift the estimate of `lambda_1` adds one factorization and a few solves
+//! ([`LAMBDA_TOLERANCE`]); [`constrained_line_field`]'s callers that compute their
+//! guidance (the designed field's curvature) do it on a second thread meanwhile.
+//! Deterministic: fixed iteration order, sequential solves, fixed start vector; the
+//! second thread computes an independent input, so the thread count changes nothing.
+
+use std::borrow::Cow;
 
 use faer::c64;
 use glam::DVec3;
@@ -74,8 +80,15 @@ use crate::mesh::TriMesh;
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
 pub const SHIFT: f64 = 1e-8;
 
-/// Inverse iterations behind the estimate of `lambda_1` for [`LineFieldOptions::smoothness`].
+/// Most inverse iterations behind the estimate of `lambda_1` for
+/// [`LineFieldOptions::smoothness`].
 pub const LAMBDA_ITERATIONS: usize = 12;
+
+/// The estimate of `lambda_1` stops once an inverse iteration changes it by at most
+/// this fraction. It converges from above, a few percent a step near the end: on the
+/// bunny it stops after 5 steps about 1% above the 12-step value, which moves the
+/// shift `s lambda_1` as little as changing `s` from 0.5 to 0.505 would.
+pub const LAMBDA_TOLERANCE: f64 = 1e-2;
 
 /// Settings of the line-field solvers.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -198,11 +211,22 @@ pub fn smoothest_line_field(
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let system = Connection::build(mesh, options.smoothing * area_radius(mesh))?;
-    let trace_a: f64 = system.diagonal.iter().sum();
-    let trace_m: f64 = system.mass.iter().sum();
-    let shift = SHIFT * trace_a / trace_m;
-    let (x, iterations) =
-        smallest_eigenvector(mesh, &system, shift, options.iterations, options.tolerance)?;
+    smoothest_on(mesh, &system, options)
+}
+
+/// [`smoothest_line_field`] with the connection already built.
+fn smoothest_on(
+    mesh: &TriMesh,
+    system: &Connection,
+    options: &LineFieldOptions,
+) -> Result<LineField, LineFieldError> {
+    let (x, iterations) = smallest_eigenvector(
+        mesh,
+        system,
+        system.shift(),
+        options.iterations,
+        options.tolerance,
+    )?;
     Ok(system.output(&x, iterations))
 }
 
@@ -320,8 +344,38 @@ pub fn constrained_line_field(
     constraints: &[LineConstraint],
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
+    constrained_line_field_with(mesh, || Cow::Borrowed(guidance), constraints, options)
+}
+
+/// [`constrained_line_field`] with the guidance made by `guidance` on one thread while
+/// the connection is built (and `lambda_1` estimated) on another; the result does not
+/// depend on the thread count.
+pub(crate) fn constrained_line_field_with<'g>(
+    mesh: &TriMesh,
+    guidance: impl FnOnce() -> Cow<'g, [DVec3]> + Send,
+    constraints: &[LineConstraint],
+    options: &LineFieldOptions,
+) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let n = mesh.vertex_count();
+    let smoothing = options.smoothing * area_radius(mesh);
+    // lambda_1 depends on the connection alone, so it is estimated beside the guidance
+    // whenever the shift may apply (it is dropped when a component turns out unpinned).
+    let may_shift = options.smoothness > 0.0 && (options.weight > 0.0 || !constraints.is_empty());
+    let (built, guidance) = rayon::join(
+        || -> Result<_, LineFieldError> {
+            let system = Connection::build(mesh, smoothing)?;
+            let lambda = if may_shift {
+                Some(smallest_eigenvalue(mesh, &system, system.shift())?)
+            } else {
+                None
+            };
+            Ok((system, lambda))
+        },
+        guidance,
+    );
+    let (system, lambda_1) = built?;
+    let guidance = &*guidance;
     if !guidance.is_empty() && guidance.len() != n {
         return Err(LineFieldError::GuidanceLength {
             expected: n,
@@ -331,7 +385,6 @@ pub fn constrained_line_field(
     if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
         return Err(LineFieldError::NonFiniteGuidance { vertex });
     }
-    let system = Connection::build(mesh, options.smoothing * area_radius(mesh))?;
     let fixed = fixed_values(mesh, &system, constraints)?;
     let q = if options.weight > 0.0 && !guidance.is_empty() {
         guidance_lines(mesh, &system, guidance)
@@ -339,7 +392,7 @@ pub fn constrained_line_field(
         vec![None; n]
     };
     if constraints.is_empty() && q.iter().all(Option::is_none) {
-        return smoothest_line_field(mesh, options);
+        return smoothest_on(mesh, &system, options);
     }
 
     // Unknowns: the free vertices in index order, then the fixed ones (slots >= free).
@@ -363,7 +416,7 @@ pub fn constrained_line_field(
     // Only a connected component with no guidance and no constraint leaves the system
     // singular (its field is free up to a rotation); the shift pins it to zero there and
     // leaves every other component exact.
-    let shift = SHIFT * system.diagonal.iter().sum::<f64>() / area;
+    let shift = system.shift();
     let component = |v: usize| mesh.face_components()[mesh.vertex_faces(v as u32)[0] as usize];
     let mut pinned = vec![false; mesh.component_count()];
     for v in 0..n {
@@ -374,10 +427,9 @@ pub fn constrained_line_field(
     // Knöppel et al.'s shift toward the smoothest field: `A - s lambda_1 M` weighs each
     // eigenvector of the connection Laplacian by `1 / (lambda_k - s lambda_1)`, so with
     // `s` near 1 the smoothest one dominates wherever the guidance leaves room.
-    let pull = if options.smoothness > 0.0 && pinned.iter().all(|&p| p) {
-        options.smoothness * smallest_eigenvalue(mesh, &system, shift)?
-    } else {
-        0.0
+    let pull = match lambda_1 {
+        Some(lambda) if pinned.iter().all(|&p| p) => options.smoothness * lambda,
+        _ => 0.0,
     };
     let mut extra = vec![0.0; n];
     let mut rhs = vec![c64::new(0.0, 0.0); free];
@@ -446,7 +498,7 @@ fn smallest_eigenvalue(
     system: &Connection,
     shift: f64,
 ) -> Result<f64, LineFieldError> {
-    let (x, _) = smallest_eigenvector(mesh, system, shift, LAMBDA_ITERATIONS, 1e-6)?;
+    let (x, _) = smallest_eigenvector(mesh, system, shift, LAMBDA_ITERATIONS, LAMBDA_TOLERANCE)?;
     Ok(system.energy(&x))
 }
 

@@ -1,5 +1,5 @@
 //! The designed field source ([`FieldSpec::Designed`](super::FieldSpec::Designed)): a
-//! smooth line field with few singularities ([`constrained_line_field`]) for the
+//! smooth line field with few singularities ([`constrained_line_field`](super::constrained_line_field)) for the
 //! direction, and per-vertex anisotropy and density from their own sources.
 //!
 //! Input: a mesh and a [`Design`]. Output: a [`TensorField`] and the [`LineField`]
@@ -7,12 +7,13 @@
 //! for the smoothed normals, and inverse power iterations for the smoothest field), and
 //! O(V) per curvature estimate.
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
-use super::design::{LineConstraint, LineField, LineFieldOptions, constrained_line_field};
+use super::design::{LineConstraint, LineField, LineFieldOptions, constrained_line_field_with};
 use super::guidance::{curvature_guidance, direction_guidance};
 use super::params::{
     direction, eigenvalues, invalid, non_negative, positive,
@@ -294,13 +295,14 @@ impl Design {
     /// The line field of this design on `mesh`.
     pub fn line_field(&self, mesh: &TriMesh) -> Result<LineField, FieldError> {
         self.validate()?;
-        let mut curvatures = CurvatureCache::default();
-        let guidance = match &self.guidance {
-            Guidance::Smoothest => Vec::new(),
-            Guidance::Curvature {
-                smoothing_iterations,
-            } => curvature_guidance(mesh, curvatures.get(mesh, *smoothing_iterations)),
-            Guidance::Direction(d) => direction_guidance(mesh, DVec3::from(*d)),
+        let guidance = || {
+            Cow::Owned(match &self.guidance {
+                Guidance::Smoothest => Vec::new(),
+                Guidance::Curvature {
+                    smoothing_iterations,
+                } => curvature_guidance(mesh, &principal_curvatures(mesh, *smoothing_iterations)),
+                Guidance::Direction(d) => direction_guidance(mesh, DVec3::from(*d)),
+            })
         };
         let constraints: Vec<LineConstraint> = self
             .constraints
@@ -319,9 +321,9 @@ impl Design {
             smoothing: self.smoothing,
             ..LineFieldOptions::default()
         };
-        Ok(constrained_line_field(
+        Ok(constrained_line_field_with(
             mesh,
-            &guidance,
+            guidance,
             &constraints,
             &options,
         )?)
