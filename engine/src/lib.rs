@@ -10,6 +10,7 @@
 //! | [`mesh`] | `TriMesh` with adjacency; OBJ/PLY loading, writing, built-in shapes |
 //! | [`io`] | OBJ/PLY readers, PLY/CSV writers for meshes and samples |
 //! | [`field`] | per-vertex tensor fields and their sources |
+//! | [`linalg`] | sparse matrices, algebraic multigrid and preconditioned conjugate gradients |
 //! | [`segment`] | field-driven segmentation into singularity-free discs |
 //! | [`param`] | field-aligned parameterization of one segment, with its validity |
 //! | [`curve`] | Hilbert curves and adaptive Hilbert cells with measures |
@@ -23,6 +24,7 @@ pub mod analysis;
 pub mod curve;
 pub mod field;
 pub mod io;
+pub mod linalg;
 pub mod mesh;
 pub mod param;
 pub mod planar;

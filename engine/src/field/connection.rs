@@ -19,8 +19,12 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, traits::ComplexField};
 use glam::DVec3;
 
-use super::line_field::{LineField, LineFieldError, MIN_EDGE_WEIGHT};
+use super::line_field::{
+    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
+    SOLVE_TOLERANCE,
+};
 use super::{frame_angle, tangent_frame, vertex_frames};
+use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
 use crate::mesh::TriMesh;
 
 /// One edge of the energy: `w |z_b - r z_a|^2`.
@@ -30,6 +34,27 @@ pub(crate) struct EdgeTerm {
     pub(crate) b: usize,
     pub(crate) weight: f64,
     pub(crate) rotation: c64,
+}
+
+/// A factored (direct) or preconditioned (multigrid) system, ready to solve.
+pub(crate) enum Factor {
+    Direct(Llt<usize, c64>),
+    Multigrid(Amg<c64>),
+}
+
+impl Factor {
+    /// Solves in place, checking the result is finite.
+    pub(crate) fn solve(&self, z: &mut [c64]) -> Result<(), LineFieldError> {
+        match self {
+            Self::Direct(llt) => solve(llt, z),
+            Self::Multigrid(amg) => {
+                let rhs = z.to_vec();
+                z.iter_mut().for_each(|v| *v = c64::new(0.0, 0.0));
+                pcg::solve(amg, &rhs, z, SOLVE_TOLERANCE, MAX_CG_ITERATIONS)?;
+                Ok(())
+            }
+        }
+    }
 }
 
 /// The discretised energy and mass of a mesh (see the [module docs](self)).
@@ -43,6 +68,28 @@ pub(crate) struct Connection {
     /// The symbolic Cholesky of the whole mesh's pattern, made on first use (an energy
     /// evaluation never needs it).
     symbolic: OnceCell<SymbolicLlt<usize>>,
+    /// Whether solves use multigrid (else sparse Cholesky).
+    multigrid: bool,
+}
+
+/// Most conjugate-gradient iterations of one multigrid-preconditioned solve (a mesh
+/// needs 10 to 25; more means the system is nearly singular).
+const MAX_CG_ITERATIONS: usize = 500;
+
+/// Relative residual of the multigrid solves of the normal smoothing: the smoothed
+/// normals only steer the connection, so 1e-5 (about 1e-5 rad) is ample.
+const NORMALS_TOLERANCE: f64 = 1e-5;
+
+/// Assembles the full Hermitian matrix from lower-triangle triplets.
+fn hermitian_csr<T: Scalar>(n: usize, lower: &[Triplet<usize, usize, T>]) -> Csr<T> {
+    let mut full = Vec::with_capacity(2 * lower.len());
+    for t in lower {
+        full.push((t.row, t.col, t.val));
+        if t.row != t.col {
+            full.push((t.col, t.row, t.val.conj()));
+        }
+    }
+    Csr::from_triplets(n, n, &full)
 }
 
 /// Cotangent weight per edge (clamped below at [`MIN_EDGE_WEIGHT`]) and lumped mass per
@@ -150,18 +197,27 @@ fn assemble<T: ComplexField>(
 impl Connection {
     /// The system of `mesh`, with its connection measured in the tangent planes of the
     /// normals smoothed over `smoothing` (a length; 0 keeps the mesh's own normals).
-    pub(crate) fn build(mesh: &TriMesh, smoothing: f64) -> Result<Self, LineFieldError> {
+    pub(crate) fn build(
+        mesh: &TriMesh,
+        smoothing: f64,
+        solver: LinearSolver,
+    ) -> Result<Self, LineFieldError> {
         let n = mesh.vertex_count();
         if n == 0 {
             return Err(LineFieldError::EmptyMesh);
         }
+        let multigrid = match solver {
+            LinearSolver::Auto => n >= MULTIGRID_VERTICES,
+            LinearSolver::Direct => false,
+            LinearSolver::Multigrid => true,
+        };
         let (weights, mass) = weights_and_mass(mesh);
         if !(mass.iter().sum::<f64>() > 0.0) {
             return Err(LineFieldError::EmptyMesh);
         }
         let symbolic = OnceCell::new();
         let frames: Vec<(DVec3, DVec3)> = if smoothing > 0.0 {
-            smoothed_normals(mesh, &weights, &mass, smoothing, &symbolic)?
+            smoothed_normals(mesh, &weights, &mass, smoothing, &symbolic, multigrid)?
                 .into_iter()
                 .map(tangent_frame)
                 .collect()
@@ -195,12 +251,13 @@ impl Connection {
             diagonal,
             mass,
             symbolic,
+            multigrid,
         })
     }
 
     /// The tiny shift `sigma = SHIFT tr(A) / tr(M)` that keeps `A + sigma M` definite.
     pub(crate) fn shift(&self) -> f64 {
-        super::design::SHIFT * self.diagonal.iter().sum::<f64>() / self.mass.iter().sum::<f64>()
+        SHIFT * self.diagonal.iter().sum::<f64>() / self.mass.iter().sum::<f64>()
     }
 
     pub(crate) fn len(&self) -> usize {
@@ -216,7 +273,7 @@ impl Connection {
         extra: &[f64],
         slots: &[usize],
         free: usize,
-    ) -> Result<Llt<usize, c64>, LineFieldError> {
+    ) -> Result<Factor, LineFieldError> {
         // Entry (b, a) of A is -w r_ab; entry (a, b) is its conjugate.
         let t = triplets(
             mesh,
@@ -229,13 +286,18 @@ impl Connection {
                 if b_below { c } else { c.conj() }
             },
         );
+        if self.multigrid {
+            let matrix = hermitian_csr(free, &t);
+            let amg = Amg::new(matrix, None, &AmgOptions::default())?;
+            return Ok(Factor::Multigrid(amg));
+        }
         let matrix = assemble(free, &t)?;
         let symbolic = if free == self.len() {
             shared_symbolic(&self.symbolic, &matrix)?
         } else {
             symbolic(matrix.symbolic())?
         };
-        numeric(symbolic, &matrix)
+        Ok(Factor::Direct(numeric(symbolic, &matrix)?))
     }
 
     /// `E(z) = sum_edges w |z_b - r z_a|^2`.
@@ -244,6 +306,17 @@ impl Connection {
             .iter()
             .map(|e| e.weight * (z[e.b] - e.rotation * z[e.a]).norm_sqr())
             .sum()
+    }
+
+    /// `A z`.
+    pub(crate) fn apply(&self, z: &[c64]) -> Vec<c64> {
+        let mut out = vec![c64::new(0.0, 0.0); z.len()];
+        for e in &self.edges {
+            let d = z[e.b] - e.rotation * z[e.a];
+            out[e.b] += d * e.weight;
+            out[e.a] -= e.rotation.conj() * d * e.weight;
+        }
+        out
     }
 
     /// `z^H M z`.
@@ -301,6 +374,7 @@ fn smoothed_normals(
     mass: &[f64],
     length: f64,
     symbolic: &OnceCell<SymbolicLlt<usize>>,
+    multigrid: bool,
 ) -> Result<Vec<DVec3>, LineFieldError> {
     let t = length * length;
     let n = mesh.vertex_count();
@@ -310,14 +384,24 @@ fn smoothed_normals(
         diagonal[b as usize] += t * w;
     }
     let all: Vec<usize> = (0..n).collect();
-    let matrix = assemble(
-        n,
-        &triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]),
-    )?;
-    let llt = numeric(shared_symbolic(symbolic, &matrix)?, &matrix)?;
+    let lower = triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]);
     let normals = mesh.vertex_normals();
     let mut rhs = Mat::from_fn(n, 3, |v, k| mass[v] * normals[v][k]);
-    llt.solve_in_place(rhs.as_mut());
+    if multigrid {
+        let amg = Amg::new(hermitian_csr(n, &lower), None, &AmgOptions::default())?;
+        for k in 0..3 {
+            let b: Vec<f64> = (0..n).map(|v| rhs[(v, k)]).collect();
+            let mut x = vec![0.0; n];
+            pcg::solve(&amg, &b, &mut x, NORMALS_TOLERANCE, MAX_CG_ITERATIONS)?;
+            for (v, x) in x.into_iter().enumerate() {
+                rhs[(v, k)] = x;
+            }
+        }
+    } else {
+        let matrix = assemble(n, &lower)?;
+        let llt = numeric(shared_symbolic(symbolic, &matrix)?, &matrix)?;
+        llt.solve_in_place(rhs.as_mut());
+    }
     Ok((0..n)
         .map(|v| {
             let smooth = DVec3::new(rhs[(v, 0)], rhs[(v, 1)], rhs[(v, 2)]);

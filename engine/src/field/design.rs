@@ -73,12 +73,12 @@ use std::borrow::Cow;
 use faer::c64;
 use glam::DVec3;
 
-use super::connection::{Connection, solve};
-pub use super::line_field::{LineField, LineFieldError, MIN_EDGE_WEIGHT};
+use super::connection::{Connection, Factor};
+pub use super::line_field::{
+    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
+    SOLVE_TOLERANCE,
+};
 use crate::mesh::TriMesh;
-
-/// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
-pub const SHIFT: f64 = 1e-8;
 
 /// Most inverse iterations behind the estimate of `lambda_1` for
 /// [`LineFieldOptions::smoothness`].
@@ -119,6 +119,8 @@ pub struct LineFieldOptions {
     /// The iteration stops when the Rayleigh quotient changes by at most `tolerance`
     /// times its value (or the shift, whichever is larger). Range `(0, inf)`; default 1e-8.
     pub tolerance: f64,
+    /// How the sparse systems are solved; default [`LinearSolver::Auto`].
+    pub solver: LinearSolver,
 }
 
 impl Default for LineFieldOptions {
@@ -129,6 +131,7 @@ impl Default for LineFieldOptions {
             smoothing: 0.0,
             iterations: 200,
             tolerance: 1e-8,
+            solver: LinearSolver::Auto,
         }
     }
 }
@@ -210,7 +213,7 @@ pub fn smoothest_line_field(
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
-    let system = Connection::build(mesh, options.smoothing * area_radius(mesh))?;
+    let system = Connection::build(mesh, options.smoothing * area_radius(mesh), options.solver)?;
     smoothest_on(mesh, &system, options)
 }
 
@@ -236,7 +239,7 @@ fn smoothest_on(
 /// after `max` steps. Returns the iterate (`z^H M z = 1`) and the steps taken.
 fn inverse_iteration(
     system: &Connection,
-    llt: &faer::sparse::linalg::solvers::Llt<usize, c64>,
+    factor: &Factor,
     mut x: Vec<c64>,
     max: usize,
     tolerance: f64,
@@ -256,11 +259,31 @@ fn inverse_iteration(
     normalise(&mut x)?;
     let mut previous = f64::INFINITY;
     let mut iterations = 0;
+    let mut work = match factor {
+        Factor::Multigrid(amg) => Some((amg, amg.workspace())),
+        Factor::Direct(_) => None,
+    };
     for _ in 0..max {
-        for (z, m) in x.iter_mut().zip(&system.mass) {
-            *z *= *m;
+        if let Some((amg, work)) = &mut work {
+            // Preconditioned inverse iteration (Knyazev and Neymeyr 2003): a V-cycle
+            // on the eigen-residual instead of a full solve, since the iteration only
+            // needs the direction.
+            let rho = system.energy(&x);
+            let mut residual = system.apply(&x);
+            for ((r, z), m) in residual.iter_mut().zip(&x).zip(&system.mass) {
+                *r -= *z * (rho * m);
+            }
+            let mut step = vec![c64::new(0.0, 0.0); x.len()];
+            amg.apply(&residual, &mut step, work);
+            for (z, s) in x.iter_mut().zip(&step) {
+                *z -= *s;
+            }
+        } else {
+            for (z, m) in x.iter_mut().zip(&system.mass) {
+                *z *= *m;
+            }
+            factor.solve(&mut x)?;
         }
-        solve(llt, &mut x)?;
         normalise(&mut x)?;
         iterations += 1;
         let rayleigh = system.energy(&x);
@@ -291,7 +314,7 @@ pub fn line_field_energy(mesh: &TriMesh, directions: &[DVec3]) -> Result<f64, Li
     if let Some(vertex) = directions.iter().position(|d| !d.is_finite()) {
         return Err(LineFieldError::NonFiniteGuidance { vertex });
     }
-    let system = Connection::build(mesh, 0.0)?;
+    let system = Connection::build(mesh, 0.0, LinearSolver::Auto)?;
     let z: Vec<c64> = guidance_lines(mesh, &system, directions)
         .into_iter()
         .map(|q| q.map_or(c64::new(0.0, 0.0), |(_, u)| u))
@@ -364,7 +387,7 @@ pub(crate) fn constrained_line_field_with<'g>(
     let may_shift = options.smoothness > 0.0 && (options.weight > 0.0 || !constraints.is_empty());
     let (built, guidance) = rayon::join(
         || -> Result<_, LineFieldError> {
-            let system = Connection::build(mesh, smoothing)?;
+            let system = Connection::build(mesh, smoothing, options.solver)?;
             let lambda = if may_shift {
                 Some(smallest_eigenvalue(mesh, &system, system.shift())?)
             } else {
@@ -459,9 +482,10 @@ pub(crate) fn constrained_line_field_with<'g>(
     }
     if free > 0 {
         // An estimate of lambda_1 slightly too high could leave the shifted system
-        // indefinite: then halve the shift (three times at most, then none).
+        // indefinite (a failed factorization, or conjugate gradients meeting negative
+        // curvature): then halve the shift (three times at most, then none).
         let mut attempt = 0;
-        let llt = loop {
+        rhs = loop {
             let shifted: Vec<f64> = if attempt < 4 {
                 let back = pull * (1.0 - 0.5f64.powi(attempt));
                 extra
@@ -476,13 +500,16 @@ pub(crate) fn constrained_line_field_with<'g>(
                     .map(|(d, m)| d + pull * m)
                     .collect()
             };
-            match system.factor(mesh, &shifted, &slots, free) {
-                Ok(llt) => break llt,
+            let mut z = rhs.clone();
+            let solved = system
+                .factor(mesh, &shifted, &slots, free)
+                .and_then(|factor| factor.solve(&mut z));
+            match solved {
+                Ok(()) => break z,
                 Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
                 Err(_) => attempt += 1,
             }
         };
-        solve(&llt, &mut rhs)?;
     }
     let x: Vec<c64> = (0..n)
         .map(|v| fixed[v].unwrap_or_else(|| rhs[slots[v]]))
@@ -515,11 +542,11 @@ fn smallest_eigenvector(
     let n = system.len();
     let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
     let identity: Vec<usize> = (0..n).collect();
-    let llt = system.factor(mesh, &extra, &identity, n)?;
+    let factor = system.factor(mesh, &extra, &identity, n)?;
     let start: Vec<c64> = (0..n as u64)
         .map(|v| c64::new(start_value(2 * v), start_value(2 * v + 1)))
         .collect();
-    inverse_iteration(system, &llt, start, max, tolerance, shift)
+    inverse_iteration(system, &factor, start, max, tolerance, shift)
 }
 
 /// `t` in the frame `(e1, e2)` as a unit doubled-angle complex number, with its

@@ -317,3 +317,131 @@ fn the_smoothness_shift_trades_guidance_for_smoothness() {
         })
     ));
 }
+
+/// Largest line angle (radians) between two fields' directions over the vertices where
+/// both magnitudes exceed `floor` times the median magnitude (near singularities the
+/// direction is ill-defined), and how many vertices that is.
+fn largest_angle(a: &LineField, b: &LineField, floor: f64) -> (f64, usize) {
+    let mut sorted = a.magnitudes.clone();
+    sorted.sort_by(f64::total_cmp);
+    let floor = floor * sorted[sorted.len() / 2];
+    let count = a
+        .magnitudes
+        .iter()
+        .zip(&b.magnitudes)
+        .filter(|(ma, mb)| **ma > floor && **mb > floor)
+        .count();
+    let angle = a
+        .directions
+        .iter()
+        .zip(&b.directions)
+        .zip(a.magnitudes.iter().zip(&b.magnitudes))
+        .filter(|(_, (ma, mb))| **ma > floor && **mb > floor)
+        .map(|((x, y), _)| x.cross(*y).length().atan2(x.dot(*y).abs()))
+        .fold(0.0, f64::max);
+    (angle, count)
+}
+
+fn with_solver(solver: LinearSolver, options: LineFieldOptions) -> LineFieldOptions {
+    LineFieldOptions { solver, ..options }
+}
+
+#[test]
+fn multigrid_and_sparse_cholesky_give_the_same_smoothest_field() {
+    let mesh = shapes::sphere(1.0, 8).expect("sphere");
+    let base = LineFieldOptions::default();
+    let direct =
+        smoothest_line_field(&mesh, &with_solver(LinearSolver::Direct, base)).expect("direct");
+    let multigrid = smoothest_line_field(&mesh, &with_solver(LinearSolver::Multigrid, base))
+        .expect("multigrid");
+    println!(
+        "sphere smoothest: eigenvalue {} (direct, {} iterations) vs {} (multigrid, {} iterations)",
+        direct.rayleigh, direct.iterations, multigrid.rayleigh, multigrid.iterations
+    );
+    assert!((multigrid.rayleigh - direct.rayleigh).abs() < 1e-5 * direct.rayleigh);
+    assert_eq!(singularities(&mesh, &multigrid).0, 4);
+    assert!((singularities(&mesh, &multigrid).1 - 2.0).abs() < 1e-9);
+}
+
+#[test]
+fn multigrid_and_sparse_cholesky_give_the_same_guided_fields() {
+    let Some(mesh) = crate::io::shared_mesh("stanford-bunny.obj") else {
+        return;
+    };
+    let guidance = crate::field::guidance::curvature_guidance(
+        &mesh,
+        &crate::field::principal_curvatures(&mesh, 2),
+    );
+    // The designed field's defaults: smoothed connection, shift toward the smoothest
+    // field (lambda_1 by inverse iteration or by preconditioned inverse iteration).
+    let base = LineFieldOptions {
+        weight: 1.0,
+        smoothness: 0.5,
+        smoothing: 0.3,
+        ..LineFieldOptions::default()
+    };
+    let direct = guided_line_field(&mesh, &guidance, &with_solver(LinearSolver::Direct, base))
+        .expect("direct");
+    let multigrid = guided_line_field(
+        &mesh,
+        &guidance,
+        &with_solver(LinearSolver::Multigrid, base),
+    )
+    .expect("multigrid");
+    let (angle, count) = largest_angle(&direct, &multigrid, 0.2);
+    assert!(
+        count > mesh.vertex_count() * 9 / 10,
+        "{count} vertices compared"
+    );
+    let (dc, ds) = singularities(&mesh, &direct);
+    let (mc, ms) = singularities(&mesh, &multigrid);
+    println!(
+        "bunny guided: largest angle {angle:.2e} rad where |z| > 0.2 median; singular faces {dc} \
+         (sum {ds}) direct, {mc} (sum {ms}) multigrid"
+    );
+    // lambda_1's two estimates stop at 1% and differ by a few percent, which moves the
+    // shift (and the field) by about as much as s = 0.5 -> 0.52 would.
+    assert!(angle < 0.02, "{angle} rad");
+    assert!(
+        dc.abs_diff(mc) <= 2 && (ds - ms).abs() < 1e-9,
+        "{dc} vs {mc}"
+    );
+    // Without the shift both solve the same system to 1e-8.
+    let plain = LineFieldOptions {
+        smoothness: 0.0,
+        ..base
+    };
+    let direct = guided_line_field(&mesh, &guidance, &with_solver(LinearSolver::Direct, plain))
+        .expect("direct");
+    let multigrid = guided_line_field(
+        &mesh,
+        &guidance,
+        &with_solver(LinearSolver::Multigrid, plain),
+    )
+    .expect("multigrid");
+    let (angle, count) = largest_angle(&direct, &multigrid, 0.2);
+    assert!(
+        count > mesh.vertex_count() * 9 / 10,
+        "{count} vertices compared"
+    );
+    println!("bunny guided without shift: largest angle {angle:.2e} rad");
+    assert!(angle < 1e-5, "{angle} rad");
+    assert_eq!(
+        singularities(&mesh, &direct),
+        singularities(&mesh, &multigrid)
+    );
+}
+
+#[test]
+fn multigrid_meets_constraints_exactly() {
+    let mesh = shapes::plane(1.0, 24).expect("plane");
+    let pin = LineConstraint {
+        vertex: 0,
+        direction: DVec3::new(1.0, 1.0, 0.0),
+    };
+    let options = with_solver(LinearSolver::Multigrid, LineFieldOptions::default());
+    let field = constrained_line_field(&mesh, &[], &[pin], &options).expect("field");
+    let diagonal = DVec3::new(1.0, 1.0, 0.0).normalize();
+    let spread = largest_spread(&field.directions, diagonal);
+    assert!(spread < 1e-6, "{spread} rad");
+}

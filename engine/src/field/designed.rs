@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
-use super::design::{LineConstraint, LineField, LineFieldOptions, constrained_line_field_with};
+use super::design::{
+    LineConstraint, LineField, LineFieldOptions, LinearSolver, constrained_line_field_with,
+};
 use super::guidance::{curvature_guidance, direction_guidance};
 use super::params::{
     direction, eigenvalues, invalid, non_negative, positive,
@@ -187,6 +189,9 @@ pub struct Design {
     pub anisotropy: Anisotropy,
     /// Density. Default `Constant(1.0)`.
     pub density: Density,
+    /// How the sparse systems are solved (see [`LinearSolver`]): `Auto` (default),
+    /// `Direct` or `Multigrid`. Results agree to the solver tolerance.
+    pub solver: LinearSolver,
 }
 
 impl Default for Design {
@@ -199,6 +204,7 @@ impl Default for Design {
             constraints: Vec::new(),
             anisotropy: Anisotropy::default(),
             density: Density::default(),
+            solver: LinearSolver::Auto,
         }
     }
 }
@@ -319,6 +325,7 @@ impl Design {
             weight: self.weight,
             smoothness: self.smoothness,
             smoothing: self.smoothing,
+            solver: self.solver,
             ..LineFieldOptions::default()
         };
         Ok(constrained_line_field_with(

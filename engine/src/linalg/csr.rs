@@ -1,0 +1,248 @@
+//! Compressed sparse row matrices: assembly from triplets, products, and the Galerkin
+//! triple product of the multigrid hierarchy.
+
+use super::scalar::Scalar;
+
+/// A sparse matrix in compressed sparse row form, with sorted, unique columns per row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Csr<S> {
+    rows: usize,
+    cols: usize,
+    starts: Vec<usize>,
+    indices: Vec<u32>,
+    values: Vec<S>,
+}
+
+impl<S: Scalar> Csr<S> {
+    /// The `rows x cols` matrix with the sum of the values given at each position
+    /// (`(row, col, value)`; entries out of range are a caller bug and panic).
+    /// Deterministic: duplicates are summed in the order given.
+    pub fn from_triplets(rows: usize, cols: usize, triplets: &[(usize, usize, S)]) -> Self {
+        let mut counts = vec![0usize; rows + 1];
+        for &(r, c, _) in triplets {
+            assert!(
+                r < rows && c < cols,
+                "triplet ({r}, {c}) outside {rows} x {cols}"
+            );
+            counts[r + 1] += 1;
+        }
+        for r in 0..rows {
+            counts[r + 1] += counts[r];
+        }
+        let mut next = counts.clone();
+        let mut order = vec![(0u32, S::ZERO); triplets.len()];
+        for &(r, c, v) in triplets {
+            order[next[r]] = (c as u32, v);
+            next[r] += 1;
+        }
+        let mut starts = Vec::with_capacity(rows + 1);
+        let mut indices = Vec::with_capacity(triplets.len());
+        let mut values = Vec::with_capacity(triplets.len());
+        starts.push(0);
+        for r in 0..rows {
+            let row = &mut order[counts[r]..counts[r + 1]];
+            // A stable sort keeps duplicates in the given order, so their sum is too.
+            row.sort_by_key(|&(c, _)| c);
+            for &(c, v) in row.iter() {
+                if indices.len() > starts[r] && indices[indices.len() - 1] == c {
+                    let last = values.len() - 1;
+                    values[last] += v;
+                } else {
+                    indices.push(c);
+                    values.push(v);
+                }
+            }
+            starts.push(indices.len());
+        }
+        Self {
+            rows,
+            cols,
+            starts,
+            indices,
+            values,
+        }
+    }
+
+    /// Rows.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Columns.
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+
+    /// Stored entries.
+    pub fn nnz(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Row `r`'s columns and values.
+    pub fn row(&self, r: usize) -> (&[u32], &[S]) {
+        let range = self.starts[r]..self.starts[r + 1];
+        (&self.indices[range.clone()], &self.values[range])
+    }
+
+    /// Row `r`'s columns and mutable values.
+    pub fn row_mut(&mut self, r: usize) -> (&[u32], &mut [S]) {
+        let range = self.starts[r]..self.starts[r + 1];
+        (&self.indices[range.clone()], &mut self.values[range])
+    }
+
+    /// The diagonal entry of row `r` (zero if absent).
+    pub fn diagonal(&self, r: usize) -> S {
+        let (cols, vals) = self.row(r);
+        cols.binary_search(&(r as u32)).map_or(S::ZERO, |k| vals[k])
+    }
+
+    /// `y = A x`.
+    pub fn mul_into(&self, x: &[S], y: &mut [S]) {
+        for (r, out) in y.iter_mut().enumerate().take(self.rows) {
+            let (cols, vals) = self.row(r);
+            let mut sum = S::ZERO;
+            for (&c, &v) in cols.iter().zip(vals) {
+                sum += v * x[c as usize];
+            }
+            *out = sum;
+        }
+    }
+
+    /// `A^H` (the conjugate transpose).
+    pub fn adjoint(&self) -> Self {
+        let mut counts = vec![0usize; self.cols + 1];
+        for &c in &self.indices {
+            counts[c as usize + 1] += 1;
+        }
+        for c in 0..self.cols {
+            counts[c + 1] += counts[c];
+        }
+        let mut next = counts.clone();
+        let mut indices = vec![0u32; self.nnz()];
+        let mut values = vec![S::ZERO; self.nnz()];
+        // Rows in increasing order, so every output row comes out sorted.
+        for r in 0..self.rows {
+            let (cols, vals) = self.row(r);
+            for (&c, &v) in cols.iter().zip(vals) {
+                let k = next[c as usize];
+                indices[k] = r as u32;
+                values[k] = v.conj();
+                next[c as usize] += 1;
+            }
+        }
+        Self {
+            rows: self.cols,
+            cols: self.rows,
+            starts: counts,
+            indices,
+            values,
+        }
+    }
+
+    /// `A B` (Gustavson's row-by-row product with a dense accumulator).
+    pub fn matmul(&self, b: &Self) -> Self {
+        assert_eq!(
+            self.cols, b.rows,
+            "matmul of {}x{} by {}x{}",
+            self.rows, self.cols, b.rows, b.cols
+        );
+        let mut accumulator = vec![S::ZERO; b.cols];
+        let mut seen = vec![false; b.cols];
+        let mut pattern: Vec<u32> = Vec::new();
+        let mut starts = Vec::with_capacity(self.rows + 1);
+        let mut indices = Vec::new();
+        let mut values = Vec::new();
+        starts.push(0);
+        for r in 0..self.rows {
+            let (cols, vals) = self.row(r);
+            for (&k, &a) in cols.iter().zip(vals) {
+                let (bc, bv) = b.row(k as usize);
+                for (&c, &v) in bc.iter().zip(bv) {
+                    let c = c as usize;
+                    if !seen[c] {
+                        seen[c] = true;
+                        pattern.push(c as u32);
+                    }
+                    accumulator[c] += a * v;
+                }
+            }
+            pattern.sort_unstable();
+            for &c in &pattern {
+                indices.push(c);
+                values.push(accumulator[c as usize]);
+                accumulator[c as usize] = S::ZERO;
+                seen[c as usize] = false;
+            }
+            pattern.clear();
+            starts.push(indices.len());
+        }
+        Self {
+            rows: self.rows,
+            cols: b.cols,
+            starts,
+            indices,
+            values,
+        }
+    }
+
+    /// `Q A Q^T` for the permutation taking old index `order[k]` to new index `k`
+    /// (`position[order[k]] == k`).
+    pub fn permuted(&self, order: &[u32], position: &[u32]) -> Self {
+        let mut starts = Vec::with_capacity(self.rows + 1);
+        let mut indices = Vec::with_capacity(self.nnz());
+        let mut values = Vec::with_capacity(self.nnz());
+        let mut row: Vec<(u32, S)> = Vec::new();
+        starts.push(0);
+        for &old in order {
+            let (cols, vals) = self.row(old as usize);
+            row.clear();
+            row.extend(
+                cols.iter()
+                    .zip(vals)
+                    .map(|(&c, &v)| (position[c as usize], v)),
+            );
+            row.sort_unstable_by_key(|&(c, _)| c);
+            for &(c, v) in &row {
+                indices.push(c);
+                values.push(v);
+            }
+            starts.push(indices.len());
+        }
+        Self {
+            rows: self.rows,
+            cols: self.cols,
+            starts,
+            indices,
+            values,
+        }
+    }
+
+    /// A breadth-first (Cuthill-McKee) order of the rows of a square matrix, each
+    /// connected part from its lowest row: neighbours end up near each other, which
+    /// keeps the solvers' memory accesses local whatever the input order. `order[k]` is
+    /// the old index of new row `k`.
+    pub fn breadth_first_order(&self) -> Vec<u32> {
+        let n = self.rows;
+        let mut visited = vec![false; n];
+        let mut order = Vec::with_capacity(n);
+        for start in 0..n {
+            if visited[start] {
+                continue;
+            }
+            visited[start] = true;
+            let mut head = order.len();
+            order.push(start as u32);
+            while head < order.len() {
+                let r = order[head] as usize;
+                head += 1;
+                for &c in self.row(r).0 {
+                    if !visited[c as usize] {
+                        visited[c as usize] = true;
+                        order.push(c);
+                    }
+                }
+            }
+        }
+        order
+    }
+}

@@ -1,0 +1,101 @@
+//! The two scalar types of the solvers, real and complex, behind one small trait.
+
+use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+
+use faer::c64;
+
+/// A real (`f64`) or complex (`c64`) number, as the solvers need it.
+pub trait Scalar:
+    Copy
+    + Send
+    + Sync
+    + PartialEq
+    + std::fmt::Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + 'static
+{
+    /// Zero.
+    const ZERO: Self;
+    /// The real number `r`.
+    fn real(r: f64) -> Self;
+    /// The real part.
+    fn re(self) -> f64;
+    /// The complex conjugate (the number itself when real).
+    fn conj(self) -> Self;
+    /// `|x|^2`.
+    fn abs2(self) -> f64;
+    /// `x / |x|`, or 1 for zero.
+    fn phase(self) -> Self {
+        let a = self.abs2().sqrt();
+        if a > 0.0 {
+            self.scale(1.0 / a)
+        } else {
+            Self::real(1.0)
+        }
+    }
+    /// `x * r` for a real `r`.
+    fn scale(self, r: f64) -> Self;
+    /// Whether both parts are finite.
+    fn is_finite(self) -> bool;
+}
+
+impl Scalar for f64 {
+    const ZERO: Self = 0.0;
+    fn real(r: f64) -> Self {
+        r
+    }
+    fn re(self) -> f64 {
+        self
+    }
+    fn conj(self) -> Self {
+        self
+    }
+    fn abs2(self) -> f64 {
+        self * self
+    }
+    fn scale(self, r: f64) -> Self {
+        self * r
+    }
+    fn is_finite(self) -> bool {
+        f64::is_finite(self)
+    }
+}
+
+impl Scalar for c64 {
+    const ZERO: Self = c64::new(0.0, 0.0);
+    fn real(r: f64) -> Self {
+        c64::new(r, 0.0)
+    }
+    fn re(self) -> f64 {
+        self.re
+    }
+    fn conj(self) -> Self {
+        c64::new(self.re, -self.im)
+    }
+    fn abs2(self) -> f64 {
+        self.re * self.re + self.im * self.im
+    }
+    fn scale(self, r: f64) -> Self {
+        c64::new(self.re * r, self.im * r)
+    }
+    fn is_finite(self) -> bool {
+        self.re.is_finite() && self.im.is_finite()
+    }
+}
+
+/// `sum conj(x_i) y_i`.
+pub fn dot<S: Scalar>(x: &[S], y: &[S]) -> S {
+    x.iter()
+        .zip(y)
+        .fold(S::ZERO, |acc, (a, b)| acc + a.conj() * *b)
+}
+
+/// `sum |x_i|^2`.
+pub fn norm2<S: Scalar>(x: &[S]) -> f64 {
+    x.iter().map(|v| v.abs2()).sum()
+}

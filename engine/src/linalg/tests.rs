@@ -1,0 +1,282 @@
+use faer::c64;
+
+use super::*;
+
+/// The `k x k` grid graph Laplacian plus `mass` on the diagonal, with each edge
+/// `(a, b)` carrying the rotation `rotation(a, b)`: entry `(b, a) = -r`, `(a, b) = -conj r`.
+fn grid<S: Scalar>(k: usize, mass: f64, rotation: impl Fn(usize, usize) -> S) -> Csr<S> {
+    let n = k * k;
+    let mut t = Vec::new();
+    let mut diagonal = vec![mass; n];
+    let mut edge = |a: usize, b: usize, t: &mut Vec<(usize, usize, S)>| {
+        let r = rotation(a, b);
+        t.push((b, a, -r));
+        t.push((a, b, -r.conj()));
+        diagonal[a] += 1.0;
+        diagonal[b] += 1.0;
+    };
+    for i in 0..k {
+        for j in 0..k {
+            let v = i * k + j;
+            if j + 1 < k {
+                edge(v, v + 1, &mut t);
+            }
+            if i + 1 < k {
+                edge(v, v + k, &mut t);
+            }
+        }
+    }
+    t.extend(
+        diagonal
+            .iter()
+            .enumerate()
+            .map(|(v, &d)| (v, v, S::real(d))),
+    );
+    Csr::from_triplets(n, n, &t)
+}
+
+fn rhs<S: Scalar>(n: usize, make: impl Fn(f64, f64) -> S) -> Vec<S> {
+    (0..n)
+        .map(|v| {
+            make(
+                ((v * 7919) % 31) as f64 - 15.0,
+                ((v * 104_729) % 17) as f64 - 8.0,
+            )
+        })
+        .collect()
+}
+
+/// `|b - A x| / |b|`, computed independently of the solver.
+fn residual<S: Scalar>(a: &Csr<S>, x: &[S], b: &[S]) -> f64 {
+    let mut ax = vec![S::ZERO; x.len()];
+    a.mul_into(x, &mut ax);
+    let r: Vec<S> = ax.iter().zip(b).map(|(l, r)| *r - *l).collect();
+    (norm2(&r) / norm2(b)).sqrt()
+}
+
+/// A pseudo-random phase per vertex (a gauge).
+fn gauge(v: usize) -> f64 {
+    (v as f64 * 0.754_877_666_246_692_8).fract() * std::f64::consts::TAU
+}
+
+#[test]
+fn triplets_sum_duplicates_and_sort_rows() {
+    let a = Csr::from_triplets(2, 3, &[(0, 2, 1.0), (0, 0, 2.0), (0, 2, 3.0), (1, 1, 5.0)]);
+    assert_eq!(a.row(0), (&[0u32, 2][..], &[2.0, 4.0][..]));
+    assert_eq!(a.row(1), (&[1u32][..], &[5.0][..]));
+    assert_eq!(a.nnz(), 3);
+    assert_eq!(a.diagonal(1), 5.0);
+    assert_eq!(a.diagonal(0), 2.0);
+}
+
+#[test]
+fn matmul_and_adjoint_match_dense_products() {
+    // Small complex matrices with a fixed pattern; compare with dense arithmetic.
+    let (m, k, n) = (5, 4, 6);
+    let entry = |seed: usize, r: usize, c: usize| {
+        let h = (seed * 31 + r * 7 + c * 13) % 11;
+        (!h.is_multiple_of(3)).then(|| c64::new(h as f64 - 5.0, (h * h % 7) as f64 - 3.0))
+    };
+    let triplets = |seed, rows, cols| {
+        let mut t = Vec::new();
+        for r in 0..rows {
+            for c in 0..cols {
+                if let Some(v) = entry(seed, r, c) {
+                    t.push((r, c, v));
+                }
+            }
+        }
+        t
+    };
+    let a = Csr::from_triplets(m, k, &triplets(1, m, k));
+    let b = Csr::from_triplets(k, n, &triplets(2, k, n));
+    let ab = a.matmul(&b);
+    let dense = |x: &Csr<c64>, r: usize, c: usize| {
+        let (cols, vals) = x.row(r);
+        cols.iter()
+            .position(|&k| k as usize == c)
+            .map_or(c64::new(0.0, 0.0), |k| vals[k])
+    };
+    for r in 0..m {
+        for c in 0..n {
+            let expected = (0..k).fold(c64::new(0.0, 0.0), |s, j| {
+                s + dense(&a, r, j) * dense(&b, j, c)
+            });
+            assert!((dense(&ab, r, c) - expected).norm() < 1e-12, "({r}, {c})");
+        }
+    }
+    let h = a.adjoint();
+    assert_eq!((h.rows(), h.cols()), (k, m));
+    for r in 0..m {
+        for c in 0..k {
+            assert_eq!(dense(&h, c, r), dense(&a, r, c).conj());
+        }
+    }
+}
+
+#[test]
+fn permutation_round_trips() {
+    let a = grid(6, 0.5, |_, _| 1.0);
+    let order = a.breadth_first_order();
+    let mut sorted = order.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, (0..36).collect::<Vec<u32>>(), "a permutation");
+    let mut position = vec![0u32; 36];
+    for (k, &o) in order.iter().enumerate() {
+        position[o as usize] = k as u32;
+    }
+    let p = a.permuted(&order, &position);
+    let back = p.permuted(&position, &order);
+    assert_eq!(back, a);
+    // Breadth-first: each row after the first has an earlier neighbour.
+    for k in 1..36 {
+        assert!(p.row(k).0.iter().any(|&c| (c as usize) < k), "row {k}");
+    }
+}
+
+#[test]
+fn dense_cholesky_solves_and_rejects_indefinite() {
+    let n = 12;
+    // A = B^H B + I for a fixed complex B: Hermitian positive definite.
+    let b = |r: usize, c: usize| {
+        c64::new(
+            ((r * 3 + c * 5) % 7) as f64 - 3.0,
+            ((r + 2 * c) % 5) as f64 - 2.0,
+        )
+    };
+    let a = |i: usize, j: usize| {
+        let s = (0..n).fold(c64::new(0.0, 0.0), |s, k| s + b(k, i).conj() * b(k, j));
+        if i == j { s + c64::new(1.0, 0.0) } else { s }
+    };
+    let chol = DenseCholesky::new(n, a).expect("positive definite");
+    let x_true: Vec<c64> = (0..n).map(|i| c64::new(i as f64, 1.0 - i as f64)).collect();
+    let mut x: Vec<c64> = (0..n)
+        .map(|i| (0..n).fold(c64::new(0.0, 0.0), |s, j| s + a(i, j) * x_true[j]))
+        .collect();
+    chol.solve(&mut x);
+    for (l, r) in x.iter().zip(&x_true) {
+        assert!((l - r).norm() < 1e-9, "{l} vs {r}");
+    }
+    let indefinite = DenseCholesky::new(2, |i, j| if i == j { 1.0 } else { 2.0 });
+    assert_eq!(
+        indefinite.err(),
+        Some(LinalgError::NotPositiveDefinite { pivot: 1 })
+    );
+}
+
+#[test]
+fn multigrid_solves_a_laplacian_in_few_iterations_at_any_size() {
+    let mut counts = Vec::new();
+    for k in [32, 64, 128] {
+        let a = grid(k, 1e-4, |_, _| 1.0);
+        let amg = Amg::new(a.clone(), None, &AmgOptions::default()).expect("hierarchy");
+        assert!(amg.level_sizes().len() >= 2, "{:?}", amg.level_sizes());
+        assert!(
+            amg.operator_complexity() < 2.0,
+            "{}",
+            amg.operator_complexity()
+        );
+        let b = rhs(k * k, |x, _| x);
+        let mut x = vec![0.0; k * k];
+        let report = pcg::solve(&amg, &b, &mut x, 1e-10, 200).expect("converges");
+        assert!(residual(&a, &x, &b) < 2e-10);
+        counts.push(report.iterations);
+    }
+    // Multigrid: the iteration count hardly grows with 16x the unknowns (plain
+    // conjugate gradients would need about 4x as many).
+    assert!(counts[2] <= counts[0] + 8 && counts[2] < 40, "{counts:?}");
+}
+
+#[test]
+fn multigrid_transports_the_near_null_vector_along_a_connection() {
+    // A flat connection in a random gauge: r_ab = e^(i (phi_b - phi_a)). Its near-null
+    // vector e^(i phi) is as smooth as the constant is for the real Laplacian, once
+    // the aggregates transport phases; without phases the coarse space would miss it.
+    let k = 96;
+    let real = grid(k, 1e-4, |_, _| 1.0);
+    let complex = grid(k, 1e-4, |a, b| c64::from_polar(1.0, gauge(b) - gauge(a)));
+    let amg_real = Amg::new(real, None, &AmgOptions::default()).expect("real");
+    let amg = Amg::new(complex.clone(), None, &AmgOptions::default()).expect("complex");
+    let b_real = rhs(k * k, |x, _| x);
+    let b: Vec<c64> = b_real
+        .iter()
+        .enumerate()
+        .map(|(v, x)| c64::from_polar(*x, gauge(v)))
+        .collect();
+    let mut x_real = vec![0.0; k * k];
+    let mut x = vec![c64::new(0.0, 0.0); k * k];
+    let real_report = pcg::solve(&amg_real, &b_real, &mut x_real, 1e-9, 300).expect("real");
+    let report = pcg::solve(&amg, &b, &mut x, 1e-9, 300).expect("complex");
+    assert!(residual(&complex, &x, &b) < 2e-9);
+    // The gauge-transformed problem is the same problem: same iterations, and the
+    // solution is the real one in the gauge.
+    assert!(
+        report.iterations.abs_diff(real_report.iterations) <= 1,
+        "{report:?} vs {real_report:?}"
+    );
+    for (v, (z, r)) in x.iter().zip(&x_real).enumerate() {
+        assert!((z - c64::from_polar(*r, gauge(v))).norm() < 1e-6 * (1.0 + r.abs()));
+    }
+}
+
+#[test]
+fn multigrid_reports_indefinite_and_unconverged_systems() {
+    // Laplacian minus a shift above its smallest eigenvalue: indefinite.
+    let a = grid(40, -0.05, |_, _| 1.0);
+    let b = rhs(1600, |x, _| x);
+    let mut x = vec![0.0; 1600];
+    let err = Amg::new(a, None, &AmgOptions::default())
+        .and_then(|amg| pcg::solve(&amg, &b, &mut x, 1e-10, 500).map(|_| ()))
+        .expect_err("indefinite");
+    assert!(
+        matches!(
+            err,
+            LinalgError::Indefinite { .. } | LinalgError::NotPositiveDefinite { .. }
+        ),
+        "{err}"
+    );
+    let a = grid(40, 1e-4, |_, _| 1.0);
+    let amg = Amg::new(a, None, &AmgOptions::default()).expect("hierarchy");
+    let err = pcg::solve(&amg, &b, &mut x, 1e-14, 2).expect_err("budget of 2");
+    assert!(
+        matches!(err, LinalgError::NotConverged { iterations: 2, .. }),
+        "{err}"
+    );
+    let mut bad = b.clone();
+    bad[3] = f64::NAN;
+    assert_eq!(
+        pcg::solve(&amg, &bad, &mut x, 1e-8, 10).err(),
+        Some(LinalgError::NonFinite)
+    );
+}
+
+#[test]
+fn multigrid_handles_isolated_unknowns_and_is_deterministic() {
+    // A grid plus 500 unknowns coupled to nothing: they are left to the smoother.
+    let k = 48;
+    let g = grid(k, 1e-3, |_, _| 1.0);
+    let n = k * k + 500;
+    let mut t = Vec::new();
+    for r in 0..k * k {
+        let (cols, vals) = g.row(r);
+        t.extend(cols.iter().zip(vals).map(|(&c, &v)| (r, c as usize, v)));
+    }
+    t.extend((k * k..n).map(|v| (v, v, 2.0)));
+    let a = Csr::from_triplets(n, n, &t);
+    let b = rhs(n, |x, _| x);
+    let solve = || {
+        let amg = Amg::new(a.clone(), None, &AmgOptions::default()).expect("hierarchy");
+        let mut x = vec![0.0; n];
+        pcg::solve(&amg, &b, &mut x, 1e-10, 100).expect("converges");
+        x
+    };
+    let x = solve();
+    assert!(residual(&a, &x, &b) < 2e-10);
+    assert!(
+        x[k * k..]
+            .iter()
+            .zip(&b[k * k..])
+            .all(|(x, b)| (x - b / 2.0).abs() < 1e-9)
+    );
+    assert_eq!(x, solve(), "bit-identical on a second run");
+}
