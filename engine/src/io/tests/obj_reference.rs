@@ -1,4 +1,6 @@
-//! Wavefront OBJ reader on top of `tobj`, with line-accurate errors.
+//! The OBJ reader before issue 18, kept as the reference the one-pass reader
+//! (`io/obj.rs`) is tested against: `tobj` (a dev-dependency now) with a prescan for
+//! line-accurate errors. Test code only.
 //!
 //! Input: the file's bytes. Output: positions and polygons by *position* index (`tobj`'s
 //! multi-index mode, so texture and normal seams never split a vertex), all objects and
@@ -19,7 +21,7 @@ use glam::DVec3;
 use crate::mesh::{MeshError, TriMesh};
 
 /// Parses OBJ `bytes` into a mesh; `path` only names the file in errors.
-pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
+pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
     let text = prepare_text(bytes);
     // `..Default::default()` covers the fields tobj adds under its `merging` and
     // `reordering` features, should any crate in a build enable them.
@@ -106,7 +108,7 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
             });
         }
     }
-    super::build_mesh(path, scan.positions, corners, &face_ends)
+    crate::io::build_mesh(path, scan.positions, corners, &face_ends)
 }
 
 /// Prepares the text for `tobj`, keeping every byte offset and line number: a UTF-8
@@ -157,17 +159,17 @@ fn line_of_offset(text: &[u8], consumed: usize) -> usize {
 
 /// What a light scan of the text finds.
 #[derive(Debug, Default, PartialEq)]
-pub(crate) struct Prescan {
+pub(super) struct Prescan {
     /// First malformed line: 1-based line and what is wrong.
-    pub(crate) problem: Option<(usize, String)>,
+    pub(super) problem: Option<(usize, String)>,
     /// All `v` positions in file order (divided by their weight `w`, as `tobj` does).
-    pub(crate) positions: Vec<DVec3>,
+    pub(super) positions: Vec<DVec3>,
 }
 
 /// Scans OBJ text for the first problem `tobj` would stop at (or overflow on), following
 /// `tobj`'s rules: positive indices may point anywhere in the file, negative ones count
 /// back from the records read so far. Collects the positions on the way.
-pub(crate) fn prescan(text: &[u8]) -> Prescan {
+pub(super) fn prescan(text: &[u8]) -> Prescan {
     let lines = || {
         text.split(|&b| b == b'\n')
             .map(|l| std::str::from_utf8(l).ok())
