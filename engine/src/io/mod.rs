@@ -6,8 +6,8 @@
 //! whole file is read into memory once and parsed from there.
 //!
 //! - [`load`] picks the reader by extension (`.obj`, `.ply`, any case).
-//! - OBJ ([`parse_obj`]): read with `tobj` by position index, so UV and normal seams
-//!   never split a vertex; all objects and groups become one mesh; polygons are
+//! - OBJ ([`parse_obj`]): our own one-pass reader, by position index, so UV and
+//!   normal seams never split a vertex; all objects and groups become one mesh; polygons are
 //!   fan-triangulated (reported as [`MeshWarning::TriangulatedPolygons`]); negative
 //!   (relative) indices work; errors name the line. Polylines (`l`) and points are
 //!   ignored.

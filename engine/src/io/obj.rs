@@ -1,17 +1,22 @@
-//! Wavefront OBJ reader on top of `tobj`, with line-accurate errors.
+//! Wavefront OBJ reader: one pass over the text, line-accurate errors.
 //!
-//! Input: the file's bytes. Output: positions and polygons by *position* index (`tobj`'s
-//! multi-index mode, so texture and normal seams never split a vertex), all objects and
-//! groups merged into one mesh. Cost: O(file size).
+//! Input: the file's bytes. Output: positions in file order and polygons by *position*
+//! index (texture and normal indices are checked, then dropped, so UV and normal seams
+//! never split a vertex), all objects and groups merged into one mesh. Cost: O(file
+//! size), with no allocation per line: the text is checked as UTF-8 once, lines are
+//! found with `str::split` (a memchr search), coordinates are parsed with `str::parse`
+//! (core's Eisel-Lemire parser, the algorithm of the `fast-float` crate, exact) and
+//! indices with a digit loop.
 //!
-//! `tobj` reports errors without a line, so a light scan of the text ([`prescan`]) runs
-//! first and reports the first wrong line (bad number, index 0, index out of range,
-//! malformed corner) with its number; should `tobj` still fail, the line where it
-//! stopped is reported with its message.
+//! The rules are those of the `tobj`-based reader this replaces (kept as the test
+//! reference in `io/tests/obj_reference.rs`), so meshes, repairs and errors are the
+//! same: positive indices may point anywhere in the file, negative ones count back
+//! from the records read so far; texture and normal indices are ignored when the file
+//! has no texture coordinates or normals; faces of one or two corners are skipped (as
+//! points and lines), a face with no corner is an empty polygon; `l` records are
+//! ignored. Where `tobj` failed on valid input (a vertex colour on some vertices only,
+//! a positive index to a vertex defined after the next `o`/`g`), this reader loads it.
 
-use std::borrow::Cow;
-use std::collections::HashMap;
-use std::io::Cursor;
 use std::path::Path;
 
 use glam::DVec3;
@@ -20,20 +25,7 @@ use crate::mesh::{MeshError, TriMesh};
 
 /// Parses OBJ `bytes` into a mesh; `path` only names the file in errors.
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
-    let text = prepare_text(bytes);
-    // `..Default::default()` covers the fields tobj adds under its `merging` and
-    // `reordering` features, should any crate in a build enable them.
-    #[allow(clippy::needless_update)]
-    let options = tobj::LoadOptions {
-        single_index: false,
-        triangulate: false,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
-    };
-    // Scan first: line-accurate errors, and tobj never sees an index it could
-    // overflow on (it multiplies texture/normal indices unchecked).
-    let scan = prescan(&text);
+    let scan = scan(bytes);
     if let Some((line, what)) = scan.problem {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
@@ -41,163 +33,95 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
             what,
         });
     }
-    let mut cursor = Cursor::new(&text[..]);
-    // Materials are irrelevant here: never open .mtl files.
-    let loaded = tobj::load_obj_buf(&mut cursor, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    });
-    let models = match loaded {
-        Ok((models, _materials)) => models,
-        Err(e) => {
-            let consumed = usize::try_from(cursor.position())
-                .unwrap_or(usize::MAX)
-                .min(text.len());
-            return Err(MeshError::Syntax {
-                path: path.to_path_buf(),
-                line: line_of_offset(&text, consumed),
-                what: format!("{e} (reported by tobj)"),
-            });
-        }
-    };
-
-    // tobj numbers vertices per object in order of first use; map them back to the
-    // file's numbering through their positions (bitwise, as parsed by both). Equal
-    // positions map to their first occurrence, which TriMesh would merge them into
-    // anyway, so repairs, warnings and the input vertex map are as for file indices.
-    let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
-    let mut first_at: HashMap<[u64; 3], u32> = HashMap::with_capacity(scan.positions.len());
-    for (i, p) in scan.positions.iter().enumerate() {
-        first_at.entry(key(*p)).or_insert(i as u32);
-    }
-    let mut corners: Vec<u32> = Vec::new();
-    let mut face_ends: Vec<usize> = Vec::new();
-    for model in &models {
-        let mesh = &model.mesh;
-        let file_index: Option<Vec<u32>> = mesh
-            .positions
-            .chunks_exact(3)
-            .map(|p| first_at.get(&key(DVec3::new(p[0], p[1], p[2]))).copied())
-            .collect();
-        let mut start = 0;
-        let mut push_face = |arity: usize| -> Option<()> {
-            for &i in mesh.indices.get(start..start + arity)? {
-                corners.push(*file_index.as_ref()?.get(i as usize)?);
-            }
-            start += arity;
-            face_ends.push(corners.len());
-            Some(())
-        };
-        let complete = if mesh.face_arities.is_empty() {
-            (0..mesh.indices.len() / 3).try_for_each(|_| push_face(3))
-        } else {
-            mesh.face_arities
-                .iter()
-                .try_for_each(|&a| push_face(a as usize))
-        };
-        if complete.is_none() {
-            // Not reachable unless tobj and our scan read a vertex differently.
-            return Err(MeshError::Syntax {
-                path: path.to_path_buf(),
-                line: 0,
-                what: format!(
-                    "tobj's faces of object `{}` do not match the file's vertices",
-                    model.name
-                ),
-            });
-        }
-    }
-    super::build_mesh(path, scan.positions, corners, &face_ends)
+    super::build_mesh(path, scan.positions, scan.corners, &scan.face_ends)
 }
 
-/// Prepares the text for `tobj`, keeping every byte offset and line number: a UTF-8
-/// byte-order mark becomes spaces (else the first keyword is not recognised), and `l`
-/// (polyline) records become comments (`tobj` reads them like faces, so a polyline of
-/// three or more points would become a triangle).
-fn prepare_text(bytes: &[u8]) -> Cow<'_, [u8]> {
-    const BOM: &[u8] = b"\xEF\xBB\xBF";
-    let is_polyline = |line: &[u8]| {
-        let mut words = line
-            .split(|b| b.is_ascii_whitespace())
-            .filter(|w| !w.is_empty());
-        words.next() == Some(b"l".as_slice())
-    };
-    let bom = bytes.starts_with(BOM);
-    if !bom && !bytes.split(|&b| b == b'\n').any(is_polyline) {
-        return Cow::Borrowed(bytes);
-    }
-    let mut owned = bytes.to_vec();
-    if bom {
-        owned[..BOM.len()].fill(b' ');
-    }
-    let mut polylines = Vec::new();
-    let mut start = 0;
-    for line in owned.split(|&b| b == b'\n') {
-        if is_polyline(line)
-            && let Some(k) = line.iter().position(|&b| b == b'l')
-        {
-            polylines.push(start + k);
-        }
-        start += line.len() + 1;
-    }
-    for at in polylines {
-        owned[at] = b'#';
-    }
-    Cow::Owned(owned)
-}
-
-/// 1-based line containing the last consumed byte (`consumed` bytes read).
-fn line_of_offset(text: &[u8], consumed: usize) -> usize {
-    let newlines = text[..consumed].iter().filter(|&&b| b == b'\n').count();
-    if consumed > 0 && text[consumed - 1] != b'\n' {
-        newlines + 1
-    } else {
-        newlines.max(1)
-    }
-}
-
-/// What a light scan of the text finds.
-#[derive(Debug, Default, PartialEq)]
-pub(crate) struct Prescan {
+/// What one pass over the text finds.
+#[derive(Debug, PartialEq)]
+pub(crate) struct Scan {
     /// First malformed line: 1-based line and what is wrong.
     pub(crate) problem: Option<(usize, String)>,
-    /// All `v` positions in file order (divided by their weight `w`, as `tobj` does).
+    /// All `v` positions in file order (divided by their weight `w`).
     pub(crate) positions: Vec<DVec3>,
+    /// Position indices (from 0) of every face's corners, concatenated.
+    pub(crate) corners: Vec<u32>,
+    /// End (exclusive) of each face in `corners`.
+    pub(crate) face_ends: Vec<usize>,
 }
 
-/// Scans OBJ text for the first problem `tobj` would stop at (or overflow on), following
-/// `tobj`'s rules: positive indices may point anywhere in the file, negative ones count
-/// back from the records read so far. Collects the positions on the way.
-pub(crate) fn prescan(text: &[u8]) -> Prescan {
-    let lines = || {
-        text.split(|&b| b == b'\n')
-            .map(|l| std::str::from_utf8(l).ok())
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// Reads OBJ text: positions and faces, or the first problem. Never panics.
+pub(crate) fn scan(bytes: &[u8]) -> Scan {
+    // Check UTF-8 once; a bad line is reported where it is, after the lines before it.
+    let (text, bad_line) = match std::str::from_utf8(bytes) {
+        Ok(text) => (text, None),
+        Err(e) => {
+            let valid = bytes.get(..e.valid_up_to()).unwrap_or_default();
+            let line_start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            let newlines = valid[..line_start].iter().filter(|&&b| b == b'\n').count();
+            let text = std::str::from_utf8(&valid[..line_start]).unwrap_or_default();
+            (text, Some(newlines + 1))
+        }
     };
-    // Totals of v, vt, vn records (positive indices are checked against these).
-    let mut totals = [0usize; 3];
-    for line in lines().flatten() {
-        match line.split_ascii_whitespace().next() {
-            Some("v") => totals[0] += 1,
-            Some("vt") => totals[1] += 1,
-            Some("vn") => totals[2] += 1,
-            _ => {}
+    // A byte-order mark is whitespace before the first keyword.
+    let body = if bytes.starts_with(BOM) {
+        text.get(BOM.len()..).unwrap_or_default()
+    } else {
+        text
+    };
+    let mut reader = Reader {
+        bytes,
+        totals: None,
+        seen: [0; 3],
+        faces: 0,
+        nameless_usemtl: None,
+    };
+    let mut scan = Scan {
+        problem: None,
+        // Pre-sized for a typical scan: about 30 bytes per vertex and per face line.
+        positions: Vec::with_capacity(bytes.len() / 64),
+        corners: Vec::with_capacity(bytes.len() / 12),
+        face_ends: Vec::with_capacity(bytes.len() / 32),
+    };
+    for (k, line) in body.split('\n').enumerate() {
+        if let Some(what) = reader.line(k + 1, line, &mut scan) {
+            scan.problem = Some((k + 1, what));
+            return scan;
         }
     }
-    let mut scan = Prescan {
-        problem: None,
-        positions: Vec::with_capacity(totals[0]),
+    scan.problem = match (bad_line, reader.nameless_usemtl) {
+        (Some(line), _) => Some((line, "line is not valid UTF-8".to_owned())),
+        (None, Some(line)) => Some((line, "`usemtl` needs a material name".to_owned())),
+        (None, None) => None,
     };
-    let mut seen = [0usize; 3];
-    let mut faces = 0usize;
-    for (k, line) in lines().enumerate() {
-        let Some(line) = line else {
-            scan.problem = Some((k + 1, "line is not valid UTF-8".to_owned()));
-            break;
-        };
+    scan
+}
+
+/// The state of the pass: records seen so far, and the file's totals once needed.
+struct Reader<'a> {
+    bytes: &'a [u8],
+    /// Totals of `v`, `vt`, `vn` records in the whole file: counted only when an index
+    /// points past the records read so far (a forward reference) or at a kind not yet
+    /// seen, which files written in the usual order never do.
+    totals: Option<[usize; 3]>,
+    /// `v`, `vt`, `vn` records read so far, the current one included.
+    seen: [usize; 3],
+    /// Faces of three or more corners read so far (how messages number faces).
+    faces: usize,
+    /// The first `usemtl` line without a name, which `tobj` rejected once the rest of
+    /// the file was fine (the name is what follows the first space, trimmed).
+    nameless_usemtl: Option<usize>,
+}
+
+impl Reader<'_> {
+    /// Reads line `number` (from 1) into `scan`; the problem, if any.
+    fn line(&mut self, number: usize, line: &str, scan: &mut Scan) -> Option<String> {
         let mut words = line.split_ascii_whitespace();
-        let problem = match words.next() {
-            Some("v") => {
-                seen[0] += 1;
-                match check_vertex(words) {
+        match words.next()? {
+            "v" => {
+                self.seen[0] += 1;
+                match vertex(words) {
                     Ok(p) => {
                         scan.positions.push(p);
                         None
@@ -205,63 +129,184 @@ pub(crate) fn prescan(text: &[u8]) -> Prescan {
                     Err(what) => Some(what),
                 }
             }
-            Some("vt") => {
-                seen[1] += 1;
+            "vt" => {
+                self.seen[1] += 1;
                 check_numbers(words, 2, "texture coordinate")
             }
-            Some("vn") => {
-                seen[2] += 1;
+            "vn" => {
+                self.seen[2] += 1;
                 check_numbers(words, 3, "normal")
             }
-            Some("f") => {
-                let mut corners = 0;
-                let problem = words.find_map(|c| {
-                    corners += 1;
-                    check_corner(c, faces, &seen, &totals)
-                });
-                if corners >= 3 {
-                    faces += 1;
+            "f" => self.face(words, scan),
+            "usemtl" => {
+                let name = line.split_once(' ').map_or("", |(_, name)| name);
+                if name.trim().is_empty() && self.nameless_usemtl.is_none() {
+                    self.nameless_usemtl = Some(number);
                 }
-                problem
+                None
             }
             _ => None,
-        };
-        if let Some(what) = problem {
-            scan.problem = Some((k + 1, what));
-            break;
         }
     }
-    scan
+
+    fn face<'w>(
+        &mut self,
+        words: impl Iterator<Item = &'w str>,
+        scan: &mut Scan,
+    ) -> Option<String> {
+        let start = scan.corners.len();
+        let mut count = 0;
+        for corner in words {
+            count += 1;
+            match self.corner(corner) {
+                Ok(v) => scan.corners.push(v),
+                Err(what) => return Some(what),
+            }
+        }
+        match count {
+            // One or two corners are a point or a line, which a mesh leaves out.
+            1 | 2 => scan.corners.truncate(start),
+            // No corner: an empty polygon, which the mesh rejects (TooFewCorners).
+            0 => scan.face_ends.push(start),
+            _ => {
+                scan.face_ends.push(scan.corners.len());
+                self.faces += 1;
+            }
+        }
+        None
+    }
+
+    /// One face corner `v`, `v/vt`, `v//vn` or `v/vt/vn`: its position index from 0.
+    fn corner(&mut self, corner: &str) -> Result<u32, String> {
+        const KINDS: [(&str, &str); 3] = [
+            ("vertex", "vertices"),
+            ("texture coordinate", "texture coordinates"),
+            ("normal", "normals"),
+        ];
+        let face = self.faces;
+        let mut parts = corner.split('/');
+        let all = [parts.next(), parts.next(), parts.next()];
+        if parts.next().is_some() || all[0].is_none_or(str::is_empty) {
+            return Err(format!("face {face}: malformed corner `{corner}`"));
+        }
+        let mut position = 0;
+        for (kind, part) in all.into_iter().enumerate() {
+            let Some(part) = part.filter(|p| !p.is_empty()) else {
+                continue;
+            };
+            let Some(index) = parse_index(part) else {
+                return Err(format!(
+                    "face {face}: corner `{corner}` has a non-integer index"
+                ));
+            };
+            let seen = self.seen[kind];
+            // Decided without the totals where the records read so far settle it.
+            let settled = if kind > 0 && seen == 0 {
+                None
+            } else if index <= 0 || index as u64 <= seen as u64 {
+                Some(seen)
+            } else {
+                None
+            };
+            let available = match settled {
+                Some(seen) => seen,
+                None => {
+                    let totals = *self.totals.get_or_insert_with(|| count_records(self.bytes));
+                    if kind > 0 && totals[kind] == 0 {
+                        continue; // no texture coordinates or normals: ignored
+                    }
+                    if index > 0 { totals[kind] } else { seen }
+                }
+            };
+            let (name, plural) = KINDS[kind];
+            let ok = match index {
+                0 => {
+                    return Err(format!(
+                        "face {face} refers to {name} 0 (OBJ indices start at 1)"
+                    ));
+                }
+                i if i > 0 => i as u64 <= available as u64,
+                i => i.unsigned_abs() <= available as u64,
+            };
+            if !ok {
+                return Err(format!(
+                    "face {face} refers to {name} {index}, but {available} {plural} are defined{}",
+                    if index < 0 { " before it" } else { "" }
+                ));
+            }
+            if kind == 0 {
+                let from_zero = if index > 0 {
+                    index - 1
+                } else {
+                    seen as i64 + index
+                };
+                // In range of the records, so of a u32 for any mesh that fits memory.
+                position = u32::try_from(from_zero).unwrap_or(u32::MAX);
+            }
+        }
+        Ok(position)
+    }
 }
 
-/// A `v` record: three numbers, then nothing, a non-zero weight, or an RGB colour.
-fn check_vertex<'a>(values: impl Iterator<Item = &'a str>) -> Result<DVec3, String> {
-    let mut p = [0.0; 3];
-    let mut count = 0;
-    let mut weight = None;
-    for (i, value) in values.enumerate() {
-        count += 1;
-        match i {
-            0..3 => {
-                p[i] = value
-                    .parse()
-                    .map_err(|_| format!("vertex coordinate `{value}` is not a number"))?;
-            }
-            // tobj ignores colour values it cannot parse, but not a bad weight.
-            3 => weight = value.parse::<f64>().ok(),
+/// Totals of `v`, `vt` and `vn` records over every line that is valid UTF-8.
+fn count_records(bytes: &[u8]) -> [usize; 3] {
+    let body = bytes.strip_prefix(BOM).unwrap_or(bytes);
+    let mut totals = [0; 3];
+    for line in body.split(|&b| b == b'\n') {
+        let Ok(line) = std::str::from_utf8(line) else {
+            continue;
+        };
+        match line.split_ascii_whitespace().next() {
+            Some("v") => totals[0] += 1,
+            Some("vt") => totals[1] += 1,
+            Some("vn") => totals[2] += 1,
             _ => {}
         }
     }
-    match (count, weight) {
-        (0..3, _) => Err(format!(
-            "a vertex needs 3 coordinates, this one has {count}"
-        )),
-        (3, _) | (6, _) => Ok(DVec3::from_array(p)),
-        (4, Some(w)) if w != 0.0 => Ok(DVec3::from_array(p.map(|c| c / w))),
-        (4, Some(_)) => Err("vertex weight w is 0".to_owned()),
-        (4, None) => Err("vertex weight w is not a number".to_owned()),
+    totals
+}
+
+/// An integer as `i64::from_str` reads it; plain digits (with an optional `-`) take a
+/// short loop, anything else (`+`, 19 digits or more, junk) goes to `from_str`.
+fn parse_index(s: &str) -> Option<i64> {
+    let b = s.as_bytes();
+    let (negative, digits) = match b.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        _ => (false, b),
+    };
+    if digits.is_empty() || digits.len() > 18 || !digits.iter().all(u8::is_ascii_digit) {
+        return s.parse().ok();
+    }
+    let value = digits
+        .iter()
+        .fold(0i64, |v, &d| v * 10 + i64::from(d - b'0'));
+    Some(if negative { -value } else { value })
+}
+
+/// A `v` record: three numbers, then nothing, a non-zero weight, or an RGB colour
+/// (whose values are not checked).
+fn vertex<'a>(mut values: impl Iterator<Item = &'a str>) -> Result<DVec3, String> {
+    let mut p = [0.0; 3];
+    for (i, c) in p.iter_mut().enumerate() {
+        let Some(value) = values.next() else {
+            return Err(format!("a vertex needs 3 coordinates, this one has {i}"));
+        };
+        *c = value
+            .parse()
+            .map_err(|_| format!("vertex coordinate `{value}` is not a number"))?;
+    }
+    let Some(fourth) = values.next() else {
+        return Ok(DVec3::from_array(p));
+    };
+    let extra = 1 + values.count();
+    match (extra, fourth.parse::<f64>().ok()) {
+        (3, _) => Ok(DVec3::from_array(p)),
+        (1, Some(w)) if w != 0.0 => Ok(DVec3::from_array(p.map(|c| c / w))),
+        (1, Some(_)) => Err("vertex weight w is 0".to_owned()),
+        (1, None) => Err("vertex weight w is not a number".to_owned()),
         _ => Err(format!(
-            "vertex has {count} values; expected 3, 4 (x y z w) or 6 (x y z r g b)"
+            "vertex has {} values; expected 3, 4 (x y z w) or 6 (x y z r g b)",
+            3 + extra
         )),
     }
 }
@@ -276,54 +321,6 @@ fn check_numbers<'a>(
             Some(w) if w.parse::<f64>().is_ok() => {}
             Some(w) => return Some(format!("{what} value `{w}` is not a number")),
             None => return Some(format!("{what} needs {n} values")),
-        }
-    }
-    None
-}
-
-/// One face corner `v`, `v/vt`, `v//vn` or `v/vt/vn`.
-fn check_corner(
-    corner: &str,
-    face: usize,
-    seen: &[usize; 3],
-    totals: &[usize; 3],
-) -> Option<String> {
-    const KINDS: [(&str, &str); 3] = [
-        ("vertex", "vertices"),
-        ("texture coordinate", "texture coordinates"),
-        ("normal", "normals"),
-    ];
-    let parts: Vec<&str> = corner.split('/').collect();
-    if parts.len() > 3 || parts[0].is_empty() {
-        return Some(format!("face {face}: malformed corner `{corner}`"));
-    }
-    for (kind, part) in parts.iter().enumerate() {
-        if part.is_empty() {
-            continue;
-        }
-        let Ok(index) = part.parse::<i64>() else {
-            return Some(format!(
-                "face {face}: corner `{corner}` has a non-integer index"
-            ));
-        };
-        let (name, plural) = KINDS[kind];
-        if kind > 0 && totals[kind] == 0 {
-            continue; // tobj ignores texture/normal indices when there are none
-        }
-        let (ok, available) = match index {
-            0 => {
-                return Some(format!(
-                    "face {face} refers to {name} 0 (OBJ indices start at 1)"
-                ));
-            }
-            i if i > 0 => (i as u64 <= totals[kind] as u64, totals[kind]),
-            i => (i.unsigned_abs() <= seen[kind] as u64, seen[kind]),
-        };
-        if !ok {
-            return Some(format!(
-                "face {face} refers to {name} {index}, but {available} {plural} are defined{}",
-                if index < 0 { " before it" } else { "" }
-            ));
         }
     }
     None

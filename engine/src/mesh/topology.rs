@@ -1,6 +1,7 @@
 //! Construction of a [`TriMesh`]: validation, repairs and adjacency.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
 
@@ -39,7 +40,7 @@ pub(super) fn build(
 
     // Merge vertices at bitwise-identical positions (-0.0 and 0.0 count as equal).
     let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
-    let mut first_at: HashMap<[u64; 3], u32> = HashMap::with_capacity(input_vertices);
+    let mut first_at: FastMap<[u64; 3], u32> = fast_map(input_vertices);
     let mut merged_to: Vec<u32> = Vec::with_capacity(input_vertices);
     let mut merged = 0;
     for (i, p) in positions.iter().enumerate() {
@@ -53,31 +54,52 @@ pub(super) fn build(
         warnings.push(MeshWarning::MergedDuplicateVertices { count: merged });
     }
 
-    // Remove degenerate (repeated vertex or zero area) and duplicated faces.
-    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
+    // Remove degenerate (repeated vertex or zero area) and duplicated faces: a face
+    // is a duplicate when an earlier face that is not degenerate has the same vertex
+    // set. Sets are compared by bucketing them by their smallest vertex.
     let mut degenerate = Vec::new();
     let mut degenerate_count = 0;
-    let mut duplicate_count = 0;
-    let mut seen_faces: HashMap<[u32; 3], ()> = HashMap::with_capacity(triangles.len());
+    let mut merged_triangles: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
+    let mut sets: Vec<Option<[u32; 3]>> = Vec::with_capacity(triangles.len());
     for (face, t) in triangles.iter().enumerate() {
         let t = t.map(|v| merged_to[v as usize]);
         let [a, b, c] = t.map(|v| positions[v as usize]);
         let repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
+        merged_triangles.push(t);
         if repeated || (b - a).cross(c - a).length_squared() == 0.0 {
             degenerate_count += 1;
             if degenerate.len() < LIST_FIRST {
                 degenerate.push(face);
             }
-            continue;
+            sets.push(None);
+        } else {
+            let mut sorted = t;
+            sorted.sort_unstable();
+            sets.push(Some(sorted));
         }
-        let mut sorted = t;
-        sorted.sort_unstable();
-        if seen_faces.insert(sorted, ()).is_some() {
-            duplicate_count += 1;
-            continue;
-        }
-        kept.push(t);
     }
+    let (starts, by_smallest) = bucket_sort(input_vertices, || {
+        sets.iter()
+            .enumerate()
+            .filter_map(|(f, s)| s.map(|[a, b, c]| (a, [b, c, f as u32])))
+    });
+    let mut duplicate = vec![false; triangles.len()];
+    for bucket in starts.windows(2) {
+        let bucket = &by_smallest[bucket[0] as usize..bucket[1] as usize];
+        for pair in bucket.windows(2) {
+            if pair[0][..2] == pair[1][..2] {
+                duplicate[pair[1][2] as usize] = true; // the later face of the two
+            }
+        }
+    }
+    drop(by_smallest);
+    let duplicate_count = duplicate.iter().filter(|&&d| d).count();
+    let mut kept: Vec<[u32; 3]> = merged_triangles
+        .into_iter()
+        .zip(sets.iter().zip(&duplicate))
+        .filter(|(_, (set, duplicate))| set.is_some() && !**duplicate)
+        .map(|(t, _)| t)
+        .collect();
     if degenerate_count > 0 {
         warnings.push(MeshWarning::RemovedDegenerateFaces {
             count: degenerate_count,
@@ -157,48 +179,150 @@ pub(super) fn build(
     Ok(mesh)
 }
 
-/// Edges, edge-to-face, face-to-edge and face neighbours, by sorting half-edge keys.
-fn build_edges(mesh: &mut TriMesh) {
-    let f_count = mesh.triangles.len();
-    // (min vertex, max vertex, face, corner) for every half-edge.
-    let mut half: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(3 * f_count);
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            half.push((a.min(b), a.max(b), f as u32, k as u8));
+/// Items grouped by a bucket below `buckets` and sorted within each bucket: the CSR
+/// starts (`buckets + 1`) and the items. A counting sort then a sort of each (usually
+/// small) bucket, O(n) for bounded buckets; `items` is called twice and must give the
+/// same items both times.
+fn bucket_sort<T, I>(buckets: usize, items: impl Fn() -> I) -> (Vec<u32>, Vec<T>)
+where
+    T: Ord + Copy + Default,
+    I: Iterator<Item = (u32, T)>,
+{
+    let mut starts = vec![0u32; buckets + 1];
+    for (b, _) in items() {
+        starts[b as usize + 1] += 1;
+    }
+    for b in 0..buckets {
+        starts[b + 1] += starts[b];
+    }
+    let mut fill = starts.clone();
+    let mut sorted = vec![T::default(); starts[buckets] as usize];
+    for (b, item) in items() {
+        let slot = &mut fill[b as usize];
+        sorted[*slot as usize] = item;
+        *slot += 1;
+    }
+    for bucket in starts.windows(2) {
+        sorted[bucket[0] as usize..bucket[1] as usize].sort_unstable();
+    }
+    (starts, sorted)
+}
+
+/// A `HashMap` with [`FastHasher`]: construction hashes every vertex once, and std's
+/// SipHash (built against hash flooding, which cannot change what these maps return,
+/// only how fast) cost more than the lookups.
+type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
+
+fn fast_map<K, V>(capacity: usize) -> FastMap<K, V> {
+    FastMap::with_capacity_and_hasher(capacity, BuildHasherDefault::default())
+}
+
+/// A multiply-add hash over 8-byte words (rustc-hash 2's scheme): fast on the short
+/// fixed-size integer keys used here (position bits, sorted vertex triples).
+#[derive(Default)]
+struct FastHasher(u64);
+
+impl FastHasher {
+    const K: u64 = 0xf135_7aea_2e62_a9c5;
+
+    fn add(&mut self, word: u64) {
+        self.0 = self.0.wrapping_add(word).wrapping_mul(Self::K);
+    }
+}
+
+impl Hasher for FastHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            let mut word = [0u8; 8];
+            word.copy_from_slice(c);
+            self.add(u64::from_le_bytes(word));
+        }
+        let rest = chunks.remainder();
+        if !rest.is_empty() {
+            let mut word = [0u8; 8];
+            word[..rest.len()].copy_from_slice(rest);
+            self.add(u64::from_le_bytes(word) ^ ((rest.len() as u64) << 59));
         }
     }
-    half.sort_unstable();
+
+    fn write_u32(&mut self, i: u32) {
+        self.add(u64::from(i));
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
+    }
+
+    fn write_usize(&mut self, i: usize) {
+        self.add(i as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        // The product's high bits are the well-mixed ones; hashbrown indexes buckets
+        // with the low bits.
+        self.0.rotate_left(26)
+    }
+}
+
+/// Edges, edge-to-face, face-to-edge and face neighbours, from the half-edges in
+/// (min vertex, max vertex, face, corner) order.
+fn build_edges(mesh: &mut TriMesh) {
+    let f_count = mesh.triangles.len();
+    // Half-edges by smallest vertex, each bucket sorted by (largest vertex, face,
+    // corner): the lexicographic order of (min, max, face, corner), in O(F). The
+    // corner is numbered 3 f + k, which fits a u32 as the vertex-face offsets do.
+    let (starts, half) = bucket_sort(mesh.positions.len(), || {
+        mesh.triangles.iter().enumerate().flat_map(|(f, t)| {
+            (0..3).map(move |k| {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let corner = 3 * f as u32 + k as u32;
+                (a.min(b), (u64::from(a.max(b)) << 32) | u64::from(corner))
+            })
+        })
+    });
     mesh.face_edges = vec![[NONE; 3]; f_count];
     mesh.face_neighbors = vec![[NONE; 3]; f_count];
     let mut non_manifold = 0;
     let mut first_non_manifold = Vec::new();
-    let mut i = 0;
-    while i < half.len() {
-        let mut j = i + 1;
-        while j < half.len() && half[j].0 == half[i].0 && half[j].1 == half[i].1 {
-            j += 1;
-        }
-        let e = mesh.edges.len() as u32;
-        mesh.edges.push([half[i].0, half[i].1]);
-        let valence = (j - i) as u32;
-        mesh.edge_valence.push(valence);
-        let second = if valence >= 2 { half[i + 1].2 } else { NONE };
-        mesh.edge_faces.push([half[i].2, second]);
-        for h in &half[i..j] {
-            mesh.face_edges[h.2 as usize][h.3 as usize] = e;
-        }
-        if valence == 2 {
-            let (f0, k0, f1, k1) = (half[i].2, half[i].3, half[i + 1].2, half[i + 1].3);
-            mesh.face_neighbors[f0 as usize][k0 as usize] = f1;
-            mesh.face_neighbors[f1 as usize][k1 as usize] = f0;
-        } else if valence > 2 {
-            non_manifold += 1;
-            if first_non_manifold.len() < LIST_FIRST {
-                first_non_manifold.push([half[i].0, half[i].1]);
+    let face_corner = |h: u64| (h as u32 / 3, h as u32 % 3);
+    for (min, bucket) in starts.windows(2).enumerate() {
+        let half = &half[bucket[0] as usize..bucket[1] as usize];
+        let mut i = 0;
+        while i < half.len() {
+            let max = (half[i] >> 32) as u32;
+            let mut j = i + 1;
+            while j < half.len() && (half[j] >> 32) as u32 == max {
+                j += 1;
             }
+            let edge = [min as u32, max];
+            let e = mesh.edges.len() as u32;
+            mesh.edges.push(edge);
+            let valence = (j - i) as u32;
+            mesh.edge_valence.push(valence);
+            let (f0, k0) = face_corner(half[i]);
+            let second = if valence >= 2 {
+                face_corner(half[i + 1]).0
+            } else {
+                NONE
+            };
+            mesh.edge_faces.push([f0, second]);
+            for &h in &half[i..j] {
+                let (f, k) = face_corner(h);
+                mesh.face_edges[f as usize][k as usize] = e;
+            }
+            if valence == 2 {
+                let (f1, k1) = face_corner(half[i + 1]);
+                mesh.face_neighbors[f0 as usize][k0 as usize] = f1;
+                mesh.face_neighbors[f1 as usize][k1 as usize] = f0;
+            } else if valence > 2 {
+                non_manifold += 1;
+                if first_non_manifold.len() < LIST_FIRST {
+                    first_non_manifold.push(edge);
+                }
+            }
+            i = j;
         }
-        i = j;
     }
     if non_manifold > 0 {
         mesh.warnings.push(MeshWarning::NonManifoldEdges {
@@ -271,7 +395,7 @@ fn build_boundary_loops(mesh: &mut TriMesh) {
     // Each boundary edge as (from, to) in its face's direction, and the boundary edges
     // touching each vertex, in face order (so the walk is deterministic).
     let mut ends: Vec<(u32, u32)> = Vec::new();
-    let mut touching: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut touching: FastMap<u32, Vec<u32>> = fast_map(0);
     for (f, t) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
             let e = mesh.face_edges[f][k];

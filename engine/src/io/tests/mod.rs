@@ -1,5 +1,9 @@
 //! Unit tests of the readers' internals; file-level behaviour is tested in
-//! `tests/tests/io.rs` over the corpus.
+//! `tests/tests/io.rs` over the corpus. `obj_fast` checks the OBJ reader against the
+//! one it replaced (`obj_reference`).
+
+mod obj_fast;
+mod obj_reference;
 
 use std::path::Path;
 
@@ -214,7 +218,7 @@ fn obj_groups_share_vertices() {
 }
 
 #[test]
-fn obj_prescan_finds_the_first_bad_line() {
+fn obj_scan_finds_the_first_bad_line() {
     let cases = [
         ("v 0 0 0\nv 1 x 0\n", 2, "`x` is not a number"),
         ("v 0 0 0\nv 1 0\n", 2, "needs 3 coordinates"),
@@ -252,7 +256,12 @@ fn obj_prescan_finds_the_first_bad_line() {
         ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3.5\n", 4, "non-integer"),
     ];
     for (text, line, what) in cases {
-        let (got_line, got_what) = obj::prescan(text.as_bytes()).problem.expect(text);
+        let (got_line, got_what) = obj::scan(text.as_bytes()).problem.expect(text);
+        assert_eq!(
+            obj_reference::prescan(text.as_bytes()).problem,
+            Some((got_line, got_what.clone())),
+            "{text}"
+        );
         assert_eq!(got_line, line, "{text}");
         assert!(
             got_what.contains(what),
@@ -260,7 +269,7 @@ fn obj_prescan_finds_the_first_bad_line() {
         );
     }
     // Valid files have no problem (texture indices are ignored when there are none).
-    let fine = obj::prescan(b"v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0 2\nf 1/1 2/9 -1\n# x\n");
+    let fine = obj::scan(b"v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0 2\nf 1/1 2/9 -1\n# x\n");
     assert_eq!(fine.problem, None);
     assert_eq!(
         fine.positions,
