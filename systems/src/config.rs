@@ -58,7 +58,7 @@ pub struct SceneConfig {
 
 /// The settings of the surface preprocessing as a whole: the fields of
 /// [`SurfaceOptions`] that are not in its `segment`, `param` and `curve` parts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SurfaceConfig {
     /// Segments with fewer faces are not split further but parameterized with the
@@ -69,6 +69,10 @@ pub struct SurfaceConfig {
     /// `Max`, the largest per-face angle (section 7.3.1; splits more). Default: the
     /// engine's, `Mean`.
     pub angle_criterion: AngleCriterion,
+    /// Vertices of anisotropy below this take a smooth direction before segmentation,
+    /// so isotropic regions make no singularities. Range >= 1, 1 turning it off;
+    /// default: the engine's, 1.1.
+    pub isotropy_threshold: f64,
 }
 
 impl Default for SurfaceConfig {
@@ -77,6 +81,7 @@ impl Default for SurfaceConfig {
         Self {
             min_segment_faces: engine.min_segment_faces,
             angle_criterion: engine.angle_criterion,
+            isotropy_threshold: engine.isotropy_threshold,
         }
     }
 }
@@ -296,6 +301,7 @@ impl SceneConfig {
             curve: self.curve,
             min_segment_faces: self.surface.min_segment_faces,
             angle_criterion: self.surface.angle_criterion,
+            isotropy_threshold: self.surface.isotropy_threshold,
         }
     }
 
@@ -357,7 +363,7 @@ mod tests {
             segment: (beta: 0.5, sigma: 2.0, seed: 11),
             param: (gamma: 0.25, isotropy_threshold: 1.5),
             curve: (max_cell_share: 0.001, boundary_level: 9, max_level: 18, leaf_levels: 10),
-            surface: (min_segment_faces: 5, angle_criterion: Max),
+            surface: (min_segment_faces: 5, angle_criterion: Max, isotropy_threshold: 1.3),
         )"#;
         let s = SceneConfig::from_ron(text, Path::new("all.ron")).expect("valid");
         let want = SurfaceOptions {
@@ -378,6 +384,7 @@ mod tests {
             },
             min_segment_faces: 5,
             angle_criterion: AngleCriterion::Max,
+            isotropy_threshold: 1.3,
         };
         assert_eq!(s.surface_options(), want);
         // Every value above differs from its default, so none was taken from there.
@@ -387,6 +394,7 @@ mod tests {
         assert!(d.curve.max_cell_share != 0.001 && d.curve.boundary_level != 9);
         assert!(d.curve.max_level != 18 && d.curve.leaf_levels != 10);
         assert!(d.min_segment_faces != 5 && d.angle_criterion != AngleCriterion::Max);
+        assert!(d.isotropy_threshold != 1.3);
         // The sections written back by serde parse to the same options (a field added
         // to one of them is covered by this round trip too).
         let text = format!(

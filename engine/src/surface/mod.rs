@@ -23,7 +23,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::curve::{CurveError, CurveOptions};
-use crate::field::{FieldError, TensorField};
+use crate::field::{FieldError, TensorField, smooth_isotropic_directions};
 use crate::mesh::TriMesh;
 use crate::param::{ParamError, ParamOptions, SegmentParam};
 use crate::planar::{self, PlanarError, PlanarMap};
@@ -60,6 +60,16 @@ pub struct SurfaceOptions {
     /// the largest per-face angle (section 7.3.1's "no angle greater than gamma"),
     /// which splits more.
     pub angle_criterion: AngleCriterion,
+    /// Vertices whose anisotropy `sqrt(l1 / l2)` is below this take their direction
+    /// from a smooth line field before segmentation
+    /// ([`smooth_isotropic_directions`]): isotropic regions then make no singularities
+    /// and no over-segmentation. Densities do not change; an exactly isotropic tensor
+    /// becomes [`ISOTROPIC_DIRECTION_RATIO`](crate::field::ISOTROPIC_DIRECTION_RATIO)
+    /// (1.02) anisotropic along that direction so
+    /// that it holds it, and a nearly isotropic one turns by at most its small
+    /// anisotropy. Range >= 1, 1 turning it off; default 1.1 (the segmentation's own
+    /// isotropy threshold).
+    pub isotropy_threshold: f64,
 }
 
 /// The angle that the validity test compares with `gamma`.
@@ -81,6 +91,7 @@ impl Default for SurfaceOptions {
             curve: CurveOptions::default(),
             min_segment_faces: 16,
             angle_criterion: AngleCriterion::Mean,
+            isotropy_threshold: crate::segment::seeds::ISOTROPY_THRESHOLD,
         }
     }
 }
@@ -91,6 +102,11 @@ impl SurfaceOptions {
     pub fn validate(&self) -> Result<(), SurfaceError> {
         if self.min_segment_faces == 0 {
             return Err(SurfaceError::InvalidMinSegmentFaces);
+        }
+        if !(self.isotropy_threshold >= 1.0 && self.isotropy_threshold.is_finite()) {
+            return Err(SurfaceError::InvalidIsotropyThreshold(
+                self.isotropy_threshold,
+            ));
         }
         self.curve
             .validate()
@@ -131,6 +147,9 @@ pub enum SurfaceError {
     /// `min_segment_faces` is 0.
     #[error("min_segment_faces must be at least 1")]
     InvalidMinSegmentFaces,
+    /// `isotropy_threshold` is below 1 or not finite.
+    #[error("isotropy_threshold must be a finite number >= 1 (1 turns it off), got {0}")]
+    InvalidIsotropyThreshold(f64),
 }
 
 /// Which path of the preprocessing ran.
@@ -293,6 +312,13 @@ impl Preprocessed {
         progress: &dyn Fn(Progress),
     ) -> Result<Self, SurfaceError> {
         let mut stages = Vec::new();
+        progress(Progress::Start("isotropic directions"));
+        let t = Instant::now();
+        let field = match smooth_isotropic_directions(&mesh, &field, options.isotropy_threshold)? {
+            Some((smoothed, _)) => Arc::new(smoothed),
+            None => field,
+        };
+        record_stage(&mut stages, progress, "isotropic directions", t);
         progress(Progress::Start("segmentation"));
         let t = Instant::now();
         let segmentation = segment(&mesh, &field, &options.segment)?;
@@ -515,7 +541,15 @@ pub(crate) mod tests {
         assert!(pre.segmentation.segments.len() > 1);
         assert_eq!(pre.params.len(), pre.report.segments);
         let names: Vec<&str> = pre.stages.iter().map(|(n, _)| *n).collect();
-        assert_eq!(names, ["segmentation", "parameterization", "cells"]);
+        assert_eq!(
+            names,
+            [
+                "isotropic directions",
+                "segmentation",
+                "parameterization",
+                "cells"
+            ]
+        );
         let surface = Preprocessed::build_surface(mesh, field, &options).expect("surface");
         for (a, b) in surface.params.iter().zip(&pre.params) {
             assert_eq!(a.faces, b.faces);

@@ -51,6 +51,24 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         options.segment.seed = seed;
     }
     let t = Instant::now();
+    // As preprocessing does: isotropic regions take a smooth direction first.
+    let field = match strata_engine::field::smooth_isotropic_directions(
+        &mesh,
+        &field,
+        options.isotropy_threshold,
+    )
+    .with_context(|| format!("{name}: isotropic directions"))?
+    {
+        Some((smoothed, changed)) => {
+            println!(
+                "{changed} of {} vertices are isotropic (anisotropy under {}): they take a smooth direction",
+                mesh.vertex_count(),
+                options.isotropy_threshold
+            );
+            smoothed
+        }
+        None => field,
+    };
     let seg = strata_engine::segment::segment(&mesh, &field, &options.segment)
         .with_context(|| format!("{name}: segmentation"))?;
     let seg_time = t.elapsed();
