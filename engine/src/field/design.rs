@@ -28,7 +28,12 @@
 //! # Solves
 //! The complex Hermitian `n x n` systems are factored by faer's sparse Cholesky over
 //! `c64` (sequential), with one symbolic factorization (AMD ordering) of the mesh's
-//! pattern shared by every solve on the whole mesh (see `connection.rs`).
+//! pattern shared by every solve on the whole mesh (see `connection.rs`). From
+//! [`MULTIGRID_VERTICES`] vertices ([`LinearSolver::Auto`]) they are solved instead by
+//! conjugate gradients preconditioned with algebraic multigrid ([`crate::linalg`]) to
+//! [`SOLVE_TOLERANCE`], and inverse iteration becomes preconditioned inverse iteration
+//! (one V-cycle on the eigen-residual per step), since a factor's fill grows faster
+//! than the mesh.
 //!
 //! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the frames and
 //! the rotations `r_ab` are measured in the tangent planes of the vertex normals after
