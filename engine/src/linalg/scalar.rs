@@ -38,6 +38,12 @@ pub trait Scalar:
             Self::real(1.0)
         }
     }
+    /// The factor by which the near-null vector passes along a coupling `a_ij` of the
+    /// matrix, from `j` to `i`, in the multigrid's aggregates: for complex connection
+    /// Laplacians `phase(-a_ij)` (the connection's rotation); for real matrices 1, the
+    /// constant, whatever the coupling's sign (a cotangent Laplacian's obtuse corners
+    /// make some couplings positive without making the constant less smooth).
+    fn transport(coupling: Self) -> Self;
     /// `x * r` for a real `r`.
     fn scale(self, r: f64) -> Self;
     /// Whether both parts are finite.
@@ -57,6 +63,9 @@ impl Scalar for f64 {
     }
     fn abs2(self) -> f64 {
         self * self
+    }
+    fn transport(_coupling: Self) -> Self {
+        1.0
     }
     fn scale(self, r: f64) -> Self {
         self * r
@@ -79,6 +88,9 @@ impl Scalar for c64 {
     }
     fn abs2(self) -> f64 {
         self.re * self.re + self.im * self.im
+    }
+    fn transport(coupling: Self) -> Self {
+        (-coupling).phase()
     }
     fn scale(self, r: f64) -> Self {
         c64::new(self.re * r, self.im * r)

@@ -280,3 +280,47 @@ fn multigrid_handles_isolated_unknowns_and_is_deterministic() {
     );
     assert_eq!(x, solve(), "bit-identical on a second run");
 }
+
+#[test]
+fn positive_couplings_do_not_flip_a_real_near_null_vector() {
+    // A cotangent Laplacian has positive couplings across obtuse corners. Make every
+    // fifth horizontal coupling of a grid slightly positive (still positive definite):
+    // the constant stays the near-null vector, so multigrid converges as on the grid.
+    let k = 64;
+    let n = k * k;
+    let mut t = Vec::new();
+    let mut diagonal = vec![1e-4; n];
+    for i in 0..k {
+        for j in 0..k {
+            let v = i * k + j;
+            let mut couple = |a: usize, b: usize, w: f64| {
+                t.push((a, b, -w));
+                t.push((b, a, -w));
+                diagonal[a] += w.abs();
+                diagonal[b] += w.abs();
+            };
+            if j + 1 < k {
+                couple(v, v + 1, if v % 5 == 0 { -0.6 } else { 1.0 });
+            }
+            if i + 1 < k {
+                couple(v, v + k, 1.0);
+            }
+        }
+    }
+    t.extend(diagonal.iter().enumerate().map(|(v, &d)| (v, v, d)));
+    let a = Csr::from_triplets(n, n, &t);
+    let amg = Amg::new(a.clone(), None, &AmgOptions::default()).expect("hierarchy");
+    let b = rhs(n, |x, _| x);
+    let mut x = vec![0.0; n];
+    let report = pcg::solve(&amg, &b, &mut x, 1e-10, 200).expect("converges");
+    assert!(residual(&a, &x, &b) < 2e-10);
+    let plain = grid(k, 1e-4, |_, _| 1.0);
+    let plain_amg = Amg::new(plain, None, &AmgOptions::default()).expect("hierarchy");
+    let mut y = vec![0.0; n];
+    let plain_report = pcg::solve(&plain_amg, &b, &mut y, 1e-10, 200).expect("converges");
+    println!("with positive couplings {report:?}, plain grid {plain_report:?}");
+    assert!(
+        report.iterations <= plain_report.iterations + 4,
+        "{report:?} vs {plain_report:?}"
+    );
+}
