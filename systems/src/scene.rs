@@ -60,21 +60,18 @@ impl Scene {
     /// Loads the mesh, builds the field and preprocesses for sampling.
     pub fn build(config: &SceneConfig) -> Result<Self, SceneError> {
         let mut stages = Vec::new();
-        let t = Instant::now();
-        let mesh = Arc::new(load_mesh(config)?);
-        stages.push(("mesh", t.elapsed()));
-        let t = Instant::now();
-        let field = Arc::new(config.field.build(&mesh)?);
-        stages.push(("field", t.elapsed()));
+        let progress = progress_spinners();
+        let (mesh, took) = stage(&progress, "mesh", || load_mesh(config));
+        let mesh = Arc::new(mesh?);
+        stages.push(("mesh", took));
+        let (field, took) = stage(&progress, "field", || config.field.build(&mesh));
+        let field = Arc::new(field?);
+        stages.push(("field", took));
         let options = config.surface_options();
         // The engine's front door: one linear map for flat meshes (exact for
         // constant-frame fields), the full surface pipeline otherwise.
-        let pre = Preprocessed::build_with_progress(
-            mesh.clone(),
-            field.clone(),
-            &options,
-            &progress_spinners(),
-        )?;
+        let pre =
+            Preprocessed::build_with_progress(mesh.clone(), field.clone(), &options, &progress)?;
         stages.extend(pre.stages.iter().copied());
         let surface = pre.planar_map().is_none().then_some(SurfaceSummary {
             segments_before_split: pre.report.segments_before_split,
@@ -93,9 +90,26 @@ impl Scene {
     }
 }
 
-/// Progress of the surface stages as spinners on standard error (hidden when it is
-/// not a terminal, so logs and CI output stay clean).
-fn progress_spinners() -> impl Fn(strata_engine::surface::Progress) {
+/// Runs `work` as the stage `name` of `progress` (start, then done with its time) and
+/// returns its result and wall time: loading and field building report like the
+/// engine's stages, since on large meshes they take seconds too.
+pub(crate) fn stage<T>(
+    progress: &dyn Fn(strata_engine::surface::Progress),
+    name: &'static str,
+    work: impl FnOnce() -> T,
+) -> (T, std::time::Duration) {
+    use strata_engine::surface::Progress;
+    progress(Progress::Start(name));
+    let t = Instant::now();
+    let out = work();
+    let took = t.elapsed();
+    progress(Progress::Done(name, took));
+    (out, took)
+}
+
+/// Progress of the stages as spinners on standard error (hidden when it is not a
+/// terminal, so logs and CI output stay clean).
+pub(crate) fn progress_spinners() -> impl Fn(strata_engine::surface::Progress) {
     use strata_engine::surface::Progress;
     let bar = std::sync::Mutex::new(None::<indicatif::ProgressBar>);
     move |p| {
@@ -121,5 +135,31 @@ pub fn load_mesh(config: &SceneConfig) -> Result<TriMesh, MeshError> {
     match &config.mesh {
         MeshSource::File(path) => strata_engine::io::load(path),
         MeshSource::Shape(shape) => shape.build(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Mutex;
+
+    use strata_engine::surface::Progress;
+
+    use super::stage;
+
+    #[test]
+    fn a_stage_reports_its_start_and_its_time_and_returns_the_work() {
+        let seen = Mutex::new(Vec::new());
+        let record = |p: Progress| seen.lock().expect("lock").push(p);
+        let (out, took) = stage(&record, "field", || {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            41 + 1
+        });
+        assert_eq!(out, 42);
+        assert!(took >= std::time::Duration::from_millis(5));
+        let seen = seen.into_inner().expect("lock");
+        assert_eq!(
+            seen,
+            [Progress::Start("field"), Progress::Done("field", took)]
+        );
     }
 }

@@ -3,7 +3,6 @@
 //! PLY mesh and the JSON report on request ([`crate::report::field`]).
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::Context;
 
@@ -30,16 +29,15 @@ pub struct FieldArgs {
 pub(super) fn run(args: &FieldArgs) -> anyhow::Result<()> {
     let config = SceneConfig::load(&args.config)?;
     let name = args.config.display().to_string();
-    let mesh = crate::scene::load_mesh(&config).with_context(|| name.clone())?;
+    let progress = crate::scene::progress_spinners();
+    let (mesh, _) = crate::scene::stage(&progress, "mesh", || crate::scene::load_mesh(&config));
+    let mesh = mesh.with_context(|| name.clone())?;
     for w in mesh.warnings() {
         eprintln!("warning: {name}: mesh: {w}");
     }
-    let t = Instant::now();
-    let field = config
-        .field
-        .build(&mesh)
-        .with_context(|| format!("{name}: field"))?;
-    let field_s = t.elapsed().as_secs_f64();
+    let (field, took) = crate::scene::stage(&progress, "field", || config.field.build(&mesh));
+    let field = field.with_context(|| format!("{name}: field"))?;
+    let field_s = took.as_secs_f64();
     let singularities = strata_engine::segment::detect_singularities(&mesh, &field);
     let report = FieldReport::new(
         &mesh,

@@ -3,7 +3,6 @@
 //! the JSON report ([`SegmentReport`]) and the SVG atlas on request.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::Context;
 use strata_engine::surface::parameterize_with_splitting;
@@ -36,13 +35,13 @@ pub struct SegmentArgs {
 pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     let config = SceneConfig::load(&args.config)?;
     let name = args.config.display().to_string();
-    let t = Instant::now();
-    let mesh = crate::scene::load_mesh(&config).with_context(|| name.clone())?;
-    let field = config
-        .field
-        .build(&mesh)
-        .with_context(|| format!("{name}: field"))?;
-    let load_time = t.elapsed();
+    let progress = crate::scene::progress_spinners();
+    let (mesh, mesh_time) =
+        crate::scene::stage(&progress, "mesh", || crate::scene::load_mesh(&config));
+    let mesh = mesh.with_context(|| name.clone())?;
+    let (field, field_time) = crate::scene::stage(&progress, "field", || config.field.build(&mesh));
+    let field = field.with_context(|| format!("{name}: field"))?;
+    let load_time = mesh_time + field_time;
     for w in mesh.warnings() {
         eprintln!("warning: {name}: mesh: {w}");
     }
@@ -50,15 +49,11 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     if let Some(seed) = args.seed {
         options.segment.seed = seed;
     }
-    let t = Instant::now();
     // As preprocessing does: isotropic regions take a smooth direction first.
-    let field = match strata_engine::field::smooth_isotropic_directions(
-        &mesh,
-        &field,
-        options.isotropy_threshold,
-    )
-    .with_context(|| format!("{name}: isotropic directions"))?
-    {
+    let (smoothed, iso_time) = crate::scene::stage(&progress, "isotropic directions", || {
+        strata_engine::field::smooth_isotropic_directions(&mesh, &field, options.isotropy_threshold)
+    });
+    let field = match smoothed.with_context(|| format!("{name}: isotropic directions"))? {
         Some((smoothed, changed)) => {
             println!(
                 "{changed} of {} vertices are isotropic (anisotropy under {}): they take a smooth direction",
@@ -69,13 +64,15 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         }
         None => field,
     };
-    let seg = strata_engine::segment::segment(&mesh, &field, &options.segment)
-        .with_context(|| format!("{name}: segmentation"))?;
-    let seg_time = t.elapsed();
-    let t = Instant::now();
-    let (params, split) = parameterize_with_splitting(&mesh, &field, &seg, &options)
-        .with_context(|| format!("{name}: parameterization"))?;
-    let param_time = t.elapsed();
+    let (seg, seg_only) = crate::scene::stage(&progress, "segmentation", || {
+        strata_engine::segment::segment(&mesh, &field, &options.segment)
+    });
+    let seg = seg.with_context(|| format!("{name}: segmentation"))?;
+    let seg_time = iso_time + seg_only;
+    let (split, param_time) = crate::scene::stage(&progress, "parameterization", || {
+        parameterize_with_splitting(&mesh, &field, &seg, &options)
+    });
+    let (params, split) = split.with_context(|| format!("{name}: parameterization"))?;
     let report = SegmentReport::new(
         &mesh,
         &seg,
