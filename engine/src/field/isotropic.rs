@@ -39,6 +39,22 @@ const ISOTROPIC_TOLERANCE: f64 = 1e-4;
 /// spacing then differs by 2% between the two directions.
 pub const ISOTROPIC_DIRECTION_RATIO: f64 = 1.02;
 
+/// Per vertex, whether its tensor's spacing ratio `sqrt(l1 / l2)` is under
+/// `threshold` (a degenerate tensor counts as isotropic): the vertices
+/// [`smooth_isotropic_directions`] gives a smooth direction.
+pub fn isotropic_vertices(mesh: &TriMesh, field: &TensorField, threshold: f64) -> Vec<bool> {
+    let ratio2 = threshold * threshold;
+    field
+        .tensors()
+        .iter()
+        .zip(mesh.vertex_normals())
+        .map(|(t, n)| {
+            let e = eigen_in_plane(t, *n);
+            !(e.l1 >= ratio2 * e.l2)
+        })
+        .collect()
+}
+
 /// `field` with the directions of its vertices of anisotropy `sqrt(l1 / l2)` below
 /// `threshold` replaced by a smooth line field through the other vertices' major
 /// directions (the smoothest line field through them, with `weight` 0), and how many
@@ -64,9 +80,7 @@ pub fn smooth_isotropic_directions(
         .zip(normals)
         .map(|(t, n)| eigen_in_plane(t, *n))
         .collect();
-    let ratio2 = threshold * threshold;
-    // NaN-safe: a degenerate tensor counts as isotropic.
-    let isotropic: Vec<bool> = eigen.iter().map(|e| !(e.l1 >= ratio2 * e.l2)).collect();
+    let isotropic = isotropic_vertices(mesh, field, threshold);
     let count = isotropic.iter().filter(|&&i| i).count();
     if threshold <= 1.0 || count == 0 || n == 0 {
         return Ok(None);

@@ -49,6 +49,9 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     if let Some(seed) = args.seed {
         options.segment.seed = seed;
     }
+    // Which vertices are isotropic in the scene's own field (charts in the report).
+    let isotropic =
+        strata_engine::field::isotropic_vertices(&mesh, &field, options.isotropy_threshold);
     // As preprocessing does: isotropic regions take a smooth direction first.
     let (smoothed, iso_time) = crate::scene::stage(&progress, "isotropic directions", || {
         strata_engine::field::smooth_isotropic_directions(&mesh, &field, options.isotropy_threshold)
@@ -80,6 +83,7 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         split.splits,
         seg_time.as_secs_f64(),
         param_time.as_secs_f64(),
+        &isotropic,
     );
     let plus = report
         .singularities
@@ -105,9 +109,11 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         .filter(|s| s.isotropic_fallback)
         .count();
     println!(
-        "parameterization: {} segments after {} splits, {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
+        "parameterization: {} segments after {} splits ({} isotropic charts, {} field-aligned), {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
         report.segment_count,
         report.splits,
+        report.charts,
+        report.segment_count - report.charts,
         param_time.as_secs_f64()
     );
     let not_discs = report

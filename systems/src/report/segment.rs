@@ -21,6 +21,9 @@ pub struct SegmentReport {
     pub segments_before_split: usize,
     /// Final segments, after splitting invalid ones (section 5.2).
     pub segment_count: usize,
+    /// Of those, isotropic charts ([`SegmentEntry::chart`]); the rest are
+    /// field-aligned.
+    pub charts: usize,
     /// Splits of invalid segments.
     pub splits: usize,
     /// Singular faces with their index (+0.5 or -0.5).
@@ -69,10 +72,18 @@ pub struct SegmentEntry {
     pub max_angle_deg: f64,
     /// Parameterized with the isotropic fallback frame.
     pub isotropic_fallback: bool,
+    /// An isotropic chart: most of its faces have all three vertices isotropic in the
+    /// scene's field (spacing ratio under `surface.isotropy_threshold`), so its
+    /// direction is the smooth field given to isotropic regions, not the scene's field
+    /// (issue 18); otherwise a field-aligned segment.
+    pub chart: bool,
 }
 
 impl SegmentReport {
-    /// Builds the report of a segmentation and its final parameterizations.
+    /// Builds the report of a segmentation and its final parameterizations;
+    /// `isotropic` (per vertex of the scene's field, before isotropic regions took a
+    /// smooth direction; empty for none) tells charts from field-aligned segments
+    /// ([`SegmentEntry::chart`]).
     pub fn new(
         mesh: &TriMesh,
         seg: &Segmentation,
@@ -80,6 +91,7 @@ impl SegmentReport {
         splits: usize,
         segmentation_s: f64,
         parameterization_s: f64,
+        isotropic: &[bool],
     ) -> Self {
         let mut cut = vec![false; mesh.edge_count()];
         for &e in &seg.cut_edges {
@@ -89,8 +101,22 @@ impl SegmentReport {
         for s in &seg.singularities {
             singular[s.face as usize] = true;
         }
+        let is_chart = |p: &SegmentParam| {
+            let isotropic_faces = p
+                .faces
+                .iter()
+                .filter(|&&f| {
+                    mesh.triangles()[f as usize]
+                        .iter()
+                        .all(|&v| isotropic.get(v as usize).copied().unwrap_or(false))
+                })
+                .count();
+            2 * isotropic_faces > p.faces.len()
+        };
+        let charts = params.iter().filter(|p| is_chart(p)).count();
         Self {
             faces: mesh.face_count(),
+            charts,
             euler_characteristic: mesh.euler_characteristic(),
             segments_before_split: seg.segments.len(),
             segment_count: params.len(),
@@ -124,6 +150,7 @@ impl SegmentReport {
                         mean_angle_deg: r.mean_angle_deg,
                         max_angle_deg: r.max_angle_deg,
                         isotropic_fallback: r.isotropic_fallback,
+                        chart: is_chart(p),
                     }
                 })
                 .collect(),
@@ -201,8 +228,32 @@ mod tests {
                 }
             }
         }
-        let report = SegmentReport::new(&mesh, &seg, &params, split.splits, 0.0, 0.0);
+        let none = vec![false; mesh.vertex_count()];
+        let report = SegmentReport::new(&mesh, &seg, &params, split.splits, 0.0, 0.0, &none);
         assert_eq!(report.faces, mesh.face_count());
+        // No isotropic vertex: every segment is field-aligned. All isotropic: every
+        // one is a chart. The upper half isotropic: exactly the segments with most of
+        // their faces there.
+        assert_eq!(report.charts, 0);
+        assert!(report.segments.iter().all(|s| !s.chart));
+        let all = vec![true; mesh.vertex_count()];
+        let charts = SegmentReport::new(&mesh, &seg, &params, split.splits, 0.0, 0.0, &all);
+        assert_eq!(charts.charts, params.len());
+        assert!(charts.segments.iter().all(|s| s.chart));
+        let upper: Vec<bool> = mesh.positions().iter().map(|p| p.z > 0.0).collect();
+        let half = SegmentReport::new(&mesh, &seg, &params, split.splits, 0.0, 0.0, &upper);
+        for (entry, p) in half.segments.iter().zip(&params) {
+            let up = p
+                .faces
+                .iter()
+                .filter(|&&f| {
+                    mesh.triangles()[f as usize]
+                        .iter()
+                        .all(|&v| upper[v as usize])
+                })
+                .count();
+            assert_eq!(entry.chart, 2 * up > p.faces.len(), "segment {}", entry.id);
+        }
         assert_eq!(report.segment_count, params.len());
         assert_eq!(
             report.segments.iter().map(|s| s.faces).sum::<usize>(),
