@@ -21,7 +21,7 @@ use glam::DVec3;
 use super::design::{
     LineConstraint, LineFieldOptions, constrained_line_field, smoothest_line_field,
 };
-use super::{FieldError, TensorField, eigen_in_plane, tangent_frame};
+use super::{Eigen2, FieldError, TensorField, eigen_in_plane, tangent_frame};
 use crate::mesh::TriMesh;
 
 /// Relative change of the Rayleigh quotient at which the smoothest field of a fully
@@ -33,26 +33,36 @@ const ISOTROPIC_TOLERANCE: f64 = 1e-4;
 /// vertex less anisotropic than it, along the smooth direction, with its density
 /// `sqrt(l1 l2)` unchanged. An exactly isotropic tensor cannot hold a direction, and
 /// the tensors interpolated across a face mix tangent planes a few degrees apart,
-/// which alone makes them about 1% anisotropic along the mesh's creases; 2% lets the
-/// smooth direction win there (on the isotropic bunny: 17,791 singular faces and
-/// 3,506 segments without the floor, 7 and 36 with 1.01, 7 and 42 with 1.03). Sample
-/// spacing then differs by 2% between the two directions.
+/// which alone makes them slightly anisotropic along the mesh's creases (of the order
+/// of the squared angle between neighbouring normals; an estimate, not measured). The
+/// floor must beat that, measured on the isotropic bunny: 17,791 singular faces and
+/// 3,506 segments without it, 7 and 36 with 1.01, 7 and 42 with 1.03; 1.02 leaves
+/// margin for rougher meshes. Sample spacing then differs by 2% between the two
+/// directions.
 pub const ISOTROPIC_DIRECTION_RATIO: f64 = 1.02;
 
 /// Per vertex, whether its tensor's spacing ratio `sqrt(l1 / l2)` is under
 /// `threshold` (a degenerate tensor counts as isotropic): the vertices
 /// [`smooth_isotropic_directions`] gives a smooth direction.
 pub fn isotropic_vertices(mesh: &TriMesh, field: &TensorField, threshold: f64) -> Vec<bool> {
-    let ratio2 = threshold * threshold;
+    is_isotropic(&eigens(mesh, field), threshold)
+}
+
+/// The in-plane eigen-decomposition of every vertex tensor.
+fn eigens(mesh: &TriMesh, field: &TensorField) -> Vec<Eigen2> {
     field
         .tensors()
         .iter()
         .zip(mesh.vertex_normals())
-        .map(|(t, n)| {
-            let e = eigen_in_plane(t, *n);
-            !(e.l1 >= ratio2 * e.l2)
-        })
+        .map(|(t, n)| eigen_in_plane(t, *n))
         .collect()
+}
+
+/// Per decomposition, whether its spacing ratio is under `threshold` (NaN-safe: a
+/// degenerate tensor counts as isotropic).
+fn is_isotropic(eigen: &[Eigen2], threshold: f64) -> Vec<bool> {
+    let ratio2 = threshold * threshold;
+    eigen.iter().map(|e| !(e.l1 >= ratio2 * e.l2)).collect()
 }
 
 /// `field` with the directions of its vertices of anisotropy `sqrt(l1 / l2)` below
@@ -74,13 +84,8 @@ pub fn smooth_isotropic_directions(
 ) -> Result<Option<(TensorField, usize)>, FieldError> {
     let n = mesh.vertex_count();
     let normals = mesh.vertex_normals();
-    let eigen: Vec<_> = field
-        .tensors()
-        .iter()
-        .zip(normals)
-        .map(|(t, n)| eigen_in_plane(t, *n))
-        .collect();
-    let isotropic = isotropic_vertices(mesh, field, threshold);
+    let eigen = eigens(mesh, field);
+    let isotropic = is_isotropic(&eigen, threshold);
     let count = isotropic.iter().filter(|&&i| i).count();
     if threshold <= 1.0 || count == 0 || n == 0 {
         return Ok(None);
