@@ -71,8 +71,13 @@ pub struct SurfaceConfig {
     pub angle_criterion: AngleCriterion,
     /// Vertices of anisotropy below this take a smooth direction before segmentation,
     /// so isotropic regions make no singularities. Range >= 1, 1 turning it off;
-    /// default: the engine's, 1.1.
+    /// default: the engine's, 1.1. A field isotropic everywhere is covered with
+    /// normal-cone charts instead of field-aligned segments.
     pub isotropy_threshold: f64,
+    /// Half-angle (radians) of the normal cones of a fully isotropic field's charts:
+    /// larger makes fewer, more distorted charts. Range (0, pi]; default: the
+    /// engine's, 60 degrees.
+    pub chart_angle: f64,
 }
 
 impl Default for SurfaceConfig {
@@ -82,6 +87,7 @@ impl Default for SurfaceConfig {
             min_segment_faces: engine.min_segment_faces,
             angle_criterion: engine.angle_criterion,
             isotropy_threshold: engine.isotropy_threshold,
+            chart_angle: engine.chart_angle,
         }
     }
 }
@@ -302,6 +308,7 @@ impl SceneConfig {
             min_segment_faces: self.surface.min_segment_faces,
             angle_criterion: self.surface.angle_criterion,
             isotropy_threshold: self.surface.isotropy_threshold,
+            chart_angle: self.surface.chart_angle,
         }
     }
 
@@ -361,9 +368,9 @@ mod tests {
         let text = r#"(
             mesh: Shape(Plane()),
             segment: (beta: 0.5, sigma: 2.0, seed: 11),
-            param: (gamma: 0.25, isotropy_threshold: 1.5),
+            param: (gamma: 0.25, isotropy_threshold: 1.5, max_stretch: 2.5),
             curve: (max_cell_share: 0.001, boundary_level: 9, max_level: 18, leaf_levels: 10),
-            surface: (min_segment_faces: 5, angle_criterion: Max, isotropy_threshold: 1.3),
+            surface: (min_segment_faces: 5, angle_criterion: Max, isotropy_threshold: 1.3, chart_angle: 0.5),
         )"#;
         let s = SceneConfig::from_ron(text, Path::new("all.ron")).expect("valid");
         let want = SurfaceOptions {
@@ -375,6 +382,7 @@ mod tests {
             param: ParamOptions {
                 gamma: 0.25,
                 isotropy_threshold: 1.5,
+                max_stretch: 2.5,
             },
             curve: CurveOptions {
                 max_cell_share: 0.001,
@@ -385,12 +393,14 @@ mod tests {
             min_segment_faces: 5,
             angle_criterion: AngleCriterion::Max,
             isotropy_threshold: 1.3,
+            chart_angle: 0.5,
         };
         assert_eq!(s.surface_options(), want);
         // Every value above differs from its default, so none was taken from there.
         let d = SurfaceOptions::default();
         assert!(d.segment.beta != 0.5 && d.segment.sigma != 2.0 && d.segment.seed != 11);
         assert!(d.param.gamma != 0.25 && d.param.isotropy_threshold != 1.5);
+        assert!(d.param.max_stretch != 2.5 && d.chart_angle != 0.5);
         assert!(d.curve.max_cell_share != 0.001 && d.curve.boundary_level != 9);
         assert!(d.curve.max_level != 18 && d.curve.leaf_levels != 10);
         assert!(d.min_segment_faces != 5 && d.angle_criterion != AngleCriterion::Max);

@@ -136,19 +136,32 @@ fn isotropic_fields_give_valid_parameterizations() {
     if let Some(dir) = shared_mesh_dir() {
         let mesh = strata_engine::io::load(&dir.join("stanford-bunny.obj")).expect("bunny");
         let pre = check(mesh, &iso, "isotropic bunny");
-        // Issue 18: isotropic regions take a smooth direction, so the bunny is a few
-        // dozen charts (3,506 segments and 17,791 singular faces before).
+        // Issue 18: an isotropic field is covered with normal-cone charts, so the
+        // bunny is a few dozen charts with no singularity (3,506 segments and 17,791
+        // singular faces before), each a compact, valid fallback parameterization.
         println!(
-            "isotropic bunny: {} segments, {} singular faces",
+            "isotropic bunny: {} charts, {} splits, worst mean stretch {:.3}",
             pre.report.segments,
-            pre.segmentation.singularities.len()
+            pre.report.splits,
+            pre.params
+                .iter()
+                .map(|p| p.report.mean_stretch)
+                .fold(0.0, f64::max)
         );
         assert!(
             pre.report.segments <= 64,
             "{} segments",
             pre.report.segments
         );
-        assert!(pre.segmentation.singularities.len() <= 16);
+        assert!(pre.segmentation.singularities.is_empty());
+        for p in &pre.params {
+            assert!(
+                p.report.isotropic_fallback && p.report.valid,
+                "{:?}",
+                p.report
+            );
+            assert!(p.report.mean_stretch <= 1.5, "{:?}", p.report);
+        }
     }
 }
 
@@ -325,7 +338,7 @@ fn seams_show_neither_gaps_nor_clusters() {
     // passing on the new scenes).
     seam_check(shapes::torus(1.0, 0.4, 40).expect("torus"), projected());
     seam_check(shapes::genus2(2.0, 3).expect("genus2"), designed());
-    // Issue 18: isotropic regions segmented along a smooth direction.
+    // Issue 18: an isotropic field, covered with normal-cone charts.
     seam_check(shapes::genus2(2.0, 3).expect("genus2"), isotropic());
 }
 
@@ -388,7 +401,7 @@ fn counts_over_random_patches_beat_random_sampling_threefold() {
     let genus2 = || shapes::genus2(2.0, 3).expect("genus2");
     patch_check(genus2(), projected());
     patch_check(genus2(), designed());
-    // Issue 18: an isotropic field, segmented along a smooth direction, on the genus-2
+    // Issue 18: an isotropic field, covered with normal-cone charts, on the genus-2
     // surface and on the bunny.
     patch_check(genus2(), isotropic());
     if let Some(dir) = shared_mesh_dir() {

@@ -72,6 +72,11 @@ pub struct ParamOptions {
     /// value is treated as isotropic and parameterized with a fallback frame (its
     /// eigenvectors are noise). Range [1, inf); 1 disables the fallback; default 1.05.
     pub isotropy_threshold: f64,
+    /// Largest area-weighted mean stretch ([`ParamReport::mean_stretch`]) for a
+    /// segment on the isotropic fallback frame to be valid: there the angle test is
+    /// waived, and this is what keeps its strata compact. Range [1, inf); default 1.5
+    /// (the isotropic bunny's charts measure 1.02 on average, 1.06 at worst).
+    pub max_stretch: f64,
 }
 
 impl Default for ParamOptions {
@@ -79,6 +84,7 @@ impl Default for ParamOptions {
         Self {
             gamma: std::f64::consts::PI / 16.0,
             isotropy_threshold: 1.05,
+            max_stretch: 1.5,
         }
     }
 }
@@ -102,6 +108,9 @@ impl ParamOptions {
                 self.isotropy_threshold,
                 "finite and >= 1",
             );
+        }
+        if !(self.max_stretch >= 1.0) {
+            return bad("max_stretch", self.max_stretch, ">= 1");
         }
         Ok(())
     }
@@ -204,8 +213,9 @@ pub struct ParamReport {
     /// Largest per-face angle (degrees).
     pub max_angle_deg: f64,
     /// `flipped == 0 && !overlaps && mean_angle < gamma`. For an isotropic fallback the
-    /// angle condition is waived: the frame it is measured against is arbitrary, and
-    /// splitting the segment would not improve it.
+    /// angle condition is waived (the frame it is measured against is arbitrary, and
+    /// splitting the segment would not improve it) and `mean_stretch <= max_stretch`
+    /// takes its place.
     pub valid: bool,
     /// Whether the segment was nearly isotropic and used the fallback frame.
     pub isotropic_fallback: bool,
@@ -214,6 +224,11 @@ pub struct ParamReport {
     pub inconsistent_combing: usize,
     /// Area-weighted mean spacing ratio `sqrt(l1 / l2)` of the face tensors.
     pub mean_anisotropy: f64,
+    /// Area-weighted mean stretch of the map: per face, the ratio of the singular
+    /// values of the map from the field's metric to `uv` (1 where the strata are as
+    /// the field asks, `k` where they come out `k` times longer one way than the
+    /// other; a degenerate face counts 1000).
+    pub mean_stretch: f64,
 }
 
 /// The parameterization of one segment: its cut-open local mesh with `uv` coordinates.

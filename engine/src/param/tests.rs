@@ -279,6 +279,20 @@ fn isotropic_fields_use_the_fallback_frame() {
     );
     assert!(r.mean_angle_deg.is_finite() && r.max_angle_deg.is_finite());
     assert_eq!(r.inconsistent_combing, 0, "{r:?}");
+    // A hemisphere cannot be flattened without stretch, but the fallback frame keeps
+    // it mild; a bound under what it measures makes the same map invalid.
+    assert!(r.mean_stretch > 1.0 + 1e-3 && r.mean_stretch < 1.5, "{r:?}");
+    let strict = ParamOptions {
+        max_stretch: 1.0,
+        ..ParamOptions::default()
+    };
+    let p_strict =
+        parameterize(&sphere, &field, &cap, &no_cut(&sphere), &strict).expect("hemisphere");
+    assert!(!p_strict.report.valid, "{:?}", p_strict.report);
+    assert_eq!(
+        p_strict.uv, p.uv,
+        "the bound changes the verdict, not the map"
+    );
     println!("hemisphere: {r:?}");
 
     // On a plane the fallback frame is constant, so the map is a similarity with
@@ -291,6 +305,7 @@ fn isotropic_fields_use_the_fallback_frame() {
         r.isotropic_fallback && r.valid && r.mean_angle_deg < 1e-6,
         "{r:?}"
     );
+    assert!((r.mean_stretch - 1.0).abs() < 1e-9, "a similarity: {r:?}");
     for t in &p.triangles {
         for k in 0..3 {
             let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
@@ -299,6 +314,26 @@ fn isotropic_fields_use_the_fallback_frame() {
             assert!((d2 / d3 - 2f64.sqrt()).abs() < 1e-9, "{d2} {d3}");
         }
     }
+}
+
+#[test]
+fn stretch_is_the_aspect_ratio_in_the_fields_metric() {
+    use super::validity::stretch;
+    let (m1, m2) = (DVec3::X, DVec3::Y);
+    // The target itself (gu = s1 m1, gv = s2 m2): no stretch, whatever s1 and s2.
+    assert!((stretch(3.0 * m1, 0.5 * m2, m1, m2, 3.0, 0.5) - 1.0).abs() < 1e-12);
+    // Twice the target along m1 only: 2; a rotation of the target: 1.
+    assert!((stretch(6.0 * m1, 0.5 * m2, m1, m2, 3.0, 0.5) - 2.0).abs() < 1e-12);
+    let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+    let rotated = stretch(c * m1 - s * m2, s * m1 + c * m2, m1, m2, 1.0, 1.0);
+    assert!((rotated - 1.0).abs() < 1e-12, "{rotated}");
+    // A shear [[1, 1], [0, 1]]: singular values golden ratio and its inverse.
+    let golden = (1.0 + 5f64.sqrt()) / 2.0;
+    let shear = stretch(m1 + m2, m2, m1, m2, 1.0, 1.0);
+    assert!((shear - golden * golden).abs() < 1e-12, "{shear}");
+    // Degenerate: capped, never infinite or NaN.
+    assert_eq!(stretch(m1, m1, m1, m2, 1.0, 1.0), 1e3);
+    assert_eq!(stretch(DVec3::ZERO, DVec3::ZERO, m1, m2, 1.0, 1.0), 1e3);
 }
 
 #[test]
@@ -494,6 +529,14 @@ fn bad_input_is_rejected() {
         },
         ParamOptions {
             isotropy_threshold: 0.9,
+            ..o
+        },
+        ParamOptions {
+            max_stretch: 0.5,
+            ..o
+        },
+        ParamOptions {
+            max_stretch: f64::NAN,
             ..o
         },
     ] {

@@ -13,7 +13,7 @@ use std::cmp::Ordering;
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 
 use crate::mesh::{NONE, TriMesh};
 
@@ -255,6 +255,7 @@ pub(crate) fn report(
         .collect();
     let overlaps = overlaps_with_closed_seams(uv, &edges, &patch.local_to_mesh);
     let (mut weighted, mut total_area, mut max_angle) = (0.0, 0.0, 0.0f64);
+    let mut stretch_sum = 0.0;
     for (i, (&f, t)) in patch.faces.iter().zip(&patch.triangles).enumerate() {
         let area = mesh.face_areas()[f as usize];
         let grads = hat_gradients(
@@ -268,6 +269,11 @@ pub(crate) fn report(
         });
         let m1 = frames.m1[i];
         let image = DVec2::new(gu.dot(m1), gv.dot(m1));
+        if area > 0.0 {
+            let m2 = mesh.face_normals()[f as usize].cross(m1);
+            let [s1, s2] = frames.sqrt_l[i];
+            stretch_sum += area * stretch(gu, gv, m1, m2, s1, s2);
+        }
         let angle = if image == DVec2::ZERO {
             90.0
         } else {
@@ -278,7 +284,12 @@ pub(crate) fn report(
         max_angle = max_angle.max(angle);
     }
     let mean_angle = weighted / total_area;
-    let aligned = frames.isotropic_fallback || mean_angle.to_radians() < options.gamma;
+    let mean_stretch = stretch_sum / total_area;
+    let aligned = if frames.isotropic_fallback {
+        mean_stretch <= options.max_stretch
+    } else {
+        mean_angle.to_radians() < options.gamma
+    };
     ParamReport {
         flipped,
         overlaps,
@@ -288,5 +299,30 @@ pub(crate) fn report(
         isotropic_fallback: frames.isotropic_fallback,
         inconsistent_combing: frames.inconsistent,
         mean_anisotropy: frames.mean_anisotropy,
+        mean_stretch,
+    }
+}
+
+/// Largest per-face stretch counted, so that one degenerate triangle cannot make a
+/// segment's mean infinite (it is flipped anyway, which the report counts).
+const MAX_FACE_STRETCH: f64 = 1e3;
+
+/// Stretch of one face: the ratio of the singular values of the map from the field's
+/// metric to `uv`, `J T^-1`, where `J` has rows `gu` and `gv` (the gradients of `u`
+/// and `v`) and `T` is the target, `diag(s1, s2)` in the frame `(m1, m2)`. 1 when the
+/// strata are as the field asks (squares in its metric), `k` when they are `k` times
+/// longer one way than the other. Capped at [`MAX_FACE_STRETCH`].
+pub(crate) fn stretch(gu: DVec3, gv: DVec3, m1: DVec3, m2: DVec3, s1: f64, s2: f64) -> f64 {
+    let (a, b) = (gu.dot(m1) / s1, gu.dot(m2) / s2);
+    let (c, d) = (gv.dot(m1) / s1, gv.dot(m2) / s2);
+    let frobenius = a * a + b * b + c * c + d * d;
+    let det = (a * d - b * c).abs();
+    // The singular values' ratio r solves r + 1/r = frobenius / det.
+    let q = frobenius / det;
+    let r = 0.5 * (q + (q * q - 4.0).max(0.0).sqrt());
+    if r.is_finite() {
+        r.min(MAX_FACE_STRETCH)
+    } else {
+        MAX_FACE_STRETCH
     }
 }

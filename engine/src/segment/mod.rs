@@ -16,6 +16,7 @@
 //!    minimum spanning tree the walk may not cross;
 //! 4. cuts that make every segment a disc.
 
+pub mod charts;
 mod clusters;
 mod from_labels;
 pub mod paths;
@@ -26,6 +27,7 @@ pub mod singularity;
 pub mod topology;
 pub mod walk;
 
+pub use charts::{CHART_NORMAL_ANGLE, chart_labels, isotropic_charts};
 pub use clusters::{SingularityCluster, singularity_clusters};
 pub use from_labels::segmentation_from_labels;
 pub use pipeline::segment;

@@ -4,7 +4,8 @@
 //! [`Preprocessed::build`] picks the path itself. A flat mesh takes the planar fast
 //! path ([`planar::sampler`]: one segment under one linear map, exact for fields of
 //! constant direction and anisotropy). Any other mesh takes the surface pipeline:
-//! segmentation (paper section 4), parameterization with splitting of invalid segments
+//! segmentation ([`segment_surface`]: normal-cone charts for a fully isotropic field,
+//! the field-aligned segmentation of paper section 4 otherwise), parameterization with splitting of invalid segments
 //! ([`refine`], section 5.2), and adaptive Hilbert cells per segment under one shared
 //! cell budget ([`budget_cells`](crate::curve::budget_cells), section 6.1).
 //! [`SurfaceReport::path`] says which path ran.
@@ -18,23 +19,25 @@
 
 mod cells;
 pub mod refine;
+mod segmentation;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::curve::{CurveError, CurveOptions};
-use crate::field::{FieldError, TensorField, smooth_isotropic_directions};
+use crate::field::{FieldError, TensorField};
 use crate::mesh::TriMesh;
 use crate::param::{ParamError, ParamOptions, SegmentParam};
 use crate::planar::{self, PlanarError, PlanarMap};
 use crate::sample::{SampleError, Sampler};
-use crate::segment::{SegmentError, SegmentOptions, Segmentation, segment};
+use crate::segment::{SegmentError, SegmentOptions, Segmentation};
 
 use cells::build_cells;
 pub use cells::segment_cells;
 pub use refine::{
     SplitContext, lowest_face, parameterize_segment_with_splitting, parameterize_with_splitting,
 };
+pub use segmentation::{SegmentationKind, SurfaceSegmentation, segment_surface};
 // Old paths of items that moved to their stage (new code should use the new homes:
 // `curve::CellInput`, `segment::segmentation_from_labels`).
 pub use crate::curve::CellInput;
@@ -70,6 +73,11 @@ pub struct SurfaceOptions {
     /// anisotropy. Range >= 1, 1 turning it off; default 1.1 (the segmentation's own
     /// isotropy threshold).
     pub isotropy_threshold: f64,
+    /// Half-angle (radians) of the normal cones that cover a fully isotropic field's
+    /// surface with charts ([`isotropic_charts`](crate::segment::isotropic_charts));
+    /// larger makes fewer, more distorted charts. Range (0, pi]; default
+    /// [`CHART_NORMAL_ANGLE`](crate::segment::CHART_NORMAL_ANGLE) (60 degrees).
+    pub chart_angle: f64,
 }
 
 /// The angle that the validity test compares with `gamma`.
@@ -92,6 +100,7 @@ impl Default for SurfaceOptions {
             min_segment_faces: 16,
             angle_criterion: AngleCriterion::Mean,
             isotropy_threshold: crate::segment::seeds::ISOTROPY_THRESHOLD,
+            chart_angle: crate::segment::CHART_NORMAL_ANGLE,
         }
     }
 }
@@ -107,6 +116,9 @@ impl SurfaceOptions {
             return Err(SurfaceError::InvalidIsotropyThreshold(
                 self.isotropy_threshold,
             ));
+        }
+        if !(self.chart_angle > 0.0 && self.chart_angle <= std::f64::consts::PI) {
+            return Err(SurfaceError::InvalidChartAngle(self.chart_angle));
         }
         self.curve
             .validate()
@@ -150,6 +162,9 @@ pub enum SurfaceError {
     /// `isotropy_threshold` is below 1 or not finite.
     #[error("isotropy_threshold must be a finite number >= 1 (1 turns it off), got {0}")]
     InvalidIsotropyThreshold(f64),
+    /// `chart_angle` is not in (0, pi].
+    #[error("chart_angle must be in (0, pi] radians, got {0}")]
+    InvalidChartAngle(f64),
 }
 
 /// Which path of the preprocessing ran.
@@ -312,18 +327,8 @@ impl Preprocessed {
         progress: &dyn Fn(Progress),
     ) -> Result<Self, SurfaceError> {
         let mut stages = Vec::new();
-        progress(Progress::Start("isotropic directions"));
-        let t = Instant::now();
-        let field = match smooth_isotropic_directions(&mesh, &field, options.isotropy_threshold)? {
-            Some((smoothed, _)) => Arc::new(smoothed),
-            None => field,
-        };
-        record_stage(&mut stages, progress, "isotropic directions", t);
-        progress(Progress::Start("segmentation"));
-        let t = Instant::now();
-        let segmentation = segment(&mesh, &field, &options.segment)?;
-        record_stage(&mut stages, progress, "segmentation", t);
-        Self::after_segmentation(mesh, field, segmentation, options, progress, stages)
+        let out = segment_surface(&mesh, field, options, progress, &mut stages)?;
+        Self::after_segmentation(mesh, out.field, out.segmentation, options, progress, stages)
     }
 
     /// Parameterization with splitting and cells of a given segmentation (options
@@ -410,6 +415,7 @@ pub(crate) mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::shapes;
+    use crate::segment::segment;
 
     /// A torus with a constant 3:1 field: a small curved case with several segments.
     pub(crate) fn torus_case() -> (Arc<TriMesh>, Arc<TensorField>) {
@@ -473,7 +479,15 @@ pub(crate) mod tests {
         };
         let mut bad_gamma = good;
         bad_gamma.param.gamma = -1.0;
-        for options in [zero, bad_gamma] {
+        let bad_chart_angle = SurfaceOptions {
+            chart_angle: 0.0,
+            ..good
+        };
+        assert!(matches!(
+            bad_chart_angle.validate(),
+            Err(SurfaceError::InvalidChartAngle(_))
+        ));
+        for options in [zero, bad_gamma, bad_chart_angle] {
             assert!(Preprocessed::build(mesh.clone(), field.clone(), &options).is_err());
             assert!(
                 Preprocessed::from_segmentation(mesh.clone(), field.clone(), seg.clone(), &options)

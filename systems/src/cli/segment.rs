@@ -3,9 +3,10 @@
 //! the JSON report ([`SegmentReport`]) and the SVG atlas on request.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use anyhow::Context;
-use strata_engine::surface::parameterize_with_splitting;
+use strata_engine::surface::{SegmentationKind, parameterize_with_splitting, segment_surface};
 
 use super::write_file;
 use crate::config::SceneConfig;
@@ -52,26 +53,29 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     // Which vertices are isotropic in the scene's own field (charts in the report).
     let isotropic =
         strata_engine::field::isotropic_vertices(&mesh, &field, options.isotropy_threshold);
-    // As preprocessing does: isotropic regions take a smooth direction first.
-    let (smoothed, iso_time) = crate::scene::stage(&progress, "isotropic directions", || {
-        strata_engine::field::smooth_isotropic_directions(&mesh, &field, options.isotropy_threshold)
-    });
-    let field = match smoothed.with_context(|| format!("{name}: isotropic directions"))? {
-        Some((smoothed, changed)) => {
-            println!(
-                "{changed} of {} vertices are isotropic (anisotropy under {}): they take a smooth direction",
-                mesh.vertex_count(),
-                options.isotropy_threshold
-            );
-            smoothed
-        }
-        None => field,
-    };
-    let (seg, seg_only) = crate::scene::stage(&progress, "segmentation", || {
-        strata_engine::segment::segment(&mesh, &field, &options.segment)
-    });
-    let seg = seg.with_context(|| format!("{name}: segmentation"))?;
-    let seg_time = iso_time + seg_only;
+    // As preprocessing does: charts for a fully isotropic field, otherwise isotropic
+    // regions take a smooth direction before the field-aligned segmentation.
+    options
+        .validate()
+        .with_context(|| format!("{name}: surface settings"))?;
+    let mut stages = Vec::new();
+    let surface = segment_surface(&mesh, Arc::new(field), &options, &progress, &mut stages)
+        .with_context(|| format!("{name}: segmentation"))?;
+    match surface.kind {
+        SegmentationKind::IsotropicCharts => println!(
+            "the field is isotropic everywhere (anisotropy under {}): normal-cone charts of half-angle {:.1} degrees",
+            options.isotropy_threshold,
+            options.chart_angle.to_degrees()
+        ),
+        SegmentationKind::FieldAligned { smoothed_vertices } if smoothed_vertices > 0 => println!(
+            "{smoothed_vertices} of {} vertices are isotropic (anisotropy under {}): they take a smooth direction",
+            mesh.vertex_count(),
+            options.isotropy_threshold
+        ),
+        SegmentationKind::FieldAligned { .. } => {}
+    }
+    let (field, seg) = (surface.field, surface.segmentation);
+    let seg_time: std::time::Duration = stages.iter().map(|(_, d)| *d).sum();
     let (split, param_time) = crate::scene::stage(&progress, "parameterization", || {
         parameterize_with_splitting(&mesh, &field, &seg, &options)
     });
@@ -93,11 +97,12 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     let minus = report.singularities.len() - plus;
     let index_sum: f64 = report.singularities.iter().map(|s| s.index).sum();
     println!(
-        "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {index_sum}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
+        "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
         report.faces,
         report.euler_characteristic,
         report.segments_before_split,
         report.singularities.len(),
+        index_sum + 0.0, // an empty sum is -0
         report.cut_edges,
         seg_time.as_secs_f64(),
         load_time.as_secs_f64(),

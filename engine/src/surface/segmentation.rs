@@ -1,0 +1,105 @@
+//! The segmentation step of the surface path: isotropic charts for an isotropic field,
+//! the field-aligned segmentation otherwise.
+//!
+//! - Every vertex isotropic (anisotropy `sqrt(l1 / l2)` under
+//!   [`SurfaceOptions::isotropy_threshold`]): the field has no direction to align to,
+//!   so the mesh is covered with [`isotropic_charts`] (normal-cone discs, O(F log F))
+//!   and parameterized with the field's [`isotropic_copy`] (the same densities, the
+//!   isotropic fallback frame). No line field is solved and no random walk runs.
+//! - Otherwise isotropic vertices take a smooth direction
+//!   ([`smooth_isotropic_directions`]) and the random walk segments along the field
+//!   (paper section 4).
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::{Progress, SurfaceError, SurfaceOptions, record_stage};
+use crate::field::{TensorField, isotropic_copy, isotropic_vertices, smooth_isotropic_directions};
+use crate::mesh::TriMesh;
+use crate::segment::{Segmentation, isotropic_charts, segment};
+
+/// How the surface was segmented.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SegmentationKind {
+    /// The field is isotropic everywhere: normal-cone charts, no field alignment.
+    IsotropicCharts,
+    /// Field-aligned segments (section 4); this many isotropic vertices took a smooth
+    /// direction first.
+    FieldAligned {
+        /// Vertices whose direction was replaced by the smooth line field.
+        smoothed_vertices: usize,
+    },
+}
+
+/// The output of [`segment_surface`].
+#[derive(Debug)]
+pub struct SurfaceSegmentation {
+    /// The field to parameterize and sample with: the input's isotropic copy for
+    /// charts, the input with smooth directions in its isotropic regions otherwise.
+    pub field: Arc<TensorField>,
+    /// The segments.
+    pub segmentation: Segmentation,
+    /// Which way it went.
+    pub kind: SegmentationKind,
+}
+
+/// Segments `mesh` for the surface path (see the module docs), reporting the stages
+/// `"isotropic directions"` and `"segmentation"` to `progress` and appending their
+/// times to `stages`. `options` must be validated.
+///
+/// Errors: a failed line-field solve or segmentation.
+///
+/// ```
+/// use std::sync::Arc;
+/// use strata_engine::{field::FieldSpec, mesh::shapes};
+/// use strata_engine::surface::{SegmentationKind, SurfaceOptions, segment_surface};
+/// let mesh = shapes::sphere(1.0, 4)?;
+/// let iso = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 1.0, density: 1.0 };
+/// let out = segment_surface(&mesh, Arc::new(iso.build(&mesh)?), &SurfaceOptions::default(),
+///     &|_| {}, &mut Vec::new())?;
+/// assert_eq!(out.kind, SegmentationKind::IsotropicCharts);
+/// assert!(out.segmentation.singularities.is_empty());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn segment_surface(
+    mesh: &TriMesh,
+    field: Arc<TensorField>,
+    options: &SurfaceOptions,
+    progress: &dyn Fn(Progress),
+    stages: &mut Vec<(&'static str, std::time::Duration)>,
+) -> Result<SurfaceSegmentation, SurfaceError> {
+    progress(Progress::Start("isotropic directions"));
+    let t = Instant::now();
+    let all_isotropic = options.isotropy_threshold > 1.0
+        && isotropic_vertices(mesh, &field, options.isotropy_threshold)
+            .iter()
+            .all(|&iso| iso);
+    if all_isotropic {
+        let field = Arc::new(isotropic_copy(mesh, &field)?);
+        record_stage(stages, progress, "isotropic directions", t);
+        progress(Progress::Start("segmentation"));
+        let t = Instant::now();
+        let segmentation = isotropic_charts(mesh, options.chart_angle);
+        record_stage(stages, progress, "segmentation", t);
+        return Ok(SurfaceSegmentation {
+            field,
+            segmentation,
+            kind: SegmentationKind::IsotropicCharts,
+        });
+    }
+    let (field, smoothed_vertices) =
+        match smooth_isotropic_directions(mesh, &field, options.isotropy_threshold)? {
+            Some((smoothed, changed)) => (Arc::new(smoothed), changed),
+            None => (field, 0),
+        };
+    record_stage(stages, progress, "isotropic directions", t);
+    progress(Progress::Start("segmentation"));
+    let t = Instant::now();
+    let segmentation = segment(mesh, &field, &options.segment)?;
+    record_stage(stages, progress, "segmentation", t);
+    Ok(SurfaceSegmentation {
+        field,
+        segmentation,
+        kind: SegmentationKind::FieldAligned { smoothed_vertices },
+    })
+}
