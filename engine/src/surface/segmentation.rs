@@ -3,7 +3,7 @@
 //!
 //! - Every vertex isotropic (anisotropy `sqrt(l1 / l2)` under
 //!   [`SurfaceOptions::isotropy_threshold`]): the field has no direction to align to,
-//!   so the mesh is covered with [`isotropic_charts`] (normal-cone discs, O(F log F))
+//!   so the mesh is covered with [`isotropic_charts`] (normal-cone discs, O(F))
 //!   and parameterized with the field's [`isotropic_copy`] (the same densities, the
 //!   isotropic fallback frame). No line field is solved and no random walk runs.
 //! - Otherwise isotropic vertices take a smooth direction
