@@ -32,6 +32,7 @@
 
 mod atomic;
 mod obj;
+mod obj_chunks;
 mod ply;
 mod samples;
 mod shared;

@@ -25,7 +25,9 @@ use crate::mesh::{MeshError, TriMesh};
 
 /// Parses OBJ `bytes` into a mesh; `path` only names the file in errors.
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
-    let scan = scan(bytes);
+    // Large files on every thread; the sequential pass for small ones and to find and
+    // report a problem.
+    let scan = super::obj_chunks::scan(bytes).unwrap_or_else(|| scan(bytes));
     if let Some((line, what)) = scan.problem {
         return Err(MeshError::Syntax {
             path: path.to_path_buf(),
@@ -268,7 +270,7 @@ fn count_records(bytes: &[u8]) -> [usize; 3] {
 
 /// An integer as `i64::from_str` reads it; plain digits (with an optional `-`) take a
 /// short loop, anything else (`+`, 19 digits or more, junk) goes to `from_str`.
-fn parse_index(s: &str) -> Option<i64> {
+pub(super) fn parse_index(s: &str) -> Option<i64> {
     let b = s.as_bytes();
     let (negative, digits) = match b.split_first() {
         Some((b'-', rest)) => (true, rest),
@@ -285,7 +287,7 @@ fn parse_index(s: &str) -> Option<i64> {
 
 /// A `v` record: three numbers, then nothing, a non-zero weight, or an RGB colour
 /// (whose values are not checked).
-fn vertex<'a>(mut values: impl Iterator<Item = &'a str>) -> Result<DVec3, String> {
+pub(super) fn vertex<'a>(mut values: impl Iterator<Item = &'a str>) -> Result<DVec3, String> {
     let mut p = [0.0; 3];
     for (i, c) in p.iter_mut().enumerate() {
         let Some(value) = values.next() else {
@@ -311,7 +313,7 @@ fn vertex<'a>(mut values: impl Iterator<Item = &'a str>) -> Result<DVec3, String
     }
 }
 
-fn check_numbers<'a>(
+pub(super) fn check_numbers<'a>(
     mut words: impl Iterator<Item = &'a str>,
     n: usize,
     what: &str,

@@ -4,6 +4,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::{MeshError, MeshWarning, NONE, TriMesh};
 
@@ -16,26 +17,27 @@ pub(super) fn build(
     mut warnings: Vec<MeshWarning>,
 ) -> Result<TriMesh, MeshError> {
     let input_vertices = positions.len();
-    for (vertex, p) in positions.iter().enumerate() {
-        if !p.is_finite() {
-            return Err(MeshError::NonFiniteVertex {
-                vertex,
-                x: p.x,
-                y: p.y,
-                z: p.z,
-            });
-        }
+    // Checked on every thread; the lowest offending vertex or face is reported.
+    if let Some(vertex) = positions.par_iter().position_first(|p| !p.is_finite()) {
+        let p = positions[vertex];
+        return Err(MeshError::NonFiniteVertex {
+            vertex,
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        });
     }
-    for (face, t) in triangles.iter().enumerate() {
-        for &index in t {
-            if index as usize >= input_vertices {
-                return Err(MeshError::IndexOutOfRange {
-                    face,
-                    index: index as i64,
-                    vertex_count: input_vertices,
-                });
-            }
-        }
+    let out_of_range = |t: &[u32; 3]| t.iter().any(|&i| i as usize >= input_vertices);
+    if let Some(face) = triangles.par_iter().position_first(out_of_range) {
+        let index = triangles[face]
+            .into_iter()
+            .find(|&i| i as usize >= input_vertices)
+            .unwrap_or_default();
+        return Err(MeshError::IndexOutOfRange {
+            face,
+            index: i64::from(index),
+            vertex_count: input_vertices,
+        });
     }
 
     // Merge vertices at bitwise-identical positions (-0.0 and 0.0 count as equal).
@@ -57,27 +59,31 @@ pub(super) fn build(
     // Remove degenerate (repeated vertex or zero area) and duplicated faces: a face
     // is a duplicate when an earlier face that is not degenerate has the same vertex
     // set. Sets are compared by bucketing them by their smallest vertex.
-    let mut degenerate = Vec::new();
-    let mut degenerate_count = 0;
-    let mut merged_triangles: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
-    let mut sets: Vec<Option<[u32; 3]>> = Vec::with_capacity(triangles.len());
-    for (face, t) in triangles.iter().enumerate() {
-        let t = t.map(|v| merged_to[v as usize]);
-        let [a, b, c] = t.map(|v| positions[v as usize]);
-        let repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
-        merged_triangles.push(t);
-        if repeated || (b - a).cross(c - a).length_squared() == 0.0 {
-            degenerate_count += 1;
-            if degenerate.len() < LIST_FIRST {
-                degenerate.push(face);
+    // Per face (on every thread): its merged corners and, unless it is degenerate, its
+    // sorted vertex set.
+    let (merged_triangles, sets): (Vec<[u32; 3]>, Vec<Option<[u32; 3]>>) = triangles
+        .par_iter()
+        .map(|t| {
+            let t = t.map(|v| merged_to[v as usize]);
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            let repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
+            if repeated || (b - a).cross(c - a).length_squared() == 0.0 {
+                (t, None)
+            } else {
+                let mut sorted = t;
+                sorted.sort_unstable();
+                (t, Some(sorted))
             }
-            sets.push(None);
-        } else {
-            let mut sorted = t;
-            sorted.sort_unstable();
-            sets.push(Some(sorted));
-        }
-    }
+        })
+        .unzip();
+    let degenerate_count = sets.iter().filter(|s| s.is_none()).count();
+    let degenerate: Vec<usize> = sets
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_none())
+        .map(|(face, _)| face)
+        .take(LIST_FIRST)
+        .collect();
     let (starts, by_smallest) = bucket_sort(input_vertices, || {
         sets.iter()
             .enumerate()
@@ -476,22 +482,39 @@ fn build_components(mesh: &mut TriMesh) {
 
 /// Face areas and normals; area-weighted vertex normals.
 fn build_geometry(mesh: &mut TriMesh) {
-    let mut vertex_normals = vec![DVec3::ZERO; mesh.positions.len()];
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
-        let n2 = (b - a).cross(c - a); // twice the area times the unit normal
-        mesh.face_areas.push(0.5 * n2.length());
-        mesh.face_normals.push(n2.normalize_or_zero());
-        for &v in t {
-            vertex_normals[v as usize] += n2;
-        }
-    }
-    for (v, n) in vertex_normals.iter_mut().enumerate() {
-        // A vertex whose faces cancel out (a pinched fold) keeps its first face's normal.
-        *n = n.try_normalize().unwrap_or_else(|| {
-            let f = mesh.vertex_faces[mesh.vertex_face_offsets[v] as usize];
-            mesh.face_normals[f as usize]
-        });
-    }
-    mesh.vertex_normals = vertex_normals;
+    // Twice the area times the unit normal, per face (on every thread).
+    let positions = &mesh.positions;
+    let doubled: Vec<DVec3> = mesh
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            (b - a).cross(c - a)
+        })
+        .collect();
+    mesh.face_areas = doubled.par_iter().map(|n2| 0.5 * n2.length()).collect();
+    mesh.face_normals = doubled
+        .par_iter()
+        .map(|n2| n2.normalize_or_zero())
+        .collect();
+    // Each vertex sums its faces in face order (the order of its CSR list), so the
+    // result does not depend on the threads.
+    let (offsets, faces, normals) = (
+        &mesh.vertex_face_offsets,
+        &mesh.vertex_faces,
+        &mesh.face_normals,
+    );
+    mesh.vertex_normals = (0..mesh.positions.len())
+        .into_par_iter()
+        .map(|v| {
+            let ring = &faces[offsets[v] as usize..offsets[v + 1] as usize];
+            let sum = ring
+                .iter()
+                .fold(DVec3::ZERO, |s, &f| s + doubled[f as usize]);
+            // A vertex whose faces cancel out (a pinched fold) keeps its first face's
+            // normal.
+            sum.try_normalize()
+                .unwrap_or_else(|| normals[ring[0] as usize])
+        })
+        .collect();
 }

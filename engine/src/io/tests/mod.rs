@@ -2,6 +2,7 @@
 //! `tests/tests/io.rs` over the corpus. `obj_fast` checks the OBJ reader against the
 //! one it replaced (`obj_reference`).
 
+mod obj_chunks;
 mod obj_fast;
 mod obj_reference;
 

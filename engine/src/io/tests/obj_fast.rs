@@ -159,7 +159,7 @@ fn what_tobj_alone_rejected_now_loads_or_names_its_line() {
 }
 
 /// One random OBJ line from a small grammar that reaches every branch of both readers.
-fn line() -> impl Strategy<Value = String> {
+pub(super) fn line() -> impl Strategy<Value = String> {
     let number = prop_oneof![
         10 => (-3i32..4).prop_map(|i| i.to_string()),
         10 => (-30i32..30).prop_map(|i| format!("{}", f64::from(i) / 8.0)),
