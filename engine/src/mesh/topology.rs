@@ -177,8 +177,9 @@ pub(super) fn build(
         warnings,
         input_vertex_map,
     };
+    build_vertex_faces(&mut mesh);
     build_edges(&mut mesh);
-    build_vertex_rings(&mut mesh);
+    build_vertex_neighbors(&mut mesh);
     build_boundary_loops(&mut mesh);
     build_components(&mut mesh);
     build_geometry(&mut mesh);
@@ -271,65 +272,126 @@ impl Hasher for FastHasher {
     }
 }
 
-/// Edges, edge-to-face, face-to-edge and face neighbours, from the half-edges in
-/// (min vertex, max vertex, face, corner) order.
+/// Vertices per chunk of the parallel edge build.
+const EDGE_CHUNK: usize = 4096;
+
+/// The edges whose smaller vertex lies in one chunk of vertices, in (min, max) order.
+#[derive(Default)]
+struct EdgeChunk {
+    edges: Vec<[u32; 2]>,
+    valence: Vec<u32>,
+    /// The faces of each edge's first two half-edges (by corner), `NONE` where absent.
+    faces: Vec<[u32; 2]>,
+    /// Per vertex of the chunk, how many edges have it as their smaller vertex.
+    per_vertex: Vec<u32>,
+    /// Edges with more than two faces.
+    non_manifold: Vec<[u32; 2]>,
+}
+
+/// Edges, edge-to-face, face-to-edge and face neighbours: per vertex `v` (chunks of
+/// vertices on every thread), the half-edges of its faces whose smaller vertex is `v`,
+/// sorted by (larger vertex, corner), so edges come in (min, max) order and each
+/// edge's faces in corner order whatever the threads; then per face (on every
+/// thread) its edges, looked up among its smaller vertex's. Needs the vertex-face
+/// lists.
 fn build_edges(mesh: &mut TriMesh) {
-    let f_count = mesh.triangles.len();
-    // Half-edges by smallest vertex, each bucket sorted by (largest vertex, face,
-    // corner): the lexicographic order of (min, max, face, corner), in O(F). The
-    // corner is numbered 3 f + k, which fits a u32 as the vertex-face offsets do.
-    let (starts, half) = bucket_sort(mesh.positions.len(), || {
-        mesh.triangles.iter().enumerate().flat_map(|(f, t)| {
-            (0..3).map(move |k| {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                let corner = 3 * f as u32 + k as u32;
-                (a.min(b), (u64::from(a.max(b)) << 32) | u64::from(corner))
-            })
+    let v_count = mesh.positions.len();
+    let (triangles, offsets, ring) = (
+        &mesh.triangles,
+        &mesh.vertex_face_offsets,
+        &mesh.vertex_faces,
+    );
+    let chunks: Vec<EdgeChunk> = (0..v_count.div_ceil(EDGE_CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut out = EdgeChunk::default();
+            let mut half: Vec<(u32, u32)> = Vec::new();
+            for v in (c * EDGE_CHUNK) as u32..((c + 1) * EDGE_CHUNK).min(v_count) as u32 {
+                half.clear();
+                for &f in &ring[offsets[v as usize] as usize..offsets[v as usize + 1] as usize] {
+                    let t = triangles[f as usize];
+                    for k in 0..3 {
+                        let (a, b) = (t[k], t[(k + 1) % 3]);
+                        if a.min(b) == v {
+                            half.push((a.max(b), 3 * f + k as u32));
+                        }
+                    }
+                }
+                half.sort_unstable();
+                let before = out.edges.len();
+                let mut i = 0;
+                while i < half.len() {
+                    let max = half[i].0;
+                    let mut j = i + 1;
+                    while j < half.len() && half[j].0 == max {
+                        j += 1;
+                    }
+                    out.edges.push([v, max]);
+                    let valence = (j - i) as u32;
+                    out.valence.push(valence);
+                    let second = if valence >= 2 {
+                        half[i + 1].1 / 3
+                    } else {
+                        NONE
+                    };
+                    out.faces.push([half[i].1 / 3, second]);
+                    if valence > 2 {
+                        out.non_manifold.push([v, max]);
+                    }
+                    i = j;
+                }
+                out.per_vertex.push((out.edges.len() - before) as u32);
+            }
+            out
         })
-    });
-    mesh.face_edges = vec![[NONE; 3]; f_count];
-    mesh.face_neighbors = vec![[NONE; 3]; f_count];
+        .collect();
+    let mut first_edge = Vec::with_capacity(v_count + 1);
+    first_edge.push(0u32);
     let mut non_manifold = 0;
     let mut first_non_manifold = Vec::new();
-    let face_corner = |h: u64| (h as u32 / 3, h as u32 % 3);
-    for (min, bucket) in starts.windows(2).enumerate() {
-        let half = &half[bucket[0] as usize..bucket[1] as usize];
-        let mut i = 0;
-        while i < half.len() {
-            let max = (half[i] >> 32) as u32;
-            let mut j = i + 1;
-            while j < half.len() && (half[j] >> 32) as u32 == max {
-                j += 1;
-            }
-            let edge = [min as u32, max];
-            let e = mesh.edges.len() as u32;
-            mesh.edges.push(edge);
-            let valence = (j - i) as u32;
-            mesh.edge_valence.push(valence);
-            let (f0, k0) = face_corner(half[i]);
-            let second = if valence >= 2 {
-                face_corner(half[i + 1]).0
-            } else {
-                NONE
-            };
-            mesh.edge_faces.push([f0, second]);
-            for &h in &half[i..j] {
-                let (f, k) = face_corner(h);
-                mesh.face_edges[f as usize][k as usize] = e;
-            }
-            if valence == 2 {
-                let (f1, k1) = face_corner(half[i + 1]);
-                mesh.face_neighbors[f0 as usize][k0 as usize] = f1;
-                mesh.face_neighbors[f1 as usize][k1 as usize] = f0;
-            } else if valence > 2 {
-                non_manifold += 1;
-                if first_non_manifold.len() < LIST_FIRST {
-                    first_non_manifold.push(edge);
+    let edge_count = chunks.iter().map(|c| c.edges.len()).sum();
+    mesh.edges.reserve_exact(edge_count);
+    mesh.edge_valence.reserve_exact(edge_count);
+    mesh.edge_faces.reserve_exact(edge_count);
+    for chunk in chunks {
+        for n in chunk.per_vertex {
+            first_edge.push(first_edge[first_edge.len() - 1] + n);
+        }
+        non_manifold += chunk.non_manifold.len();
+        let room = LIST_FIRST.saturating_sub(first_non_manifold.len());
+        first_non_manifold.extend(chunk.non_manifold.into_iter().take(room));
+        mesh.edges.extend(chunk.edges);
+        mesh.edge_valence.extend(chunk.valence);
+        mesh.edge_faces.extend(chunk.faces);
+    }
+    // Per face, each side's edge among those of its smaller vertex (a handful), and
+    // the face across it where the edge has exactly two faces.
+    let (edges, valence, edge_faces) = (&mesh.edges, &mesh.edge_valence, &mesh.edge_faces);
+    (mesh.face_edges, mesh.face_neighbors) = mesh
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(f, t)| {
+            let mut face_edges = [NONE; 3];
+            let mut neighbors = [NONE; 3];
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let (min, max) = (a.min(b), a.max(b));
+                let range = first_edge[min as usize]..first_edge[min as usize + 1];
+                // Every side of a face is an edge of its smaller vertex.
+                let e = range
+                    .clone()
+                    .find(|&e| edges[e as usize][1] == max)
+                    .unwrap_or(range.start);
+                face_edges[k] = e;
+                if valence[e as usize] == 2 {
+                    let [f0, f1] = edge_faces[e as usize];
+                    neighbors[k] = if f0 == f as u32 { f1 } else { f0 };
                 }
             }
-            i = j;
-        }
-    }
+            (face_edges, neighbors)
+        })
+        .unzip();
     if non_manifold > 0 {
         mesh.warnings.push(MeshWarning::NonManifoldEdges {
             count: non_manifold,
@@ -338,8 +400,8 @@ fn build_edges(mesh: &mut TriMesh) {
     }
 }
 
-/// CSR lists of faces and of neighbouring vertices around each vertex.
-fn build_vertex_rings(mesh: &mut TriMesh) {
+/// CSR list of the faces around each vertex, in face order.
+fn build_vertex_faces(mesh: &mut TriMesh) {
     let v_count = mesh.positions.len();
     let mut counts = vec![0u32; v_count + 1];
     for t in &mesh.triangles {
@@ -360,7 +422,11 @@ fn build_vertex_rings(mesh: &mut TriMesh) {
     }
     mesh.vertex_face_offsets = counts;
     mesh.vertex_faces = faces;
+}
 
+/// CSR list of the neighbouring vertices (and joining edges) around each vertex.
+fn build_vertex_neighbors(mesh: &mut TriMesh) {
+    let v_count = mesh.positions.len();
     let mut ncounts = vec![0u32; v_count + 1];
     for [a, b] in &mesh.edges {
         ncounts[*a as usize + 1] += 1;
