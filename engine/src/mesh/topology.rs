@@ -11,6 +11,10 @@ use super::{MeshError, MeshWarning, NONE, TriMesh};
 /// How many offending items a warning lists.
 const LIST_FIRST: usize = 8;
 
+/// Items (vertices or faces) below which a parallel pass stays on the calling thread:
+/// a small mesh would pay more for the threads than it gains.
+const MIN_PARALLEL: usize = 1 << 14;
+
 pub(super) fn build(
     positions: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
@@ -18,7 +22,11 @@ pub(super) fn build(
 ) -> Result<TriMesh, MeshError> {
     let input_vertices = positions.len();
     // Checked on every thread; the lowest offending vertex or face is reported.
-    if let Some(vertex) = positions.par_iter().position_first(|p| !p.is_finite()) {
+    if let Some(vertex) = positions
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .position_first(|p| !p.is_finite())
+    {
         let p = positions[vertex];
         return Err(MeshError::NonFiniteVertex {
             vertex,
@@ -28,7 +36,11 @@ pub(super) fn build(
         });
     }
     let out_of_range = |t: &[u32; 3]| t.iter().any(|&i| i as usize >= input_vertices);
-    if let Some(face) = triangles.par_iter().position_first(out_of_range) {
+    if let Some(face) = triangles
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .position_first(out_of_range)
+    {
         let index = triangles[face]
             .into_iter()
             .find(|&i| i as usize >= input_vertices)
@@ -63,6 +75,7 @@ pub(super) fn build(
     // sorted vertex set.
     let (merged_triangles, sets): (Vec<[u32; 3]>, Vec<Option<[u32; 3]>>) = triangles
         .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .map(|t| {
             let t = t.map(|v| merged_to[v as usize]);
             let [a, b, c] = t.map(|v| positions[v as usize]);
@@ -370,6 +383,7 @@ fn build_edges(mesh: &mut TriMesh) {
     (mesh.face_edges, mesh.face_neighbors) = mesh
         .triangles
         .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .enumerate()
         .map(|(f, t)| {
             let mut face_edges = [NONE; 3];
@@ -553,14 +567,20 @@ fn build_geometry(mesh: &mut TriMesh) {
     let doubled: Vec<DVec3> = mesh
         .triangles
         .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .map(|t| {
             let [a, b, c] = t.map(|v| positions[v as usize]);
             (b - a).cross(c - a)
         })
         .collect();
-    mesh.face_areas = doubled.par_iter().map(|n2| 0.5 * n2.length()).collect();
+    mesh.face_areas = doubled
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .map(|n2| 0.5 * n2.length())
+        .collect();
     mesh.face_normals = doubled
         .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .map(|n2| n2.normalize_or_zero())
         .collect();
     // Each vertex sums its faces in face order (the order of its CSR list), so the
@@ -572,6 +592,7 @@ fn build_geometry(mesh: &mut TriMesh) {
     );
     mesh.vertex_normals = (0..mesh.positions.len())
         .into_par_iter()
+        .with_min_len(MIN_PARALLEL)
         .map(|v| {
             let ring = &faces[offsets[v] as usize..offsets[v + 1] as usize];
             let sum = ring
