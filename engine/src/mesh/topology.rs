@@ -4,16 +4,15 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
-use rayon::prelude::*;
 
 use super::{MeshError, MeshWarning, NONE, TriMesh};
 
 /// How many offending items a warning lists.
 const LIST_FIRST: usize = 8;
 
-/// Items (vertices or faces) below which a parallel pass stays on the calling thread:
-/// a small mesh would pay more for the threads than it gains.
-const MIN_PARALLEL: usize = 1 << 14;
+/// Faces from which [`build`] computes the geometry on a second thread beside the
+/// topology: below it, handing work to the thread pool costs more than it saves.
+const SIDE_BY_SIDE_FACES: usize = 1 << 17;
 
 pub(super) fn build(
     positions: Vec<DVec3>,
@@ -21,35 +20,26 @@ pub(super) fn build(
     mut warnings: Vec<MeshWarning>,
 ) -> Result<TriMesh, MeshError> {
     let input_vertices = positions.len();
-    // Checked on every thread; the lowest offending vertex or face is reported.
-    if let Some(vertex) = positions
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .position_first(|p| !p.is_finite())
-    {
-        let p = positions[vertex];
-        return Err(MeshError::NonFiniteVertex {
-            vertex,
-            x: p.x,
-            y: p.y,
-            z: p.z,
-        });
+    for (vertex, p) in positions.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(MeshError::NonFiniteVertex {
+                vertex,
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            });
+        }
     }
-    let out_of_range = |t: &[u32; 3]| t.iter().any(|&i| i as usize >= input_vertices);
-    if let Some(face) = triangles
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .position_first(out_of_range)
-    {
-        let index = triangles[face]
-            .into_iter()
-            .find(|&i| i as usize >= input_vertices)
-            .unwrap_or_default();
-        return Err(MeshError::IndexOutOfRange {
-            face,
-            index: i64::from(index),
-            vertex_count: input_vertices,
-        });
+    for (face, t) in triangles.iter().enumerate() {
+        for &index in t {
+            if index as usize >= input_vertices {
+                return Err(MeshError::IndexOutOfRange {
+                    face,
+                    index: index as i64,
+                    vertex_count: input_vertices,
+                });
+            }
+        }
     }
 
     // Merge vertices at bitwise-identical positions (-0.0 and 0.0 count as equal).
@@ -71,32 +61,27 @@ pub(super) fn build(
     // Remove degenerate (repeated vertex or zero area) and duplicated faces: a face
     // is a duplicate when an earlier face that is not degenerate has the same vertex
     // set. Sets are compared by bucketing them by their smallest vertex.
-    // Per face (on every thread): its merged corners and, unless it is degenerate, its
-    // sorted vertex set.
-    let (merged_triangles, sets): (Vec<[u32; 3]>, Vec<Option<[u32; 3]>>) = triangles
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|t| {
-            let t = t.map(|v| merged_to[v as usize]);
-            let [a, b, c] = t.map(|v| positions[v as usize]);
-            let repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
-            if repeated || (b - a).cross(c - a).length_squared() == 0.0 {
-                (t, None)
-            } else {
-                let mut sorted = t;
-                sorted.sort_unstable();
-                (t, Some(sorted))
+    let mut degenerate = Vec::new();
+    let mut degenerate_count = 0;
+    let mut merged_triangles: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
+    let mut sets: Vec<Option<[u32; 3]>> = Vec::with_capacity(triangles.len());
+    for (face, t) in triangles.iter().enumerate() {
+        let t = t.map(|v| merged_to[v as usize]);
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
+        merged_triangles.push(t);
+        if repeated || (b - a).cross(c - a).length_squared() == 0.0 {
+            degenerate_count += 1;
+            if degenerate.len() < LIST_FIRST {
+                degenerate.push(face);
             }
-        })
-        .unzip();
-    let degenerate_count = sets.iter().filter(|s| s.is_none()).count();
-    let degenerate: Vec<usize> = sets
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.is_none())
-        .map(|(face, _)| face)
-        .take(LIST_FIRST)
-        .collect();
+            sets.push(None);
+        } else {
+            let mut sorted = t;
+            sorted.sort_unstable();
+            sets.push(Some(sorted));
+        }
+    }
     let (starts, by_smallest) = bucket_sort(input_vertices, || {
         sets.iter()
             .enumerate()
@@ -168,9 +153,12 @@ pub(super) fn build(
         });
     }
 
+    // Topology and geometry are independent: on a large mesh they are built side by
+    // side (each is sequential, so the result does not depend on the threads).
+    let v_count = compact_positions.len();
     let mut mesh = TriMesh {
-        positions: compact_positions,
-        triangles: kept,
+        positions: Vec::new(),
+        triangles: Vec::new(),
         edges: Vec::new(),
         edge_faces: Vec::new(),
         edge_valence: Vec::new(),
@@ -190,12 +178,27 @@ pub(super) fn build(
         warnings,
         input_vertex_map,
     };
-    build_vertex_faces(&mut mesh);
-    build_edges(&mut mesh);
-    build_vertex_neighbors(&mut mesh);
-    build_boundary_loops(&mut mesh);
-    build_components(&mut mesh);
-    build_geometry(&mut mesh);
+    let topology = |mesh: &mut TriMesh| {
+        build_edges(mesh, &kept, v_count);
+        build_vertex_rings(mesh, &kept, v_count);
+        build_boundary_loops(mesh, &kept);
+        build_components(mesh);
+    };
+    let geometry = if kept.len() >= SIDE_BY_SIDE_FACES {
+        rayon::join(
+            || topology(&mut mesh),
+            || geometry(&compact_positions, &kept),
+        )
+        .1
+    } else {
+        topology(&mut mesh);
+        geometry(&compact_positions, &kept)
+    };
+    mesh.positions = compact_positions;
+    mesh.triangles = kept;
+    mesh.face_areas = geometry.face_areas;
+    mesh.face_normals = geometry.face_normals;
+    mesh.vertex_normals = geometry.vertex_normals;
     Ok(mesh)
 }
 
@@ -285,127 +288,65 @@ impl Hasher for FastHasher {
     }
 }
 
-/// Vertices per chunk of the parallel edge build.
-const EDGE_CHUNK: usize = 4096;
-
-/// The edges whose smaller vertex lies in one chunk of vertices, in (min, max) order.
-#[derive(Default)]
-struct EdgeChunk {
-    edges: Vec<[u32; 2]>,
-    valence: Vec<u32>,
-    /// The faces of each edge's first two half-edges (by corner), `NONE` where absent.
-    faces: Vec<[u32; 2]>,
-    /// Per vertex of the chunk, how many edges have it as their smaller vertex.
-    per_vertex: Vec<u32>,
-    /// Edges with more than two faces.
-    non_manifold: Vec<[u32; 2]>,
-}
-
-/// Edges, edge-to-face, face-to-edge and face neighbours: per vertex `v` (chunks of
-/// vertices on every thread), the half-edges of its faces whose smaller vertex is `v`,
-/// sorted by (larger vertex, corner), so edges come in (min, max) order and each
-/// edge's faces in corner order whatever the threads; then per face (on every
-/// thread) its edges, looked up among its smaller vertex's. Needs the vertex-face
-/// lists.
-fn build_edges(mesh: &mut TriMesh) {
-    let v_count = mesh.positions.len();
-    let (triangles, offsets, ring) = (
-        &mesh.triangles,
-        &mesh.vertex_face_offsets,
-        &mesh.vertex_faces,
-    );
-    let chunks: Vec<EdgeChunk> = (0..v_count.div_ceil(EDGE_CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut out = EdgeChunk::default();
-            let mut half: Vec<(u32, u32)> = Vec::new();
-            for v in (c * EDGE_CHUNK) as u32..((c + 1) * EDGE_CHUNK).min(v_count) as u32 {
-                half.clear();
-                for &f in &ring[offsets[v as usize] as usize..offsets[v as usize + 1] as usize] {
-                    let t = triangles[f as usize];
-                    for k in 0..3 {
-                        let (a, b) = (t[k], t[(k + 1) % 3]);
-                        if a.min(b) == v {
-                            half.push((a.max(b), 3 * f + k as u32));
-                        }
-                    }
-                }
-                half.sort_unstable();
-                let before = out.edges.len();
-                let mut i = 0;
-                while i < half.len() {
-                    let max = half[i].0;
-                    let mut j = i + 1;
-                    while j < half.len() && half[j].0 == max {
-                        j += 1;
-                    }
-                    out.edges.push([v, max]);
-                    let valence = (j - i) as u32;
-                    out.valence.push(valence);
-                    let second = if valence >= 2 {
-                        half[i + 1].1 / 3
-                    } else {
-                        NONE
-                    };
-                    out.faces.push([half[i].1 / 3, second]);
-                    if valence > 2 {
-                        out.non_manifold.push([v, max]);
-                    }
-                    i = j;
-                }
-                out.per_vertex.push((out.edges.len() - before) as u32);
-            }
-            out
+/// Edges, edge-to-face, face-to-edge and face neighbours, from the half-edges in
+/// (min vertex, max vertex, face, corner) order.
+fn build_edges(mesh: &mut TriMesh, triangles: &[[u32; 3]], v_count: usize) {
+    let f_count = triangles.len();
+    // Half-edges by smallest vertex, each bucket sorted by (largest vertex, face,
+    // corner): the lexicographic order of (min, max, face, corner), in O(F). The
+    // corner is numbered 3 f + k, which fits a u32 as the vertex-face offsets do.
+    let (starts, half) = bucket_sort(v_count, || {
+        triangles.iter().enumerate().flat_map(|(f, t)| {
+            (0..3).map(move |k| {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let corner = 3 * f as u32 + k as u32;
+                (a.min(b), (u64::from(a.max(b)) << 32) | u64::from(corner))
+            })
         })
-        .collect();
-    let mut first_edge = Vec::with_capacity(v_count + 1);
-    first_edge.push(0u32);
+    });
+    mesh.face_edges = vec![[NONE; 3]; f_count];
+    mesh.face_neighbors = vec![[NONE; 3]; f_count];
     let mut non_manifold = 0;
     let mut first_non_manifold = Vec::new();
-    let edge_count = chunks.iter().map(|c| c.edges.len()).sum();
-    mesh.edges.reserve_exact(edge_count);
-    mesh.edge_valence.reserve_exact(edge_count);
-    mesh.edge_faces.reserve_exact(edge_count);
-    for chunk in chunks {
-        for n in chunk.per_vertex {
-            first_edge.push(first_edge[first_edge.len() - 1] + n);
-        }
-        non_manifold += chunk.non_manifold.len();
-        let room = LIST_FIRST.saturating_sub(first_non_manifold.len());
-        first_non_manifold.extend(chunk.non_manifold.into_iter().take(room));
-        mesh.edges.extend(chunk.edges);
-        mesh.edge_valence.extend(chunk.valence);
-        mesh.edge_faces.extend(chunk.faces);
-    }
-    // Per face, each side's edge among those of its smaller vertex (a handful), and
-    // the face across it where the edge has exactly two faces.
-    let (edges, valence, edge_faces) = (&mesh.edges, &mesh.edge_valence, &mesh.edge_faces);
-    (mesh.face_edges, mesh.face_neighbors) = mesh
-        .triangles
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .enumerate()
-        .map(|(f, t)| {
-            let mut face_edges = [NONE; 3];
-            let mut neighbors = [NONE; 3];
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                let (min, max) = (a.min(b), a.max(b));
-                let range = first_edge[min as usize]..first_edge[min as usize + 1];
-                // Every side of a face is an edge of its smaller vertex.
-                let e = range
-                    .clone()
-                    .find(|&e| edges[e as usize][1] == max)
-                    .unwrap_or(range.start);
-                face_edges[k] = e;
-                if valence[e as usize] == 2 {
-                    let [f0, f1] = edge_faces[e as usize];
-                    neighbors[k] = if f0 == f as u32 { f1 } else { f0 };
+    let face_corner = |h: u64| (h as u32 / 3, h as u32 % 3);
+    for (min, bucket) in starts.windows(2).enumerate() {
+        let half = &half[bucket[0] as usize..bucket[1] as usize];
+        let mut i = 0;
+        while i < half.len() {
+            let max = (half[i] >> 32) as u32;
+            let mut j = i + 1;
+            while j < half.len() && (half[j] >> 32) as u32 == max {
+                j += 1;
+            }
+            let edge = [min as u32, max];
+            let e = mesh.edges.len() as u32;
+            mesh.edges.push(edge);
+            let valence = (j - i) as u32;
+            mesh.edge_valence.push(valence);
+            let (f0, k0) = face_corner(half[i]);
+            let second = if valence >= 2 {
+                face_corner(half[i + 1]).0
+            } else {
+                NONE
+            };
+            mesh.edge_faces.push([f0, second]);
+            for &h in &half[i..j] {
+                let (f, k) = face_corner(h);
+                mesh.face_edges[f as usize][k as usize] = e;
+            }
+            if valence == 2 {
+                let (f1, k1) = face_corner(half[i + 1]);
+                mesh.face_neighbors[f0 as usize][k0 as usize] = f1;
+                mesh.face_neighbors[f1 as usize][k1 as usize] = f0;
+            } else if valence > 2 {
+                non_manifold += 1;
+                if first_non_manifold.len() < LIST_FIRST {
+                    first_non_manifold.push(edge);
                 }
             }
-            (face_edges, neighbors)
-        })
-        .unzip();
+            i = j;
+        }
+    }
     if non_manifold > 0 {
         mesh.warnings.push(MeshWarning::NonManifoldEdges {
             count: non_manifold,
@@ -414,11 +355,10 @@ fn build_edges(mesh: &mut TriMesh) {
     }
 }
 
-/// CSR list of the faces around each vertex, in face order.
-fn build_vertex_faces(mesh: &mut TriMesh) {
-    let v_count = mesh.positions.len();
+/// CSR lists of faces and of neighbouring vertices around each vertex.
+fn build_vertex_rings(mesh: &mut TriMesh, triangles: &[[u32; 3]], v_count: usize) {
     let mut counts = vec![0u32; v_count + 1];
-    for t in &mesh.triangles {
+    for t in triangles {
         for &v in t {
             counts[v as usize + 1] += 1;
         }
@@ -427,8 +367,8 @@ fn build_vertex_faces(mesh: &mut TriMesh) {
         counts[i + 1] += counts[i];
     }
     let mut fill = counts.clone();
-    let mut faces = vec![0u32; 3 * mesh.triangles.len()];
-    for (f, t) in mesh.triangles.iter().enumerate() {
+    let mut faces = vec![0u32; 3 * triangles.len()];
+    for (f, t) in triangles.iter().enumerate() {
         for &v in t {
             faces[fill[v as usize] as usize] = f as u32;
             fill[v as usize] += 1;
@@ -436,11 +376,7 @@ fn build_vertex_faces(mesh: &mut TriMesh) {
     }
     mesh.vertex_face_offsets = counts;
     mesh.vertex_faces = faces;
-}
 
-/// CSR list of the neighbouring vertices (and joining edges) around each vertex.
-fn build_vertex_neighbors(mesh: &mut TriMesh) {
-    let v_count = mesh.positions.len();
     let mut ncounts = vec![0u32; v_count + 1];
     for [a, b] in &mesh.edges {
         ncounts[*a as usize + 1] += 1;
@@ -477,12 +413,12 @@ fn build_vertex_neighbors(mesh: &mut TriMesh) {
 /// to non-manifold vertices (several loops through one vertex). Only next to
 /// non-manifold edges, where a vertex can touch an odd number of boundary edges, can a
 /// chain end away from its start.
-fn build_boundary_loops(mesh: &mut TriMesh) {
+fn build_boundary_loops(mesh: &mut TriMesh, triangles: &[[u32; 3]]) {
     // Each boundary edge as (from, to) in its face's direction, and the boundary edges
     // touching each vertex, in face order (so the walk is deterministic).
     let mut ends: Vec<(u32, u32)> = Vec::new();
     let mut touching: FastMap<u32, Vec<u32>> = fast_map(0);
-    for (f, t) in mesh.triangles.iter().enumerate() {
+    for (f, t) in triangles.iter().enumerate() {
         for k in 0..3 {
             let e = mesh.face_edges[f][k];
             if mesh.edge_valence[e as usize] == 1 {
@@ -530,7 +466,7 @@ fn build_boundary_loops(mesh: &mut TriMesh) {
 
 /// Connected components over manifold edges (breadth-first, deterministic).
 fn build_components(mesh: &mut TriMesh) {
-    let f_count = mesh.triangles.len();
+    let f_count = mesh.face_neighbors.len();
     let mut comp = vec![NONE; f_count];
     let mut count = 0u32;
     let mut queue = Vec::new();
@@ -560,48 +496,41 @@ fn build_components(mesh: &mut TriMesh) {
     }
 }
 
-/// Face areas and normals; area-weighted vertex normals.
-fn build_geometry(mesh: &mut TriMesh) {
-    // Twice the area times the unit normal, per face (on every thread).
-    let positions = &mesh.positions;
-    let doubled: Vec<DVec3> = mesh
-        .triangles
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|t| {
-            let [a, b, c] = t.map(|v| positions[v as usize]);
-            (b - a).cross(c - a)
-        })
-        .collect();
-    mesh.face_areas = doubled
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|n2| 0.5 * n2.length())
-        .collect();
-    mesh.face_normals = doubled
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|n2| n2.normalize_or_zero())
-        .collect();
-    // Each vertex sums its faces in face order (the order of its CSR list), so the
-    // result does not depend on the threads.
-    let (offsets, faces, normals) = (
-        &mesh.vertex_face_offsets,
-        &mesh.vertex_faces,
-        &mesh.face_normals,
-    );
-    mesh.vertex_normals = (0..mesh.positions.len())
-        .into_par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|v| {
-            let ring = &faces[offsets[v] as usize..offsets[v + 1] as usize];
-            let sum = ring
-                .iter()
-                .fold(DVec3::ZERO, |s, &f| s + doubled[f as usize]);
-            // A vertex whose faces cancel out (a pinched fold) keeps its first face's
-            // normal.
-            sum.try_normalize()
-                .unwrap_or_else(|| normals[ring[0] as usize])
-        })
-        .collect();
+/// Face areas and unit normals, and area-weighted vertex normals.
+struct Geometry {
+    face_areas: Vec<f64>,
+    face_normals: Vec<DVec3>,
+    vertex_normals: Vec<DVec3>,
+}
+
+/// The [`Geometry`] of a mesh (every vertex used by a face).
+fn geometry(positions: &[DVec3], triangles: &[[u32; 3]]) -> Geometry {
+    let mut face_areas = Vec::with_capacity(triangles.len());
+    let mut face_normals = Vec::with_capacity(triangles.len());
+    let mut vertex_normals = vec![DVec3::ZERO; positions.len()];
+    // The lowest face of each vertex (its normal is the fallback below).
+    let mut first_face = vec![NONE; positions.len()];
+    for (f, t) in triangles.iter().enumerate() {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let n2 = (b - a).cross(c - a); // twice the area times the unit normal
+        face_areas.push(0.5 * n2.length());
+        face_normals.push(n2.normalize_or_zero());
+        for &v in t {
+            vertex_normals[v as usize] += n2;
+            if first_face[v as usize] == NONE {
+                first_face[v as usize] = f as u32;
+            }
+        }
+    }
+    for (v, n) in vertex_normals.iter_mut().enumerate() {
+        // A vertex whose faces cancel out (a pinched fold) keeps its first face's normal.
+        *n = n
+            .try_normalize()
+            .unwrap_or_else(|| face_normals[first_face[v] as usize]);
+    }
+    Geometry {
+        face_areas,
+        face_normals,
+        vertex_normals,
+    }
 }
