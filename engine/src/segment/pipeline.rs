@@ -94,17 +94,28 @@ pub fn segment(
         }
         if !touched.is_empty() {
             let weights = walk_weights(mesh, &frames, options.sigma, &cut);
+            // Each segment's walk is independent of the others': in parallel, each
+            // returning its faces' local labels, applied in segment order below.
+            let walks: Vec<(Vec<u32>, u32)> = touched
+                .par_iter()
+                .enumerate()
+                .map(|(round, &i)| {
+                    let mask = FaceSet::new(mesh, &groups[i]);
+                    let seed = options.seed.wrapping_add(1 + round as u64);
+                    let seeds =
+                        place_seeds(mesh, &frames, &weights, mask.mask(), options.beta, seed);
+                    let local = random_walk(mesh, &weights, mask.mask(), &seeds)?;
+                    let faces = groups[i].iter().map(|&f| local[f as usize]).collect();
+                    Ok((faces, seeds.len() as u32))
+                })
+                .collect::<Result<_, SegmentError>>()?;
             let mut next = labels.iter().copied().max().unwrap_or(0) + 1;
-            for (round, &i) in touched.iter().enumerate() {
-                let mask = FaceSet::new(mesh, &groups[i]);
-                let seed = options.seed.wrapping_add(1 + round as u64);
-                let seeds = place_seeds(mesh, &frames, &weights, mask.mask(), options.beta, seed);
-                let local = random_walk(mesh, &weights, mask.mask(), &seeds)?;
+            for (&i, (local, seed_count)) in touched.iter().zip(walks) {
                 // Give the re-segmented faces fresh labels above all existing ones.
-                for &f in &groups[i] {
-                    labels[f as usize] = next + local[f as usize];
+                for (&f, l) in groups[i].iter().zip(local) {
+                    labels[f as usize] = next + l;
                 }
-                next += seeds.len() as u32;
+                next += seed_count;
             }
             labels = connected_parts(mesh, &labels, &cut);
         }

@@ -64,6 +64,7 @@
 use std::f64::consts::{PI, TAU};
 
 use glam::{DMat3, DVec3};
+use rayon::prelude::*;
 
 use super::Singularity;
 use crate::field::{TensorField, frame_angle, vertex_frames};
@@ -104,11 +105,14 @@ pub(crate) fn wrap_pi(x: f64) -> f64 {
 /// Builds the [`LineFieldTransport`] of `field` on `mesh`: one pass over edges (the
 /// field's turn) and one over faces (corner angles, holonomies). O(V + E + F).
 pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTransport {
+    // Every pass below is a map over vertices, edges or faces: on rayon's threads
+    // (from MIN_PARALLEL items), each item computed as it was sequentially.
     let pos = mesh.positions();
     let frames = vertex_frames(mesh);
     let two_theta: Vec<f64> = field
         .tensors()
-        .iter()
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .zip(&frames)
         .map(|(t, (e1, e2))| doubled_angle(t, *e1, *e2))
         .collect();
@@ -116,7 +120,8 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
     // psi[e] = angle of the edge direction a -> b in the frames of a and of b.
     let psi: Vec<[f64; 2]> = mesh
         .edges()
-        .iter()
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .map(|&[a, b]| {
             let d = pos[b as usize] - pos[a as usize];
             let (fa, fb) = (frames[a as usize], frames[b as usize]);
@@ -125,7 +130,8 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
         .collect();
     let edge_turn: Vec<f64> = mesh
         .edges()
-        .iter()
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
         .zip(&psi)
         .map(|(&[a, b], p)| {
             wrap_pi((two_theta[b as usize] - 2.0 * p[1]) - (two_theta[a as usize] - 2.0 * p[0]))
@@ -133,9 +139,6 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
         .collect();
 
     // Corner angles gamma (projected, representative nearest the true angle beta).
-    let f_count = mesh.face_count();
-    let mut gamma = vec![[0.0f64; 3]; f_count];
-    let mut beta = vec![[0.0f64; 3]; f_count];
     // Angle of the edge leaving corner `v` of a face towards `w`, in v's frame.
     let out_angle = |e: u32, v: u32| -> f64 {
         let [a, _] = mesh.edges()[e as usize];
@@ -143,61 +146,79 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
         // The stored direction is a -> b; seen from b the edge leaves towards a.
         if v == a { p[0] } else { p[1] + PI }
     };
-    for (f, t) in mesh.triangles().iter().enumerate() {
-        let fe = mesh.face_edges()[f];
-        for k in 0..3 {
-            let v = t[k];
-            // Edge k leaves corner k towards k+1; edge k+2 joins corner k+2 and k.
-            let to_next = out_angle(fe[k], v);
-            let to_prev = out_angle(fe[(k + 2) % 3], v);
-            let p = pos[v as usize];
-            let u = pos[t[(k + 1) % 3] as usize] - p;
-            let w = pos[t[(k + 2) % 3] as usize] - p;
-            let b = u.cross(w).length().atan2(u.dot(w));
-            let mut g = wrap_pi(to_prev - to_next);
-            if g < b - PI {
-                g += TAU;
-            }
-            gamma[f][k] = g;
-            beta[f][k] = b;
-        }
-    }
-
-    // Per interior vertex, make the corner angles sum to 2 pi per closed fan.
-    for v in 0..mesh.vertex_count() as u32 {
-        let faces = mesh.vertex_faces(v);
-        let Some(fans) = closed_fans(mesh, v) else {
-            continue;
-        };
-        let mut sum = 0.0;
-        let mut worst: Option<(f64, usize, usize)> = None;
-        for &f in faces {
-            let t = mesh.triangles()[f as usize];
+    let (mut gamma, beta): (Vec<[f64; 3]>, Vec<[f64; 3]>) = mesh
+        .triangles()
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .zip(mesh.face_edges())
+        .map(|(t, fe)| {
+            let (mut gamma, mut beta) = ([0.0f64; 3], [0.0f64; 3]);
             for k in 0..3 {
-                if t[k] == v {
-                    let (g, b) = (gamma[f as usize][k], beta[f as usize][k]);
-                    sum += g;
-                    let dev = (g - b).abs();
-                    if worst.is_none_or(|(d, _, _)| dev > d) {
-                        worst = Some((dev, f as usize, k));
+                let v = t[k];
+                // Edge k leaves corner k towards k+1; edge k+2 joins corner k+2 and k.
+                let to_next = out_angle(fe[k], v);
+                let to_prev = out_angle(fe[(k + 2) % 3], v);
+                let p = pos[v as usize];
+                let u = pos[t[(k + 1) % 3] as usize] - p;
+                let w = pos[t[(k + 2) % 3] as usize] - p;
+                let b = u.cross(w).length().atan2(u.dot(w));
+                let mut g = wrap_pi(to_prev - to_next);
+                if g < b - PI {
+                    g += TAU;
+                }
+                gamma[k] = g;
+                beta[k] = b;
+            }
+            (gamma, beta)
+        })
+        .unzip();
+
+    // Per interior vertex, make the corner angles sum to 2 pi per closed fan: the
+    // corrections are found per vertex in parallel (each touches one corner of its
+    // own) and applied after.
+    let corrections: Vec<(usize, usize, f64)> = (0..mesh.vertex_count() as u32)
+        .into_par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .filter_map(|v| {
+            let fans = closed_fans(mesh, v)?;
+            let mut sum = 0.0;
+            let mut worst: Option<(f64, usize, usize)> = None;
+            for &f in mesh.vertex_faces(v) {
+                let t = mesh.triangles()[f as usize];
+                for k in 0..3 {
+                    if t[k] == v {
+                        let (g, b) = (gamma[f as usize][k], beta[f as usize][k]);
+                        sum += g;
+                        let dev = (g - b).abs();
+                        if worst.is_none_or(|(d, _, _)| dev > d) {
+                            worst = Some((dev, f as usize, k));
+                        }
                     }
                 }
             }
-        }
-        let turns = (sum / TAU).round() as i64;
-        if let Some((_, f, k)) = worst
-            && turns != fans as i64
-        {
-            gamma[f][k] += (fans as i64 - turns) as f64 * TAU;
-        }
+            let turns = (sum / TAU).round() as i64;
+            let (_, f, k) = worst?;
+            (turns != fans as i64).then(|| (f, k, (fans as i64 - turns) as f64 * TAU))
+        })
+        .collect();
+    for (f, k, delta) in corrections {
+        gamma[f][k] += delta;
     }
 
-    let face_holonomy = gamma.iter().map(|g| g[0] + g[1] + g[2] - PI).collect();
+    let face_holonomy = gamma
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .map(|g| g[0] + g[1] + g[2] - PI)
+        .collect();
     LineFieldTransport {
         edge_turn,
         face_holonomy,
     }
 }
+
+/// Items (vertices, edges or faces) below which [`line_field_transport`]'s passes
+/// stay on the calling thread.
+const MIN_PARALLEL: usize = 1 << 14;
 
 /// Number of fans of faces around `v` if every edge at `v` is interior and manifold
 /// (so every fan is closed), `None` otherwise (a boundary or non-manifold vertex).
