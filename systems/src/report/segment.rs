@@ -70,12 +70,16 @@ pub struct SegmentEntry {
     pub mean_angle_deg: f64,
     /// Largest per-face angle.
     pub max_angle_deg: f64,
+    /// Area-weighted mean stretch of the map (the strata's aspect ratio in the field's
+    /// metric, 1 when they are as the field asks; `ParamReport::mean_stretch`).
+    pub mean_stretch: f64,
     /// Parameterized with the isotropic fallback frame.
     pub isotropic_fallback: bool,
     /// An isotropic chart: most of its faces have all three vertices isotropic in the
-    /// scene's field (spacing ratio under `surface.isotropy_threshold`), so its
-    /// direction is the smooth field given to isotropic regions, not the scene's field
-    /// (issue 18); otherwise a field-aligned segment.
+    /// scene's field (spacing ratio under `surface.isotropy_threshold`). A field
+    /// isotropic everywhere is covered by normal-cone charts; in a mixed field such a
+    /// segment followed the smooth direction given to isotropic regions (issue 18).
+    /// Otherwise a field-aligned segment.
     pub chart: bool,
 }
 
@@ -149,6 +153,7 @@ impl SegmentReport {
                         overlaps: r.overlaps,
                         mean_angle_deg: r.mean_angle_deg,
                         max_angle_deg: r.max_angle_deg,
+                        mean_stretch: r.mean_stretch,
                         isotropic_fallback: r.isotropic_fallback,
                         chart: is_chart(p),
                     }
