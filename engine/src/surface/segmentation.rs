@@ -103,3 +103,90 @@ pub fn segment_surface(
         kind: SegmentationKind::FieldAligned { smoothed_vertices },
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::*;
+    use crate::field::FieldSpec;
+    use crate::mesh::shapes;
+
+    fn run(mesh: &TriMesh, field: TensorField, options: &SurfaceOptions) -> SurfaceSegmentation {
+        let mut stages = Vec::new();
+        let out =
+            segment_surface(mesh, Arc::new(field), options, &|_| {}, &mut stages).expect("segment");
+        let names: Vec<&str> = stages.iter().map(|(n, _)| *n).collect();
+        assert_eq!(names, ["isotropic directions", "segmentation"]);
+        out
+    }
+
+    fn constant(mesh: &TriMesh, anisotropy: f64) -> TensorField {
+        FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy,
+            density: 2.0,
+        }
+        .build(mesh)
+        .expect("field")
+    }
+
+    #[test]
+    fn the_field_decides_charts_or_field_aligned_segments() {
+        let mesh = shapes::torus(1.0, 0.4, 24).expect("torus");
+        let options = SurfaceOptions::default();
+        // Isotropic everywhere, and nearly so (under the threshold): charts, on the
+        // field's isotropic copy (densities kept).
+        for anisotropy in [1.0, 1.05] {
+            let input = constant(&mesh, anisotropy);
+            let out = run(&mesh, input.clone(), &options);
+            assert_eq!(out.kind, SegmentationKind::IsotropicCharts);
+            assert!(out.segmentation.singularities.is_empty());
+            for v in 0..mesh.vertex_count() as u32 {
+                let (a, b) = (
+                    out.field.vertex_density(&mesh, v),
+                    input.vertex_density(&mesh, v),
+                );
+                assert!((a - b).abs() < 1e-9 * b, "vertex {v}: {a} vs {b}");
+            }
+        }
+        // Anisotropic everywhere: the field-aligned path, nothing smoothed.
+        let out = run(&mesh, constant(&mesh, 3.0), &options);
+        assert_eq!(
+            out.kind,
+            SegmentationKind::FieldAligned {
+                smoothed_vertices: 0
+            }
+        );
+        // A threshold of 1 turns isotropic handling off: even an isotropic field is
+        // segmented along its (arbitrary) eigenvectors.
+        let off = SurfaceOptions {
+            isotropy_threshold: 1.0,
+            ..options
+        };
+        let out = run(&mesh, constant(&mesh, 1.0), &off);
+        assert!(matches!(out.kind, SegmentationKind::FieldAligned { .. }));
+    }
+
+    #[test]
+    fn a_mixed_field_smooths_its_isotropic_vertices_and_stays_field_aligned() {
+        // Isotropic on the torus's upper half, 3:1 along x on the lower half.
+        let mesh = shapes::torus(1.0, 0.4, 24).expect("torus");
+        let upper: Vec<bool> = mesh.positions().iter().map(|p| p.z > 0.0).collect();
+        let directions = vec![DVec3::X; mesh.vertex_count()];
+        let eigenvalues: Vec<[f64; 2]> = upper
+            .iter()
+            .map(|&u| if u { [1.0, 1.0] } else { [9.0, 1.0] })
+            .collect();
+        let field = TensorField::from_frames(&mesh, &directions, &eigenvalues).expect("field");
+        let isotropic = upper.iter().filter(|&&u| u).count();
+        assert!(isotropic > 0 && isotropic < mesh.vertex_count());
+        let out = run(&mesh, field, &SurfaceOptions::default());
+        assert_eq!(
+            out.kind,
+            SegmentationKind::FieldAligned {
+                smoothed_vertices: isotropic
+            }
+        );
+    }
+}
