@@ -63,10 +63,12 @@ pub struct SurfaceOptions {
     /// the largest per-face angle (section 7.3.1's "no angle greater than gamma"),
     /// which splits more.
     pub angle_criterion: AngleCriterion,
-    /// Vertices whose anisotropy `sqrt(l1 / l2)` is below this take their direction
-    /// from a smooth line field before segmentation
-    /// ([`smooth_isotropic_directions`]): isotropic regions then make no singularities
-    /// and no over-segmentation. Densities do not change; an exactly isotropic tensor
+    /// Vertices whose anisotropy `sqrt(l1 / l2)` is below this count as isotropic. A
+    /// field isotropic everywhere is covered by normal-cone charts
+    /// ([`segment_surface`]); otherwise isotropic vertices take their direction from a
+    /// smooth line field before segmentation
+    /// ([`smooth_isotropic_directions`](crate::field::smooth_isotropic_directions)):
+    /// isotropic regions then make no singularities and no over-segmentation. Densities do not change; an exactly isotropic tensor
     /// becomes [`ISOTROPIC_DIRECTION_RATIO`](crate::field::ISOTROPIC_DIRECTION_RATIO)
     /// (1.02) anisotropic along that direction so
     /// that it holds it, and a nearly isotropic one turns by at most its small
