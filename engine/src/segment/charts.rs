@@ -35,7 +35,10 @@ use super::{Segmentation, segmentation_from_labels};
 use crate::mesh::{NONE, TriMesh};
 
 /// Default half-angle (radians) of the normal cones of the greedy cover: 60 degrees.
-/// Measured on the isotropic bunny (69k faces): see `bench/README.md`.
+/// Measured on the isotropic bunny (69k faces), charts after splitting and their
+/// face-weighted mean stretch: 40 degrees 124 and 1.010, 50 degrees 67 and 1.015, 60
+/// degrees 48 and 1.019, 70 degrees 34 and 1.021. 60 keeps under the 64 charts
+/// with room, and the stretch barely grows past it.
 pub const CHART_NORMAL_ANGLE: f64 = 60.0 * std::f64::consts::PI / 180.0;
 
 /// Rounds of Lloyd relaxation after the greedy cover.
