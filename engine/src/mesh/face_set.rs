@@ -137,14 +137,48 @@ impl FaceSet {
     /// of their lowest face, faces within a part in the set's order. Every face is in
     /// exactly one group: set faces labelled `NONE` come last, as one group.
     pub fn parts(&self, mesh: &TriMesh, labels: &[u32], cut: &[bool]) -> Vec<Vec<u32>> {
-        let part = connected_parts(mesh, labels, cut);
-        let mut groups = group_by_label(&part, self.faces.iter().copied());
-        let unlabelled: Vec<u32> = self
-            .faces
-            .iter()
-            .copied()
-            .filter(|&f| part[f as usize] == NONE)
-            .collect();
+        // As `connected_parts` numbers them (by lowest face), but visiting only the
+        // set's faces: O(set log set) instead of O(F), which matters when a small
+        // segment of a large mesh is split again and again.
+        let mut sorted = self.faces.clone();
+        sorted.sort_unstable();
+        let local = |f: u32| sorted.binary_search(&f).ok();
+        let mut part = vec![NONE; sorted.len()];
+        let mut next = 0u32;
+        let mut queue = VecDeque::new();
+        for (start, &f0) in sorted.iter().enumerate() {
+            let label = labels[f0 as usize];
+            if label == NONE || part[start] != NONE {
+                continue;
+            }
+            part[start] = next;
+            queue.push_back(f0);
+            while let Some(f) = queue.pop_front() {
+                for &e in &mesh.face_edges()[f as usize] {
+                    if cut[e as usize] || !is_interior(mesh, e as usize) {
+                        continue;
+                    }
+                    if let Some(g) = across(mesh, e, f)
+                        && labels[g as usize] == label
+                        && let Some(j) = local(g)
+                        && part[j] == NONE
+                    {
+                        part[j] = next;
+                        queue.push_back(g);
+                    }
+                }
+            }
+            next += 1;
+        }
+        let mut groups = vec![Vec::new(); next as usize];
+        let mut unlabelled = Vec::new();
+        for &f in &self.faces {
+            // Every set face is in `sorted`.
+            match local(f).map(|i| part[i]) {
+                Some(p) if p != NONE => groups[p as usize].push(f),
+                _ => unlabelled.push(f),
+            }
+        }
         if !unlabelled.is_empty() {
             groups.push(unlabelled);
         }

@@ -153,10 +153,14 @@ pub fn walk_weights(mesh: &TriMesh, faces: &FaceField, sigma: f64, blocked: &[bo
 pub struct WalkSystem {
     face_count: usize,
     seed_count: usize,
-    /// Per mesh face: its row among the unknowns, or `NONE` (seed or outside the mask).
-    row_of_face: Vec<u32>,
-    /// Per mesh face: its seed index, or `NONE`.
-    seed_of_face: Vec<u32>,
+    /// The mask's faces, ascending: face `faces[i]` is local face `i`. Everything else
+    /// is sized by the mask, not the mesh, so a walk over a small segment of a large
+    /// mesh costs in proportion to the segment.
+    faces: Vec<u32>,
+    /// Per local face: its row among the unknowns, or `NONE` (a seed).
+    row_of_local: Vec<u32>,
+    /// Per local face: its seed index, or `NONE`.
+    seed_of_local: Vec<u32>,
     /// Per seed `k`, `rhs[rhs_offsets[k]..rhs_offsets[k + 1]]` are the `(row, weight)`
     /// entries of `b_k`.
     rhs_offsets: Vec<usize>,
@@ -185,36 +189,50 @@ impl WalkSystem {
         let n = mesh.face_count();
         assert_eq!(weights.len(), mesh.edge_count(), "one weight per edge");
         assert_eq!(mask.len(), n, "one mask flag per face");
-        let mut seed_of_face = vec![NONE; n];
+        let faces: Vec<u32> = (0..n as u32).filter(|&f| mask[f as usize]).collect();
+        // Local index of a mask face: the identity when the mask is the whole mesh.
+        let all = faces.len() == n;
+        let local = |f: u32| -> usize {
+            if all {
+                f as usize
+            } else {
+                faces.binary_search(&f).unwrap_or(usize::MAX)
+            }
+        };
+        let m = faces.len();
+        let mut seed_of_local = vec![NONE; m];
         for (k, &s) in seeds.iter().enumerate() {
             assert!(
                 (s as usize) < n && mask[s as usize],
                 "seed {s} is not a mask face"
             );
-            assert_eq!(seed_of_face[s as usize], NONE, "seed {s} is repeated");
-            seed_of_face[s as usize] = k as u32;
+            let i = local(s);
+            assert_eq!(seed_of_local[i], NONE, "seed {s} is repeated");
+            seed_of_local[i] = k as u32;
         }
 
         // Every mask face must be reachable from a seed, or L_U is singular.
-        let mut reached = seed_of_face.iter().map(|&k| k != NONE).collect::<Vec<_>>();
+        let mut reached: Vec<bool> = seed_of_local.iter().map(|&k| k != NONE).collect();
         let mut queue: VecDeque<u32> = seeds.iter().copied().collect();
         while let Some(f) = queue.pop_front() {
             for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-                if !reached[g as usize] {
-                    reached[g as usize] = true;
+                let j = local(g);
+                if !reached[j] {
+                    reached[j] = true;
                     queue.push_back(g);
                 }
             });
         }
-        if let Some(face) = (0..n).find(|&f| mask[f] && !reached[f]) {
-            return Err(SegmentError::Unseeded { face: face as u32 });
+        if let Some(i) = reached.iter().position(|&r| !r) {
+            return Err(SegmentError::Unseeded { face: faces[i] });
         }
 
-        let mut row_of_face = vec![NONE; n];
+        // Rows in ascending face order over the mask's non-seed faces.
+        let mut row_of_local = vec![NONE; m];
         let mut unknowns = 0u32;
-        for f in 0..n {
-            if mask[f] && seed_of_face[f] == NONE {
-                row_of_face[f] = unknowns;
+        for (row, &seed) in row_of_local.iter_mut().zip(&seed_of_local) {
+            if seed == NONE {
+                *row = unknowns;
                 unknowns += 1;
             }
         }
@@ -223,21 +241,22 @@ impl WalkSystem {
         // Lower triangle of L_U (row >= column) and the seeds' right-hand sides.
         let mut triplets = Vec::with_capacity(3 * unknowns);
         let mut rhs_pairs: Vec<(u32, u32, f64)> = Vec::new();
-        for f in 0..n as u32 {
-            let i = row_of_face[f as usize];
+        for (l, &f) in faces.iter().enumerate() {
+            let i = row_of_local[l];
             if i == NONE {
                 continue;
             }
             let mut diagonal = 0.0;
             for_each_walk_neighbor(mesh, weights, mask, f, |g, w| {
                 diagonal += w;
-                let j = row_of_face[g as usize];
+                let lg = local(g);
+                let j = row_of_local[lg];
                 if j != NONE {
                     if j < i {
                         triplets.push(Triplet::new(i as usize, j as usize, -w));
                     }
                 } else {
-                    rhs_pairs.push((seed_of_face[g as usize], i, w));
+                    rhs_pairs.push((seed_of_local[lg], i, w));
                 }
             });
             triplets.push(Triplet::new(i as usize, i as usize, diagonal));
@@ -261,8 +280,9 @@ impl WalkSystem {
         Ok(Self {
             face_count: n,
             seed_count: seeds.len(),
-            row_of_face,
-            seed_of_face,
+            faces,
+            row_of_local,
+            seed_of_local,
             rhs_offsets,
             rhs,
             factor,
@@ -316,9 +336,9 @@ impl WalkSystem {
             let x = self.solve_block(block.clone());
             for (c, k) in block.enumerate() {
                 let column = &mut out[(k - seeds.start) * n..(k - seeds.start + 1) * n];
-                let faces = self.row_of_face.iter().zip(&self.seed_of_face);
-                for (value, (&row, &seed)) in column.iter_mut().zip(faces) {
-                    *value = if row != NONE {
+                let local = self.row_of_local.iter().zip(&self.seed_of_local);
+                for (&f, (&row, &seed)) in self.faces.iter().zip(local) {
+                    column[f as usize] = if row != NONE {
                         x[(row as usize, c)]
                     } else if seed == k as u32 {
                         1.0
@@ -373,16 +393,12 @@ impl WalkSystem {
                     (best, arg)
                 },
             );
-        (0..self.face_count)
-            .map(|f| {
-                let row = self.row_of_face[f];
-                if row != NONE {
-                    arg[row as usize]
-                } else {
-                    self.seed_of_face[f]
-                }
-            })
-            .collect()
+        let mut labels = vec![NONE; self.face_count];
+        let local = self.row_of_local.iter().zip(&self.seed_of_local);
+        for (&f, (&row, &seed)) in self.faces.iter().zip(local) {
+            labels[f as usize] = if row != NONE { arg[row as usize] } else { seed };
+        }
+        labels
     }
 }
 
