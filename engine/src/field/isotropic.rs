@@ -48,8 +48,23 @@ pub fn isotropic_vertices(mesh: &TriMesh, field: &TensorField, threshold: f64) -
     is_isotropic(&eigens(mesh, field), threshold)
 }
 
+/// Whether every vertex's spacing ratio `sqrt(l1 / l2)` is under `threshold` (as
+/// [`isotropic_vertices`] would say of each), stopping at the first vertex that is not:
+/// nearly free for an anisotropic field.
+pub fn all_isotropic(mesh: &TriMesh, field: &TensorField, threshold: f64) -> bool {
+    let ratio2 = threshold * threshold;
+    field
+        .tensors()
+        .iter()
+        .zip(mesh.vertex_normals())
+        .all(|(t, n)| {
+            let e = eigen_in_plane(t, *n);
+            !(e.l1 >= ratio2 * e.l2)
+        })
+}
+
 /// The in-plane eigen-decomposition of every vertex tensor.
-fn eigens(mesh: &TriMesh, field: &TensorField) -> Vec<Eigen2> {
+pub(super) fn eigens(mesh: &TriMesh, field: &TensorField) -> Vec<Eigen2> {
     field
         .tensors()
         .iter()
@@ -185,6 +200,26 @@ mod tests {
             anisotropy,
             density: 2.0,
         }
+    }
+
+    #[test]
+    fn all_isotropic_agrees_with_the_per_vertex_test() {
+        let mesh = shapes::sphere(1.0, 8).expect("sphere");
+        // A constant direction projected onto a sphere is isotropic only where it is
+        // normal to the surface: some vertices, not all, for a ratio above 1.
+        for (anisotropy, threshold) in [(1.0, 1.1), (1.05, 1.1), (3.0, 1.1), (1.05, 1.01)] {
+            let field = constant(anisotropy).build(&mesh).expect("field");
+            let each = isotropic_vertices(&mesh, &field, threshold);
+            assert_eq!(
+                all_isotropic(&mesh, &field, threshold),
+                each.iter().all(|&i| i),
+                "anisotropy {anisotropy}, threshold {threshold}"
+            );
+        }
+        let field = constant(1.0).build(&mesh).expect("field");
+        assert!(all_isotropic(&mesh, &field, 1.1));
+        let field = constant(3.0).build(&mesh).expect("field");
+        assert!(!all_isotropic(&mesh, &field, 1.1));
     }
 
     #[test]

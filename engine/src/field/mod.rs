@@ -47,7 +47,8 @@ pub use error::FieldError;
 pub use file::{format_field_file, parse_field_file, read_field_file};
 pub use guidance::{curvature_guidance, direction_guidance};
 pub use isotropic::{
-    ISOTROPIC_DIRECTION_RATIO, isotropic_copy, isotropic_vertices, smooth_isotropic_directions,
+    ISOTROPIC_DIRECTION_RATIO, all_isotropic, isotropic_copy, isotropic_vertices,
+    smooth_isotropic_directions,
 };
 pub use spec::{FieldSpec, PlanarDensity};
 pub use warp::PlanarWarp;

@@ -139,13 +139,7 @@ fn interpolation_is_linear_and_exact_at_corners() {
 
 /// Builds `spec` and returns the eigen-decomposition at every vertex of `mesh`.
 fn vertex_eigen(spec: &FieldSpec, mesh: &TriMesh) -> Vec<Eigen2> {
-    let field = spec.build(mesh).expect("valid spec");
-    field
-        .tensors()
-        .iter()
-        .zip(mesh.vertex_normals())
-        .map(|(t, n)| eigen_in_plane(t, *n))
-        .collect()
+    isotropic::eigens(mesh, &spec.build(mesh).expect("valid spec"))
 }
 
 fn planar(density: PlanarDensity) -> FieldSpec {

@@ -143,34 +143,8 @@ impl FaceSet {
         let mut sorted = self.faces.clone();
         sorted.sort_unstable();
         let local = |f: u32| sorted.binary_search(&f).ok();
-        let mut part = vec![NONE; sorted.len()];
-        let mut next = 0u32;
-        let mut queue = VecDeque::new();
-        for (start, &f0) in sorted.iter().enumerate() {
-            let label = labels[f0 as usize];
-            if label == NONE || part[start] != NONE {
-                continue;
-            }
-            part[start] = next;
-            queue.push_back(f0);
-            while let Some(f) = queue.pop_front() {
-                for &e in &mesh.face_edges()[f as usize] {
-                    if cut[e as usize] || !is_interior(mesh, e as usize) {
-                        continue;
-                    }
-                    if let Some(g) = across(mesh, e, f)
-                        && labels[g as usize] == label
-                        && let Some(j) = local(g)
-                        && part[j] == NONE
-                    {
-                        part[j] = next;
-                        queue.push_back(g);
-                    }
-                }
-            }
-            next += 1;
-        }
-        let mut groups = vec![Vec::new(); next as usize];
+        let (part, count) = number_parts(mesh, sorted.len(), |i| sorted[i], local, labels, cut);
+        let mut groups = vec![Vec::new(); count as usize];
         let mut unlabelled = Vec::new();
         for &f in &self.faces {
             // Every set face is in `sorted`.
@@ -235,32 +209,51 @@ pub fn connected_parts(mesh: &TriMesh, labels: &[u32], blocked: &[bool]) -> Vec<
         mesh.edge_count(),
         "one blocked flag per edge"
     );
-    let mut out = vec![NONE; n];
+    number_parts(mesh, n, |i| i as u32, |f| Some(f as usize), labels, blocked).0
+}
+
+/// The connected parts of equal label among `count` faces (`face(i)` the `i`-th, in
+/// ascending face order; `index(f)` its position, `None` for a face not among them),
+/// through manifold edges not `blocked`: per position its part (numbered from 0 by
+/// lowest face; `NONE` where unlabelled), and the number of parts. Breadth-first,
+/// sequential; O(count) lookups of `index`.
+fn number_parts(
+    mesh: &TriMesh,
+    count: usize,
+    face: impl Fn(usize) -> u32,
+    index: impl Fn(u32) -> Option<usize>,
+    labels: &[u32],
+    blocked: &[bool],
+) -> (Vec<u32>, u32) {
+    let mut part = vec![NONE; count];
     let mut next = 0u32;
     let mut queue = VecDeque::new();
-    for start in 0..n {
-        if labels[start] == NONE || out[start] != NONE {
+    for start in 0..count {
+        let f0 = face(start);
+        let label = labels[f0 as usize];
+        if label == NONE || part[start] != NONE {
             continue;
         }
-        out[start] = next;
-        queue.push_back(start as u32);
+        part[start] = next;
+        queue.push_back(f0);
         while let Some(f) = queue.pop_front() {
             for &e in &mesh.face_edges()[f as usize] {
                 if blocked[e as usize] || !is_interior(mesh, e as usize) {
                     continue;
                 }
                 if let Some(g) = across(mesh, e, f)
-                    && out[g as usize] == NONE
-                    && labels[g as usize] == labels[start]
+                    && labels[g as usize] == label
+                    && let Some(j) = index(g)
+                    && part[j] == NONE
                 {
-                    out[g as usize] = next;
+                    part[j] = next;
                     queue.push_back(g);
                 }
             }
         }
         next += 1;
     }
-    out
+    (part, next)
 }
 
 /// The face across edge `e` from face `f`, if the edge joins two faces.

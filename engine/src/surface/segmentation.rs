@@ -14,7 +14,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::{Progress, SurfaceError, SurfaceOptions, record_stage};
-use crate::field::{TensorField, isotropic_copy, isotropic_vertices, smooth_isotropic_directions};
+use crate::field::{TensorField, all_isotropic, isotropic_copy, smooth_isotropic_directions};
 use crate::mesh::TriMesh;
 use crate::segment::{Segmentation, isotropic_charts, segment};
 
@@ -70,11 +70,7 @@ pub fn segment_surface(
 ) -> Result<SurfaceSegmentation, SurfaceError> {
     progress(Progress::Start("isotropic directions"));
     let t = Instant::now();
-    let all_isotropic = options.isotropy_threshold > 1.0
-        && isotropic_vertices(mesh, &field, options.isotropy_threshold)
-            .iter()
-            .all(|&iso| iso);
-    if all_isotropic {
+    if options.isotropy_threshold > 1.0 && all_isotropic(mesh, &field, options.isotropy_threshold) {
         let field = Arc::new(isotropic_copy(mesh, &field)?);
         record_stage(stages, progress, "isotropic directions", t);
         progress(Progress::Start("segmentation"));
