@@ -242,8 +242,8 @@ fn flood(mesh: &TriMesh, normals: &[DVec3], seeds: &[Seed]) -> Vec<u32> {
         }
         buckets[current] = Vec::new();
     }
-    // A face no seed reaches (possible only through edges the component count and the
-    // neighbour table read differently) gets a chart of its own reach, never no chart.
+    // Every component keeps a seed (relaxed_seeds), so every face is reached; should
+    // one not be, it gets a chart of its own reach rather than none.
     let mut next = seeds.len() as u32;
     for start in 0..labels.len() {
         if labels[start] != NONE {
@@ -412,6 +412,18 @@ mod tests {
             "no chart spans both components"
         );
         assert_eq!(chart_labels(&mesh, ANGLE), labels);
+        // The small sphere is under 1/SMALL_CHART_SHARE of the mean chart area, yet its
+        // largest chart keeps a seed in the relaxation itself (not through the flood's
+        // last-resort fill).
+        let seeds = relaxed_seeds(&mesh, &labels);
+        let in_small = |s: &Seed| s.face as usize >= first_small;
+        assert_eq!(seeds.iter().filter(|s| in_small(s)).count(), 1);
+        let small_area: f64 = mesh.face_areas()[first_small..].iter().sum();
+        let mean = mesh.area() / (labels.iter().max().map_or(0, |&m| m + 1) as f64);
+        assert!(
+            small_area * SMALL_CHART_SHARE < mean,
+            "{small_area} vs {mean}"
+        );
     }
 
     #[test]
