@@ -19,6 +19,8 @@
 pub mod charts;
 mod clusters;
 mod from_labels;
+mod graph_walk;
+pub mod multilevel;
 pub mod paths;
 mod pipeline;
 pub mod region;

@@ -30,31 +30,17 @@
 //! walks", CAGD 26(6), 2009; Quinn et al., "Generalized Anisotropic Stratified Surface
 //! Sampling", section 4 (the field-based difference measure).
 
-use std::collections::VecDeque;
 use std::ops::Range;
 
-use faer::Mat;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::prelude::*;
-use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Side};
-use rayon::prelude::*;
-
+pub use super::graph_walk::RHS_BLOCK;
+use super::graph_walk::{GraphWalk, GraphWalkError, WalkGraph};
+pub use super::multilevel::MULTILEVEL_FACES;
+use super::multilevel::multilevel_labels;
 use super::seeds::{FaceField, direction_confidence, for_each_walk_neighbor};
 use super::{SegmentError, line_angle};
 pub use crate::mesh::connected_parts;
 use crate::mesh::face_set::is_interior;
 use crate::mesh::{NONE, TriMesh};
-
-/// Right-hand sides (seeds) solved together. Measured on the bunny (69k unknowns, 1.9M
-/// nonzeros in the factor), per right-hand side on one core: 4.7 ms one at a time,
-/// 1.5 ms in blocks of 8, 1.3 ms in blocks of 16, 1.7 ms in blocks of 32 and more (a
-/// block then outgrows the cache: 69k x 32 x 8 bytes = 18 MB).
-pub const RHS_BLOCK: usize = 16;
 
 /// Largest exponent `d*/sigma` used in a weight: weights never fall below
 /// `|e| exp(-30)` (about `1e-13 |e|`). Near singularities `d*` can reach hundreds on a
@@ -152,21 +138,11 @@ pub fn walk_weights(mesh: &TriMesh, faces: &FaceField, sigma: f64, blocked: &[bo
 #[derive(Debug)]
 pub struct WalkSystem {
     face_count: usize,
-    seed_count: usize,
-    /// The mask's faces, ascending: face `faces[i]` is local face `i`. Everything else
+    /// The mask's faces, ascending: face `faces[i]` is graph node `i`. Everything else
     /// is sized by the mask, not the mesh, so a walk over a small segment of a large
     /// mesh costs in proportion to the segment.
     faces: Vec<u32>,
-    /// Per local face: its row among the unknowns, or `NONE` (a seed).
-    row_of_local: Vec<u32>,
-    /// Per local face: its seed index, or `NONE`.
-    seed_of_local: Vec<u32>,
-    /// Per seed `k`, `rhs[rhs_offsets[k]..rhs_offsets[k + 1]]` are the `(row, weight)`
-    /// entries of `b_k`.
-    rhs_offsets: Vec<usize>,
-    rhs: Vec<(u32, f64)>,
-    /// The Cholesky factor of `L_U` (absent when there are no unknowns).
-    factor: Option<(SymbolicCholesky<usize>, Vec<f64>)>,
+    walk: GraphWalk,
 }
 
 impl WalkSystem {
@@ -186,138 +162,19 @@ impl WalkSystem {
         mask: &[bool],
         seeds: &[u32],
     ) -> Result<Self, SegmentError> {
-        let n = mesh.face_count();
-        assert_eq!(weights.len(), mesh.edge_count(), "one weight per edge");
-        assert_eq!(mask.len(), n, "one mask flag per face");
-        let faces: Vec<u32> = (0..n as u32).filter(|&f| mask[f as usize]).collect();
-        // Local index of a mask face: the identity when the mask is the whole mesh.
-        let all = faces.len() == n;
-        let local = |f: u32| -> usize {
-            if all {
-                f as usize
-            } else {
-                faces.binary_search(&f).unwrap_or(usize::MAX)
-            }
-        };
-        let m = faces.len();
-        let mut seed_of_local = vec![NONE; m];
-        for (k, &s) in seeds.iter().enumerate() {
-            assert!(
-                (s as usize) < n && mask[s as usize],
-                "seed {s} is not a mask face"
-            );
-            let i = local(s);
-            assert_eq!(seed_of_local[i], NONE, "seed {s} is repeated");
-            seed_of_local[i] = k as u32;
-        }
-
-        // Every mask face must be reachable from a seed, or L_U is singular.
-        let mut reached: Vec<bool> = seed_of_local.iter().map(|&k| k != NONE).collect();
-        let mut queue: VecDeque<u32> = seeds.iter().copied().collect();
-        while let Some(f) = queue.pop_front() {
-            for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-                let j = local(g);
-                if !reached[j] {
-                    reached[j] = true;
-                    queue.push_back(g);
-                }
-            });
-        }
-        if let Some(i) = reached.iter().position(|&r| !r) {
-            return Err(SegmentError::Unseeded { face: faces[i] });
-        }
-
-        // Rows in ascending face order over the mask's non-seed faces.
-        let mut row_of_local = vec![NONE; m];
-        let mut unknowns = 0u32;
-        for (row, &seed) in row_of_local.iter_mut().zip(&seed_of_local) {
-            if seed == NONE {
-                *row = unknowns;
-                unknowns += 1;
-            }
-        }
-        let unknowns = unknowns as usize;
-
-        // Lower triangle of L_U (row >= column) and the seeds' right-hand sides.
-        let mut triplets = Vec::with_capacity(3 * unknowns);
-        let mut rhs_pairs: Vec<(u32, u32, f64)> = Vec::new();
-        for (l, &f) in faces.iter().enumerate() {
-            let i = row_of_local[l];
-            if i == NONE {
-                continue;
-            }
-            let mut diagonal = 0.0;
-            for_each_walk_neighbor(mesh, weights, mask, f, |g, w| {
-                diagonal += w;
-                let lg = local(g);
-                let j = row_of_local[lg];
-                if j != NONE {
-                    if j < i {
-                        triplets.push(Triplet::new(i as usize, j as usize, -w));
-                    }
-                } else {
-                    rhs_pairs.push((seed_of_local[lg], i, w));
-                }
-            });
-            triplets.push(Triplet::new(i as usize, i as usize, diagonal));
-        }
-        // Group right-hand-side entries by seed (stable: rows stay ascending).
-        rhs_pairs.sort_by_key(|&(k, _, _)| k);
-        let mut rhs_offsets = vec![0usize; seeds.len() + 1];
-        for &(k, _, _) in &rhs_pairs {
-            rhs_offsets[k as usize + 1] += 1;
-        }
-        for k in 0..seeds.len() {
-            rhs_offsets[k + 1] += rhs_offsets[k];
-        }
-        let rhs = rhs_pairs.into_iter().map(|(_, i, w)| (i, w)).collect();
-
-        let factor = if unknowns == 0 {
-            None
-        } else {
-            Some(factorize(unknowns, &triplets)?)
-        };
+        let (graph, faces) = face_graph(mesh, weights, mask);
+        let local = local_seeds(mesh, mask, &faces, seeds);
+        let walk = GraphWalk::build(&graph, &local).map_err(|e| face_error(e, &faces))?;
         Ok(Self {
-            face_count: n,
-            seed_count: seeds.len(),
+            face_count: mesh.face_count(),
             faces,
-            row_of_local,
-            seed_of_local,
-            rhs_offsets,
-            rhs,
-            factor,
+            walk,
         })
     }
 
     /// Number of unknowns (mask faces that are not seeds).
     pub fn unknown_count(&self) -> usize {
-        self.factor
-            .as_ref()
-            .map_or(0, |(symbolic, _)| symbolic.nrows())
-    }
-
-    /// Solves `L_U x_k = b_k` for the seeds in `seeds` (one block), as columns of a
-    /// dense matrix over the unknowns.
-    fn solve_block(&self, seeds: Range<usize>) -> Mat<f64> {
-        let unknowns = self.unknown_count();
-        let mut x = Mat::<f64>::zeros(unknowns, seeds.len());
-        let Some((symbolic, values)) = &self.factor else {
-            return x;
-        };
-        for (c, k) in seeds.enumerate() {
-            for &(i, w) in &self.rhs[self.rhs_offsets[k]..self.rhs_offsets[k + 1]] {
-                x[(i as usize, c)] += w;
-            }
-        }
-        let columns = x.ncols();
-        let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(columns, Par::Seq));
-        LltRef::new(symbolic, values).solve_in_place_with_conj(
-            Conj::No,
-            x.as_mut(),
-            Par::Seq,
-            MemStack::new(&mut scratch),
-        );
-        x
+        self.walk.unknown_count()
     }
 
     /// The probability that a walk from each face reaches each seed of `seeds` first,
@@ -328,24 +185,16 @@ impl WalkSystem {
     /// # Panics
     /// If `seeds` reaches past the seed count.
     pub fn probabilities(&self, seeds: Range<usize>) -> Vec<f64> {
-        assert!(seeds.end <= self.seed_count, "seed range out of bounds");
         let n = self.face_count;
+        let m = self.faces.len();
+        let local = self.walk.probabilities(seeds.clone());
         let mut out = vec![0.0; n * seeds.len()];
-        for start in seeds.clone().step_by(RHS_BLOCK) {
-            let block = start..(start + RHS_BLOCK).min(seeds.end);
-            let x = self.solve_block(block.clone());
-            for (c, k) in block.enumerate() {
-                let column = &mut out[(k - seeds.start) * n..(k - seeds.start + 1) * n];
-                let local = self.row_of_local.iter().zip(&self.seed_of_local);
-                for (&f, (&row, &seed)) in self.faces.iter().zip(local) {
-                    column[f as usize] = if row != NONE {
-                        x[(row as usize, c)]
-                    } else if seed == k as u32 {
-                        1.0
-                    } else {
-                        0.0
-                    };
-                }
+        for (column, values) in out
+            .chunks_exact_mut(n.max(1))
+            .zip(local.chunks_exact(m.max(1)))
+        {
+            for (&f, &p) in self.faces.iter().zip(values) {
+                column[f as usize] = p;
             }
         }
         out
@@ -356,82 +205,72 @@ impl WalkSystem {
     /// Blocks of [`RHS_BLOCK`] seeds are solved in parallel with rayon and merged in
     /// seed order, so the result does not depend on the thread count.
     pub fn labels(&self) -> Vec<u32> {
-        let unknowns = self.unknown_count();
-        let blocks: Vec<Range<usize>> = (0..self.seed_count)
-            .step_by(RHS_BLOCK)
-            .map(|s| s..(s + RHS_BLOCK).min(self.seed_count))
-            .collect();
-        // Per block, each unknown's best probability and seed within the block; blocks
-        // are combined in seed order (rayon's `reduce` never reorders), keeping the
-        // earlier block on ties, so ties go to the lower seed whatever the threads.
-        let (_, arg) = blocks
-            .into_par_iter()
-            .map(|block| {
-                let x = self.solve_block(block.clone());
-                let mut best = vec![f64::NEG_INFINITY; unknowns];
-                let mut arg = vec![NONE; unknowns];
-                for (c, k) in block.enumerate() {
-                    let column = x.col(c);
-                    for ((b, a), &p) in best.iter_mut().zip(&mut arg).zip(column.iter()) {
-                        if p > *b {
-                            *b = p;
-                            *a = k as u32;
-                        }
-                    }
-                }
-                (best, arg)
-            })
-            .reduce(
-                || (vec![f64::NEG_INFINITY; unknowns], vec![NONE; unknowns]),
-                |(mut best, mut arg), (later_best, later_arg)| {
-                    for i in 0..unknowns {
-                        if later_best[i] > best[i] {
-                            best[i] = later_best[i];
-                            arg[i] = later_arg[i];
-                        }
-                    }
-                    (best, arg)
-                },
-            );
         let mut labels = vec![NONE; self.face_count];
-        let local = self.row_of_local.iter().zip(&self.seed_of_local);
-        for (&f, (&row, &seed)) in self.faces.iter().zip(local) {
-            labels[f as usize] = if row != NONE { arg[row as usize] } else { seed };
+        for (&f, l) in self.faces.iter().zip(self.walk.labels()) {
+            labels[f as usize] = l;
         }
         labels
     }
 }
 
-/// Assembles the `n x n` lower triangle from `triplets` and factors it.
-fn factorize(
-    n: usize,
-    triplets: &[Triplet<usize, usize, f64>],
-) -> Result<(SymbolicCholesky<usize>, Vec<f64>), SegmentError> {
-    let solver = |what: String| SegmentError::Solver { what };
-    let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, triplets)
-        .map_err(|e| solver(format!("assembling L_U: {e:?}")))?;
-    let symbolic = factorize_symbolic_cholesky(
-        a.symbolic(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        Default::default(),
-    )
-    .map_err(|e| solver(format!("symbolic Cholesky: {e:?}")))?;
-    let mut values = vec![0.0; symbolic.len_val()];
-    let mut scratch =
-        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
-    symbolic
-        .factorize_numeric_llt(
-            &mut values,
-            a.as_ref(),
-            Side::Lower,
-            LltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut scratch),
-            Default::default(),
-        )
-        .map_err(|e| solver(format!("numeric Cholesky: {e:?}")))?;
-    Ok((symbolic, values))
+/// A graph walk's error, with the node of [`GraphWalkError::Unseeded`] as its face.
+fn face_error(e: GraphWalkError, faces: &[u32]) -> SegmentError {
+    match e {
+        GraphWalkError::Unseeded(v) => SegmentError::Unseeded { face: faces[v] },
+        GraphWalkError::Solver(e) => e,
+    }
+}
+
+/// The face graph of `mask`: its faces ascending (`faces[i]` is node `i`), joined by
+/// the positive-weight edges between mask faces, listed in each face's edge order.
+///
+/// # Panics
+/// If `weights` or `mask` do not match the mesh.
+pub(crate) fn face_graph(mesh: &TriMesh, weights: &[f64], mask: &[bool]) -> (WalkGraph, Vec<u32>) {
+    let n = mesh.face_count();
+    assert_eq!(weights.len(), mesh.edge_count(), "one weight per edge");
+    assert_eq!(mask.len(), n, "one mask flag per face");
+    let faces: Vec<u32> = (0..n as u32).filter(|&f| mask[f as usize]).collect();
+    // Node of a mask face: the identity when the mask is the whole mesh.
+    let all = faces.len() == n;
+    let local = |f: u32| -> u32 {
+        if all {
+            f
+        } else {
+            faces.binary_search(&f).map_or(NONE, |i| i as u32)
+        }
+    };
+    let mut graph = WalkGraph {
+        offsets: Vec::with_capacity(faces.len() + 1),
+        targets: Vec::with_capacity(3 * faces.len()),
+        weights: Vec::with_capacity(3 * faces.len()),
+    };
+    graph.offsets.push(0);
+    for &f in &faces {
+        for_each_walk_neighbor(mesh, weights, mask, f, |g, w| {
+            graph.targets.push(local(g));
+            graph.weights.push(w);
+        });
+        graph.offsets.push(graph.targets.len());
+    }
+    (graph, faces)
+}
+
+/// `seeds` (mesh faces) as nodes of the face graph of `mask` with node faces `faces`.
+///
+/// # Panics
+/// If a seed is out of range or outside the mask.
+pub(crate) fn local_seeds(mesh: &TriMesh, mask: &[bool], faces: &[u32], seeds: &[u32]) -> Vec<u32> {
+    seeds
+        .iter()
+        .map(|&s| {
+            assert!(
+                (s as usize) < mesh.face_count() && mask[s as usize],
+                "seed {s} is not a mask face"
+            );
+            faces.binary_search(&s).expect("a mask face") as u32
+        })
+        .collect()
 }
 
 /// Grady's random walker on the face graph (section 4): for every mask face, the index
@@ -440,8 +279,11 @@ fn factorize(
 /// mask faces are used). Seeds get themselves; ties go to the lower seed index; faces
 /// outside the mask get `u32::MAX`.
 ///
-/// One sparse Cholesky factorization serves all seeds (see [`WalkSystem`], which also
-/// gives the probabilities). Labels need not be connected in floating point, nor
+/// Masks under [`MULTILEVEL_FACES`] faces are walked exactly: one sparse Cholesky
+/// factorization serves all seeds (see [`WalkSystem`], which also gives the
+/// probabilities). Larger masks are walked on an aggregated graph about eight times
+/// smaller ([`multilevel`](super::multilevel)), with the same quality measured on
+/// the subdivided bunnies at a fraction of the time. Labels need not be connected in floating point, nor
 /// respect blocked edges that do not separate the mask: run [`connected_parts`] after.
 /// The walk does not keep the seeding bound of
 /// [`place_seeds`](super::seeds::place_seeds): a face joins the most reachable seed,
@@ -478,7 +320,19 @@ pub fn random_walk(
     mask: &[bool],
     seeds: &[u32],
 ) -> Result<Vec<u32>, SegmentError> {
-    Ok(WalkSystem::build(mesh, weights, mask, seeds)?.labels())
+    let (graph, faces) = face_graph(mesh, weights, mask);
+    let local = local_seeds(mesh, mask, &faces, seeds);
+    let node_labels = if faces.len() >= MULTILEVEL_FACES {
+        multilevel_labels(&graph, &local)
+    } else {
+        GraphWalk::build(&graph, &local).map(|w| w.labels())
+    }
+    .map_err(|e| face_error(e, &faces))?;
+    let mut labels = vec![NONE; mesh.face_count()];
+    for (&f, l) in faces.iter().zip(node_labels) {
+        labels[f as usize] = l;
+    }
+    Ok(labels)
 }
 
 #[cfg(test)]
