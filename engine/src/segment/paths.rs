@@ -113,10 +113,15 @@ impl ShortestPaths {
     /// The edges of the cheapest path to `target`, in order from its source to
     /// `target`; empty if `target` is a source or unreachable. O(path length).
     pub fn path_edges(&self, mesh: &TriMesh, target: u32) -> Vec<u32> {
+        self.path_edges_in(mesh, target, &|v| v as usize)
+    }
+
+    /// [`path_edges`](Self::path_edges) for paths whose vertex `v` is entry `index(v)`.
+    fn path_edges_in(&self, mesh: &TriMesh, target: u32, index: &dyn Fn(u32) -> usize) -> Vec<u32> {
         let mut path = Vec::new();
         let mut v = target;
-        while self.pred_edge[v as usize] != NONE {
-            let e = self.pred_edge[v as usize];
+        while self.pred_edge[index(v)] != NONE {
+            let e = self.pred_edge[index(v)];
             path.push(e);
             let [a, b] = mesh.edges()[e as usize];
             v = if a == v { b } else { a };
@@ -146,44 +151,59 @@ impl<'a> VertexEdges<'a> {
     }
 }
 
+/// The vertices a Dijkstra run may reach, and where each is stored: vertex `v` is
+/// entry `index(v)` of `count` (the identity over the whole mesh, or a region's
+/// vertices, so that a run over a small region of a large mesh costs in proportion
+/// to the region). Every vertex reachable through allowed edges must have an entry.
+struct Vertices<'a> {
+    count: usize,
+    index: &'a dyn Fn(u32) -> usize,
+}
+
 /// Dijkstra over `adjacency`; stops early at the first settled vertex for which `stop`
-/// holds and returns it.
+/// holds and returns it. The paths are stored by `vertices.index`.
 fn run_dijkstra(
     adjacency: &VertexEdges<'_>,
+    vertices: &Vertices<'_>,
     costs: &[f64],
     sources: &[u32],
     allowed: &dyn Fn(u32) -> bool,
     stop: &dyn Fn(u32) -> bool,
 ) -> (ShortestPaths, Option<u32>) {
-    let v_count = adjacency.mesh.vertex_count();
-    let mut dist = vec![f64::INFINITY; v_count];
-    let mut pred_edge = vec![NONE; v_count];
-    let mut settled = vec![false; v_count];
+    let (count, at) = (vertices.count, vertices.index);
+    let mut dist = vec![f64::INFINITY; count];
+    let mut pred_edge = vec![NONE; count];
+    let mut settled = vec![false; count];
     // Non-negative floats order like their bit patterns.
     let mut heap = BinaryHeap::new();
     for &s in sources {
-        dist[s as usize] = 0.0;
+        dist[at(s)] = 0.0;
         heap.push(Reverse((0u64, s)));
     }
     let mut reached = None;
     while let Some(Reverse((bits, v))) = heap.pop() {
-        if settled[v as usize] || bits != dist[v as usize].to_bits() {
+        let iv = at(v);
+        if settled[iv] || bits != dist[iv].to_bits() {
             continue;
         }
-        settled[v as usize] = true;
+        settled[iv] = true;
         if stop(v) {
             reached = Some(v);
             break;
         }
         for (w, e) in adjacency.of(v) {
-            if settled[w as usize] || !allowed(e) {
+            if !allowed(e) {
                 continue;
             }
-            let nd = dist[v as usize] + costs[e as usize];
-            let old = dist[w as usize];
-            if nd < old || (nd == old && e < pred_edge[w as usize]) {
-                dist[w as usize] = nd;
-                pred_edge[w as usize] = e;
+            let iw = at(w);
+            if settled[iw] {
+                continue;
+            }
+            let nd = dist[iv] + costs[e as usize];
+            let old = dist[iw];
+            if nd < old || (nd == old && e < pred_edge[iw]) {
+                dist[iw] = nd;
+                pred_edge[iw] = e;
                 if nd < old {
                     heap.push(Reverse((nd.to_bits(), w)));
                 }
@@ -216,7 +236,11 @@ pub fn dijkstra(
 ) -> ShortestPaths {
     assert_eq!(costs.len(), mesh.edge_count(), "one cost per mesh edge");
     let adjacency = VertexEdges::new(mesh);
-    run_dijkstra(&adjacency, costs, sources, allowed, &|_| false).0
+    let whole = Vertices {
+        count: mesh.vertex_count(),
+        index: &|v| v as usize,
+    };
+    run_dijkstra(&adjacency, &whole, costs, sources, allowed, &|_| false).0
 }
 
 /// Smallest-root union-find with path halving.
@@ -285,15 +309,6 @@ pub fn singularity_tree(
         let [f0, f1] = mesh.edge_faces()[e as usize];
         in_region(f0) || in_region(f1)
     };
-    let mut on_boundary = vec![false; mesh.vertex_count()];
-    for (e, &[a, b]) in mesh.edges().iter().enumerate() {
-        let [f0, f1] = mesh.edge_faces()[e];
-        let interior = mesh.edge_valence()[e] == 2 && in_region(f0) && in_region(f1);
-        if allowed(e as u32) && !interior {
-            on_boundary[a as usize] = true;
-            on_boundary[b as usize] = true;
-        }
-    }
     let mut nodes: Vec<u32> = singular_faces
         .iter()
         .copied()
@@ -304,6 +319,39 @@ pub fn singularity_tree(
     let k = nodes.len();
     if k == 0 {
         return Vec::new();
+    }
+    // Everything below is sized by the region: its allowed edges are those of its
+    // faces, and their ends are its faces' corners (`verts`, ascending; vertex `v` is
+    // entry `at(v)`).
+    let faces: Vec<u32> = (0..mesh.face_count() as u32)
+        .filter(|&f| region[f as usize])
+        .collect();
+    let mut verts: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.triangles()[f as usize])
+        .collect();
+    verts.sort_unstable();
+    verts.dedup();
+    let mut edges: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.face_edges()[f as usize])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let at = |v: u32| verts.binary_search(&v).expect("a corner of a region face");
+    let vertices = Vertices {
+        count: verts.len(),
+        index: &at,
+    };
+    let mut on_boundary = vec![false; verts.len()];
+    for &e in &edges {
+        let [f0, f1] = mesh.edge_faces()[e as usize];
+        let interior = mesh.edge_valence()[e as usize] == 2 && in_region(f0) && in_region(f1);
+        if !interior {
+            for v in mesh.edges()[e as usize] {
+                on_boundary[at(v)] = true;
+            }
+        }
     }
     let adjacency = VertexEdges::new(mesh);
     let corners = |i: usize| mesh.triangles()[nodes[i] as usize];
@@ -320,27 +368,29 @@ pub fn singularity_tree(
     // Voronoi cells; the cheapest edge between two cells, d(u) + c(u, v) + d(v), links
     // them. A minimum spanning tree of these links is a minimum spanning tree of the
     // complete graph of pairwise shortest paths, and its expanded paths never cross.
-    let (cells, _) = run_dijkstra(&adjacency, costs, &sources, &allowed, &|_| false);
-    let mut node_of_source = vec![NONE; mesh.vertex_count()];
+    let (cells, _) = run_dijkstra(&adjacency, &vertices, costs, &sources, &allowed, &|_| false);
+    let mut node_of_source = vec![NONE; verts.len()];
     for (i, &r) in reps.iter().enumerate().rev() {
-        node_of_source[r as usize] = i as u32;
+        node_of_source[at(r)] = i as u32;
     }
-    let cell = nearest_source_node(mesh, &cells, &node_of_source);
+    let cell = nearest_source_node(mesh, &verts, &at, &cells, &node_of_source);
     let mut sets = UnionFind::new(k);
     let mut degree = vec![0usize; k];
     for (i, &r) in reps.iter().enumerate() {
-        let first = node_of_source[r as usize];
+        let first = node_of_source[at(r)];
         if first != i as u32 && sets.union(first, i as u32) {
             degree[i] += 1;
             degree[first as usize] += 1;
         }
     }
     let mut links: Vec<(f64, u32, u32, u32)> = Vec::new();
-    for (e, &[a, b]) in mesh.edges().iter().enumerate() {
-        let (ca, cb) = (cell[a as usize], cell[b as usize]);
-        if ca != NONE && cb != NONE && ca != cb && allowed(e as u32) {
-            let w = cells.dist[a as usize] + costs[e] + cells.dist[b as usize];
-            links.push((w, ca.min(cb), ca.max(cb), e as u32));
+    for &e in &edges {
+        let [a, b] = mesh.edges()[e as usize];
+        let (ia, ib) = (at(a), at(b));
+        let (ca, cb) = (cell[ia], cell[ib]);
+        if ca != NONE && cb != NONE && ca != cb {
+            let w = cells.dist[ia] + costs[e as usize] + cells.dist[ib];
+            links.push((w, ca.min(cb), ca.max(cb), e));
         }
     }
     links.sort_by(|x, y| {
@@ -354,19 +404,19 @@ pub fn singularity_tree(
             degree[j as usize] += 1;
             let [a, b] = mesh.edges()[e as usize];
             union.push(e);
-            union.extend(cells.path_edges(mesh, a));
-            union.extend(cells.path_edges(mesh, b));
+            union.extend(cells.path_edges_in(mesh, a, &at));
+            union.extend(cells.path_edges_in(mesh, b, &at));
         }
     }
     // Path ends that must stay: the singular faces' corners and the boundary ends of
     // lone paths.
     let mut terminal: Vec<u32> = (0..k).flat_map(corners).collect();
     for i in (0..k).filter(|&i| degree[i] == 0) {
-        let (tree, reached) = run_dijkstra(&adjacency, costs, &corners(i), &allowed, &|v| {
-            on_boundary[v as usize]
-        });
+        let stop = |v: u32| on_boundary[at(v)];
+        let (tree, reached) =
+            run_dijkstra(&adjacency, &vertices, costs, &corners(i), &allowed, &stop);
         if let Some(v) = reached {
-            union.extend(tree.path_edges(mesh, v));
+            union.extend(tree.path_edges_in(mesh, v, &at));
             terminal.push(v);
         }
     }
@@ -377,29 +427,36 @@ pub fn singularity_tree(
     forest_of(mesh, costs, &union, &terminal)
 }
 
-/// Per vertex, the node whose source its shortest path starts from (`NONE` where
-/// unreached), found by following `pred_edge` (memoised, so O(V) in all).
-fn nearest_source_node(mesh: &TriMesh, tree: &ShortestPaths, node_of_source: &[u32]) -> Vec<u32> {
-    let mut cell = vec![NONE; tree.dist.len()];
+/// Per vertex of `verts` (entry `at(v)`), the node whose source its shortest path
+/// starts from (`NONE` where unreached), found by following `pred_edge` (memoised, so
+/// O(|verts|) in all).
+fn nearest_source_node(
+    mesh: &TriMesh,
+    verts: &[u32],
+    at: &dyn Fn(u32) -> usize,
+    tree: &ShortestPaths,
+    node_of_source: &[u32],
+) -> Vec<u32> {
+    let mut cell = vec![NONE; verts.len()];
     let mut chain = Vec::new();
-    for v in 0..tree.dist.len() as u32 {
-        if !tree.dist[v as usize].is_finite() || cell[v as usize] != NONE {
+    for i in 0..verts.len() {
+        if !tree.dist[i].is_finite() || cell[i] != NONE {
             continue;
         }
-        let mut u = v;
-        while cell[u as usize] == NONE && tree.pred_edge[u as usize] != NONE {
+        let mut u = i;
+        while cell[u] == NONE && tree.pred_edge[u] != NONE {
             chain.push(u);
-            let [a, b] = mesh.edges()[tree.pred_edge[u as usize] as usize];
-            u = if a == u { b } else { a };
+            let [a, b] = mesh.edges()[tree.pred_edge[u] as usize];
+            u = if at(a) == u { at(b) } else { at(a) };
         }
-        let label = if cell[u as usize] != NONE {
-            cell[u as usize]
+        let label = if cell[u] != NONE {
+            cell[u]
         } else {
-            node_of_source[u as usize]
+            node_of_source[u]
         };
-        cell[u as usize] = label;
+        cell[u] = label;
         for w in chain.drain(..) {
-            cell[w as usize] = label;
+            cell[w] = label;
         }
     }
     cell

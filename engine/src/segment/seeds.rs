@@ -226,17 +226,32 @@ pub(crate) fn grow_regions(
         line_angle(reference, faces.major[g as usize])
             * direction_confidence(faces.anisotropy[g as usize])
     };
+    // Everything below is sized by the mask, not the mesh, so that seeding a small
+    // segment of a large mesh costs in proportion to the segment: `members_of_mask`
+    // lists the mask's faces ascending, and `at(f)` is face `f`'s index in it.
+    let members_of_mask: Vec<u32> = (0..n as u32).filter(|&f| mask[f as usize]).collect();
+    let m = members_of_mask.len();
+    let whole = m == n;
+    let at = |f: u32| -> usize {
+        if whole {
+            f as usize
+        } else {
+            members_of_mask
+                .binary_search(&f)
+                .expect("a face of the mask")
+        }
+    };
     // Per face of the region being grown, its reference direction carried into the
     // face's plane along the growth (unfolded across each edge crossed), so that only
     // the field's own turning counts, not the surface's bending.
     let normals = mesh.face_normals();
-    let mut carried = vec![DVec3::ZERO; n];
+    let mut carried = vec![DVec3::ZERO; m];
 
-    let mut component = vec![NONE; n];
-    let mut region = vec![NONE; n];
+    let mut component = vec![NONE; m];
+    let mut region = vec![NONE; m];
     // Faces of withdrawn regions: they cannot seed again (this bounds the work).
-    let mut barren = vec![false; n];
-    let mut depth = vec![NONE; n];
+    let mut barren = vec![false; m];
+    let mut depth = vec![NONE; m];
     let mut seeds = Vec::new();
     let mut origins = Vec::new();
     let mut members = Vec::new();
@@ -244,20 +259,21 @@ pub(crate) fn grow_regions(
     let mut candidates = VecDeque::new();
     let mut grown = Vec::new();
     let mut component_count = 0u64;
-    for start in 0..n as u32 {
-        if !mask[start as usize] || component[start as usize] != NONE {
+    for (i, &start) in members_of_mask.iter().enumerate() {
+        if component[i] != NONE {
             continue;
         }
         // The component's faces, ascending, so that the draw is independent of the
         // traversal order.
         members.clear();
-        component[start as usize] = component_count as u32;
+        component[i] = component_count as u32;
         ring.push_back(start);
         while let Some(f) = ring.pop_front() {
             members.push(f);
             for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-                if component[g as usize] == NONE {
-                    component[g as usize] = component_count as u32;
+                let j = at(g);
+                if component[j] == NONE {
+                    component[j] = component_count as u32;
                     ring.push_back(g);
                 }
             });
@@ -271,24 +287,22 @@ pub(crate) fn grow_regions(
         let mut first = true;
         while let Some(s) = next {
             let id = seeds.len() as u32;
-            carried[s as usize] = faces.major[s as usize];
-            region[s as usize] = id;
+            carried[at(s)] = faces.major[s as usize];
+            region[at(s)] = id;
             ring.push_back(s);
             grown.clear();
             while let Some(f) = ring.pop_front() {
                 grown.push(f);
+                let lf = at(f);
                 for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-                    if region[g as usize] != NONE {
+                    let lg = at(g);
+                    if region[lg] != NONE {
                         return;
                     }
-                    let reference = unfold(
-                        carried[f as usize],
-                        normals[f as usize],
-                        normals[g as usize],
-                    );
+                    let reference = unfold(carried[lf], normals[f as usize], normals[g as usize]);
                     if turn(reference, g) <= beta {
-                        carried[g as usize] = reference;
-                        region[g as usize] = id;
+                        carried[lg] = reference;
+                        region[lg] = id;
                         ring.push_back(g);
                     } else {
                         candidates.push_back(g);
@@ -296,32 +310,47 @@ pub(crate) fn grow_regions(
                 });
             }
             if first || grown.len() >= MIN_REGION_FACES {
+                let local = Local {
+                    region: &region,
+                    at: &at,
+                };
                 seeds.push(region_centre(
-                    mesh, weights, mask, &region, id, &grown, &mut depth, &mut ring,
+                    mesh, weights, mask, &local, id, &grown, &mut depth, &mut ring,
                 ));
                 origins.push(s);
             } else {
                 // Withdrawn: its faces may still join a later region, never seed one.
                 for &f in &grown {
-                    region[f as usize] = NONE;
-                    barren[f as usize] = true;
+                    region[at(f)] = NONE;
+                    barren[at(f)] = true;
                 }
             }
             first = false;
             next = None;
             while let Some(c) = candidates.pop_front() {
-                if region[c as usize] == NONE && !barren[c as usize] {
+                if region[at(c)] == NONE && !barren[at(c)] {
                     next = Some(c);
                     break;
                 }
             }
         }
     }
+    let mut per_face = vec![NONE; n];
+    for (&f, &r) in members_of_mask.iter().zip(&region) {
+        per_face[f as usize] = r;
+    }
     Regions {
         seeds,
         origins,
-        region,
+        region: per_face,
     }
+}
+
+/// The regions of the mask's faces, indexed through `at` (a face's index among the
+/// mask's faces).
+struct Local<'a, F: Fn(u32) -> usize> {
+    region: &'a [u32],
+    at: &'a F,
 }
 
 /// The face of region `id` (whose faces are `grown`) deepest inside it: the most
@@ -330,16 +359,17 @@ pub(crate) fn grow_regions(
 /// area-weighted centroid, then by the lower index. O(|grown|); `depth` is scratch
 /// that must be `NONE` on `grown` (each face is in at most one kept region).
 #[allow(clippy::too_many_arguments)]
-fn region_centre(
+fn region_centre<F: Fn(u32) -> usize>(
     mesh: &TriMesh,
     weights: &[f64],
     mask: &[bool],
-    region: &[u32],
+    local: &Local<'_, F>,
     id: u32,
     grown: &[u32],
     depth: &mut [u32],
     ring: &mut VecDeque<u32>,
 ) -> u32 {
+    let (region, at) = (local.region, local.at);
     let barycentre = |f: u32| mesh.face_positions(f).iter().sum::<DVec3>() / 3.0;
     let mut area = 0.0;
     let mut centroid = DVec3::ZERO;
@@ -349,24 +379,25 @@ fn region_centre(
         centroid += barycentre(f) * a;
         let mut inside = 0;
         for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-            inside += usize::from(region[g as usize] == id);
+            inside += usize::from(region[at(g)] == id);
         });
         if inside < 3 {
-            depth[f as usize] = 0;
+            depth[at(f)] = 0;
             ring.push_back(f);
         }
     }
     centroid /= area;
     let mut best = (0, f64::INFINITY, grown[0]);
     while let Some(f) = ring.pop_front() {
-        let d = depth[f as usize];
+        let d = depth[at(f)];
         let dist = barycentre(f).distance_squared(centroid);
         if (d, -dist, std::cmp::Reverse(f)) > (best.0, -best.1, std::cmp::Reverse(best.2)) {
             best = (d, dist, f);
         }
         for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-            if region[g as usize] == id && depth[g as usize] == NONE {
-                depth[g as usize] = d + 1;
+            let lg = at(g);
+            if region[lg] == id && depth[lg] == NONE {
+                depth[lg] = d + 1;
                 ring.push_back(g);
             }
         });
