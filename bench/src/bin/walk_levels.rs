@@ -18,8 +18,7 @@ use std::time::Instant;
 
 use strata_engine::mesh::{NONE, TriMesh, loop_subdivide};
 use strata_engine::segment::{
-    FaceField, SegmentOptions, WalkSystem, connected_parts, face_frames, place_seeds, random_walk,
-    walk_weights,
+    FaceField, WalkSystem, connected_parts, face_frames, place_seeds, random_walk, walk_weights,
 };
 use strata_systems::config::SceneConfig;
 
@@ -79,10 +78,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| field | faces | seeds | walk | time (s) | mean turn to seed (rad) | boundary weight | connected parts | same label |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    let options = SegmentOptions::default();
     for _ in 0..levels {
         mesh = Arc::new(loop_subdivide(&mesh)?);
         for (name, config) in &scenes {
+            let options = config.surface_options().segment;
             let field = config.field.build(&mesh)?;
             let frames = face_frames(&mesh, &field);
             let open = vec![false; mesh.edge_count()];

@@ -16,15 +16,16 @@
 //!    as its seed; every fine node takes its aggregate's label.
 //!
 //! Compared with the exact walk by `cargo run --release -p strata-bench --bin
-//! walk_levels` (the first walk of the bunny's segmentation, Loop-subdivided once and
-//! twice, for the constant 3:1 and the smooth curvature-aligned fields): the mean turn
-//! between a face and its seed is within 0.1% of the exact walk's or lower (0.636,
-//! 0.799, 0.554, 0.754 rad against 0.640, 0.798, 0.558, 0.783), the boundaries weigh
-//! 15% to 34% less, and the labels have as many connected parts (128, 23, 245, 29
-//! against 133, 25, 255, 26), at 1/3.9 to 1/6.6 of the time (1.14 s against 7.47 s
-//! for 234 seeds at 1.1M faces). Labels agree on 76% to 87% of the faces: where the
-//! field barely turns, a boundary sits where two seeds' probabilities balance on a
-//! flat landscape, and any change to the system moves it.
+//! walk_levels` (the first walk of the segmentation of the bunny Loop-subdivided once
+//! and twice, with the settings of the constant 3:1 and the smooth curvature-aligned
+//! scenes): the mean turn between a face and its seed is 4% and 6% lower at 278k
+//! faces and 1% higher at 1.1M (0.716, 0.780, 0.640, 0.798 rad against 0.748,
+//! 0.827, 0.632, 0.789), the boundaries between labels weigh 8% to 46% less, and the
+//! labels have as many connected parts (99, 16, 188, 30 against 102, 15, 190, 31), at
+//! 1/4.2 to 1/6.8 of the time (1.18 s against 8.04 s for 176 seeds at 1.1M faces).
+//! Labels agree on 75% to 87% of the faces: where the field barely turns, a boundary
+//! sits where two seeds' probabilities balance on a flat landscape, and any change to
+//! the system moves it.
 //!
 //! Refining a band around the coarse boundaries by local fine walks (with the kept
 //! labels, or the coarse probabilities, as boundary values) was tried and dropped: it
@@ -141,7 +142,8 @@ fn scatter(v: u64) -> u64 {
 /// faces each have one strong edge and two weak ones, the worst case met, the mean
 /// turn between a face and its seed is 16% to 32% above the exact walk's depending
 /// on the scattering, 31% in index order and 107% in index order without the
-/// strength test; on the subdivided bunnies it is within 1% either way.
+/// strength test; on the subdivided bunnies it is within 1% of the exact walk's or
+/// lower (module documentation).
 fn coarsen(graph: &WalkGraph, seeded: &[bool]) -> (WalkGraph, Vec<u32>, Vec<bool>) {
     let n = graph.node_count();
     let strongest: Vec<f64> = (0..n)
