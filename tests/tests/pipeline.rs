@@ -128,6 +128,57 @@ fn cli_writes_ply_and_csv_that_read_back() {
 }
 
 #[test]
+fn cli_progressive_order_nests_its_prefixes() {
+    // `--order progressive`: the samples of 500 are the first 500 of 800, bit for bit
+    // in place (spacing follows the count), and equal the engine's progressive ranks.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let config = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("sphere-anisotropic.ron"))
+        .expect("sphere-anisotropic.ron is bundled");
+    let config = config.to_str().expect("utf-8 path");
+    let mut sets = Vec::new();
+    for n in ["500", "800"] {
+        let ply = dir.path().join(format!("p{n}.ply"));
+        strata(&[
+            "sample",
+            config,
+            "-n",
+            n,
+            "--seed",
+            "4",
+            "--order",
+            "progressive",
+            "-o",
+            ply.to_str().expect("utf-8"),
+        ])
+        .expect("progressive sample");
+        sets.push(read_samples_ply(&ply).expect("read back"));
+    }
+    let place =
+        |s: &strata_engine::sample::Sample| (s.position, s.face, s.segment, s.bary, s.index);
+    assert_eq!(sets[0].len(), 500);
+    for (a, b) in sets[0].iter().zip(&sets[1]) {
+        assert_eq!(place(a), place(b));
+    }
+    let scene = Scene::build(&SceneConfig::load(std::path::Path::new(config)).expect("config"))
+        .expect("scene");
+    let mut ranks = vec![strata_engine::sample::Sample::default(); 300];
+    scene.sampler.progressive_into(4, 500, &mut ranks);
+    for (a, b) in ranks.iter().zip(&sets[1][500..]) {
+        assert_eq!(place(a), place(b));
+    }
+    // The stratified order moves samples when the count changes.
+    let stratified = scene.sampler.sample(800, 4);
+    assert!(
+        stratified
+            .iter()
+            .zip(&sets[1])
+            .any(|(a, b)| place(a) != place(b))
+    );
+}
+
+#[test]
 fn cli_errors_are_one_line_with_file_and_position() {
     let dir = tempfile::tempdir().expect("tempdir");
     let bad = dir.path().join("bad.ron");

@@ -9,6 +9,7 @@
 //! on the thread count), no allocation.
 
 mod faces;
+pub mod progressive;
 mod sampler;
 mod stratified;
 mod types;

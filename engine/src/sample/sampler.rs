@@ -5,6 +5,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::faces::{FaceTensors, face_point};
+use super::progressive::Scramble;
 use super::stratified::{Allocation, stratified_value_keyed};
 use super::types::{Sample, SampleSite};
 use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
@@ -14,6 +15,11 @@ use crate::mesh::TriMesh;
 /// Samples are produced in fixed chunks of this many outputs, each chunk on one rayon
 /// task; the chunking, not the thread count, decides the work split.
 const CHUNK: usize = 4096;
+
+/// Levels of the continuous map inside a leaf for progressive samples: fixed, since a
+/// sample's place may not depend on the count (4^12 sub-cells per leaf separate far
+/// more samples than a leaf receives).
+const PROGRESSIVE_LEVELS: u32 = 12;
 
 /// One segment ready for sampling: its cells and the mesh face of each domain triangle.
 #[derive(Clone, Debug)]
@@ -79,6 +85,9 @@ pub struct Sampler {
     singles: Groups,
     /// Chains of neighbouring segments (section 6.2), used when `t / N >= 1/3`.
     chains: Groups,
+    /// The measure before each segment of `chains.order` (and the total at the end):
+    /// the progressive sequence runs over the curves concatenated in chain order.
+    chain_cumulative: Vec<f64>,
 }
 
 /// One sampling request as every chunk of it sees it.
@@ -264,6 +273,12 @@ impl Sampler {
             None => Groups::new(&link_chains(&mesh, &segments), &segments),
         };
         let face_tensors = FaceTensors::new(&mesh, &field);
+        let mut chain_cumulative = Vec::with_capacity(segments.len() + 1);
+        chain_cumulative.push(0.0);
+        for &i in &chains.order {
+            let before = chain_cumulative[chain_cumulative.len() - 1];
+            chain_cumulative.push(before + segments[i as usize].curve.measure());
+        }
         Ok(Self {
             mesh,
             field,
@@ -272,6 +287,7 @@ impl Sampler {
             total_measure,
             singles,
             chains,
+            chain_cumulative,
         })
     }
 
@@ -318,6 +334,7 @@ impl Sampler {
             + self.segments.capacity() * std::mem::size_of::<SegmentSampling>()
             + groups(&self.singles)
             + groups(&self.chains)
+            + self.chain_cumulative.capacity() * 8
             + self.face_tensors.heap_bytes()
     }
 
@@ -353,6 +370,89 @@ impl Sampler {
     pub fn sample_sites_into(&self, seed: u64, out: &mut [SampleSite]) {
         let linked = self.uses_chains(out.len());
         self.fill(seed, out, linked);
+    }
+
+    /// Fills `out` with the progressive samples of ranks `first_rank..first_rank +
+    /// out.len()` for `seed` (issue 19): sample `k` is value `k` of one
+    /// [progressive sequence](super::progressive) over the curves of all segments
+    /// concatenated in chain order, mapped through the cumulative measure to a leaf
+    /// cell and along the continuous Hilbert curve to a point.
+    ///
+    /// A sample's place depends only on the seed and its rank, never on how many are
+    /// drawn: the first `N` samples of any request are the samples of an `N`-sample
+    /// request, bit for bit (only [`Sample::spacing`]'s scale, which follows the count
+    /// `first_rank + out.len()`, differs). Every prefix of `2^m` ranks puts one sample
+    /// in each `1/2^m` of the total measure along the curves; counts per segment come
+    /// from the sequence, with nothing rounded per segment. [`sample_into`](Self::sample_into)
+    /// places a fixed `N` more evenly (exactly stratified for every `N`), so use this
+    /// where samples must persist as the count changes (level of detail), and that
+    /// where one fixed count is drawn.
+    ///
+    /// # Panics
+    /// If a rank reaches `2^32` (the sequence's length).
+    pub fn progressive_into(&self, seed: u64, first_rank: u32, out: &mut [Sample]) {
+        self.fill_progressive(seed, first_rank, out);
+    }
+
+    /// As [`progressive_into`](Self::progressive_into), writing only where each sample
+    /// lies ([`SampleSite`]).
+    ///
+    /// # Panics
+    /// As [`progressive_into`](Self::progressive_into).
+    pub fn progressive_sites_into(&self, seed: u64, first_rank: u32, out: &mut [SampleSite]) {
+        self.fill_progressive(seed, first_rank, out);
+    }
+
+    /// The records of progressive ranks `first_rank..first_rank + out.len()`.
+    fn fill_progressive<T: Record>(&self, seed: u64, first_rank: u32, out: &mut [T]) {
+        let count = u64::from(first_rank) + out.len() as u64;
+        assert!(
+            count <= 1 << 32,
+            "progressive ranks end at 2^32, asked up to {count}"
+        );
+        if out.is_empty() {
+            return;
+        }
+        let scramble = Scramble::new(seed);
+        let scale = (self.total_measure / count as f64).sqrt();
+        out.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(chunk, dst)| {
+                let mut scratch = LeafScratch::default();
+                let start = first_rank + (chunk * CHUNK) as u32;
+                for (i, slot) in dst.iter_mut().enumerate() {
+                    let rank = start + i as u32;
+                    let m = scramble.value(rank) * self.total_measure;
+                    let (seg, p) = self.progressive_point(m, &mut scratch);
+                    *slot = T::make(self, seg, &p, rank, scale);
+                }
+            });
+    }
+
+    /// The segment and domain point at measure `m` along the curves in chain order,
+    /// resolved to [`PROGRESSIVE_LEVELS`] levels inside its leaf.
+    #[inline]
+    fn progressive_point<'a>(
+        &'a self,
+        m: f64,
+        scratch: &mut LeafScratch<'a>,
+    ) -> (&'a SegmentSampling, DomainPoint) {
+        let cum = &self.chain_cumulative;
+        // The segment whose measure range holds m (positive measure: it ends above m).
+        let k = cum[1..]
+            .partition_point(|&c| c <= m)
+            .min(self.chains.order.len() - 1);
+        let seg = &self.segments[self.chains.order[k] as usize];
+        let curve = &seg.curve;
+        let leaves = curve.cumulative();
+        let ml = (m - cum[k]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
+        let leaf = leaves[1..]
+            .partition_point(|&c| c <= ml)
+            .min(leaves.len() - 2);
+        let (w0, w1) = (leaves[leaf], leaves[leaf + 1]);
+        let t = if w1 > w0 { (ml - w0) / (w1 - w0) } else { 0.0 };
+        let p = curve.point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, scratch);
+        (seg, p)
     }
 
     /// Fills `out` with the records of an `out.len()`-sample request.
@@ -816,6 +916,87 @@ mod tests {
                 .record(0, [f64::NAN, 0.5, 0.5], 0, 0, n)
                 .is_none()
         );
+    }
+
+    /// The place of a sample: everything but the count-dependent spacing.
+    fn place(s: &super::Sample) -> ([u32; 3], u32, u32, [u32; 2], u32) {
+        (
+            s.position.map(f32::to_bits),
+            s.face,
+            s.segment,
+            s.bary.map(f32::to_bits),
+            s.index,
+        )
+    }
+
+    #[test]
+    fn progressive_prefixes_nest_bit_for_bit() {
+        let pre = torus();
+        let sampler = &pre.sampler;
+        let mut small = vec![super::Sample::default(); 10_000];
+        let mut large = vec![super::Sample::default(); 10_100];
+        sampler.progressive_into(7, 0, &mut small);
+        sampler.progressive_into(7, 0, &mut large);
+        for (a, b) in small.iter().zip(&large) {
+            assert_eq!(place(a), place(b));
+        }
+        // Ranks drawn later on their own are the same samples.
+        let mut later = vec![super::Sample::default(); 100];
+        sampler.progressive_into(7, 10_000, &mut later);
+        for (a, b) in later.iter().zip(&large[10_000..]) {
+            assert_eq!(place(a), place(b));
+        }
+        assert!(large.iter().enumerate().all(|(k, s)| s.index == k as u32));
+        // Sites are the same places.
+        let mut sites = vec![super::SampleSite::default(); 10_100];
+        sampler.progressive_sites_into(7, 0, &mut sites);
+        for (site, s) in sites.iter().zip(&large) {
+            assert_eq!((site.face, site.segment), (s.face, s.segment));
+            assert_eq!(site.bary.map(f32::to_bits), s.bary.map(f32::to_bits));
+        }
+        // Another seed, other samples.
+        let mut other = vec![super::Sample::default(); 100];
+        sampler.progressive_into(8, 0, &mut other);
+        assert!(other.iter().zip(&large).all(|(a, b)| place(a) != place(b)));
+    }
+
+    #[test]
+    fn progressive_samples_do_not_depend_on_the_thread_count() {
+        let pre = torus();
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| {
+                    let mut out = vec![super::Sample::default(); 20_000];
+                    pre.sampler.progressive_into(3, 0, &mut out);
+                    out.iter().map(place).collect::<Vec<_>>()
+                })
+        };
+        assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn power_of_two_prefixes_give_each_segment_its_share() {
+        // One sample per 2^-m of the measure along the curves: a segment of share s
+        // receives N s samples, give or take one at each of its two ends.
+        let pre = torus();
+        let sampler = &pre.sampler;
+        let n = 1usize << 14;
+        let mut out = vec![super::SampleSite::default(); n];
+        sampler.progressive_sites_into(11, 0, &mut out);
+        let segments = sampler.segments();
+        assert!(segments.len() > 1, "{}", segments.len());
+        for seg in segments {
+            let count = out.iter().filter(|s| s.segment == seg.segment).count() as f64;
+            let expected = n as f64 * seg.curve.measure() / sampler.total_measure();
+            assert!(
+                (count - expected).abs() <= 2.0,
+                "segment {}: {count} against {expected}",
+                seg.segment
+            );
+        }
     }
 
     #[test]

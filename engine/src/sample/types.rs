@@ -21,7 +21,9 @@ pub struct Sample {
     /// spacing); the minor axis is `normal x major_axis`.
     pub major_axis: [f32; 3],
     /// Rank of the sample in its stratified sequence (stable across frames for the
-    /// same count and seed).
+    /// same count and seed); for progressive samples
+    /// ([`Sampler::progressive_into`](super::Sampler::progressive_into)) its rank in
+    /// the progressive sequence, the same for any count.
     pub index: u32,
     /// Barycentric coordinates of corners 1 and 2 of `face`; corner 0 has
     /// `1 - bary[0] - bary[1]`.

@@ -28,6 +28,20 @@ pub struct SampleArgs {
     /// Worker threads (default: one per core). The samples do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Sample order: `stratified` (exactly stratified for this count) or
+    /// `progressive` (the first N of one sequence per scene and seed, so the samples of
+    /// a count are among those of any larger count).
+    #[arg(long, value_enum, default_value_t = Order::Stratified)]
+    pub order: Order,
+}
+
+/// How samples are drawn (`--order`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Order {
+    /// `Sampler::sample_into`: exactly stratified for the count asked.
+    Stratified,
+    /// `Sampler::progressive_into`: nested prefixes of one stratified sequence.
+    Progressive,
 }
 
 /// Runs `strata sample`.
@@ -48,11 +62,20 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
         eprintln!("warning: {}: mesh: {w}", args.config.display());
     }
     let count = args.count.unwrap_or(config.sampling.count);
+    if args.order == Order::Progressive && count > 1 << 32 {
+        anyhow::bail!(
+            "{}: --order progressive draws at most 2^32 = 4294967296 samples, asked for {count}",
+            args.config.display()
+        );
+    }
     let count = usize::try_from(count).context("sample count does not fit in memory")?;
     let seed = args.seed.unwrap_or(config.sampling.seed);
     let mut samples = vec![Sample::default(); count];
     let t = Instant::now();
-    scene.sampler.sample_into(seed, &mut samples);
+    match args.order {
+        Order::Stratified => scene.sampler.sample_into(seed, &mut samples),
+        Order::Progressive => scene.sampler.progressive_into(seed, 0, &mut samples),
+    }
     let sample_time = t.elapsed();
     let preprocess: f64 = scene.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
     let cells: usize = scene
@@ -62,7 +85,11 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
         .map(|s| s.curve.cell_count())
         .sum();
     println!(
-        "sampled {count} points (seed {seed}) on {} faces, {cells} cells: sampling {:.3} ms, preprocessing {:.3} ms ({})",
+        "sampled {count} points (seed {seed}, {} order) on {} faces, {cells} cells: sampling {:.3} ms, preprocessing {:.3} ms ({})",
+        match args.order {
+            Order::Stratified => "stratified",
+            Order::Progressive => "progressive",
+        },
         scene.mesh.face_count(),
         sample_time.as_secs_f64() * 1e3,
         preprocess * 1e3,

@@ -1,0 +1,212 @@
+//! A progressive 1D sequence: an Owen-scrambled base-2 radical inverse, whose every
+//! prefix is stratified, and the enumeration of its ranks inside a dyadic interval.
+//!
+//! Value `k` for a seed is `reverse_bits(P(k))` over 2^32 plus a jitter under 2^-32,
+//! where `P` is a bijection of 32-bit words in which output bit `i` is input bit `i`
+//! flipped by a function of the lower input bits only (a composition of adding a
+//! constant, `x ^= x * even` and `x *= odd`, all with seed-derived constants). Read in
+//! value order (bits reversed), digit `i` of the value is digit `i` of the radical
+//! inverse flipped by a function of the more significant digits: Owen's nested
+//! uniform scrambling (Owen 1995; the hash construction follows the idea of Laine and
+//! Karras 2011 and Burley 2020, with its own constants). Hence:
+//!
+//! - **Stratified prefixes.** The top `m` bits of value `k` are a bijection of the low
+//!   `m` bits of `k`, so ranks `0..2^m` put exactly one value in each interval
+//!   `[j / 2^m, (j + 1) / 2^m)`, and any prefix of `N` ranks puts one or two values in
+//!   each interval of length `2^-floor(log2 N)`.
+//! - **Rank enumeration.** The ranks whose values fall in one such interval are
+//!   `r, r + 2^m, r + 2 * 2^m, ...` for the one `r < 2^m` found digit by digit
+//!   ([`Scramble::first_rank_in`]), so the next `k` samples of an interval cost O(k).
+//!
+//! Ranks are 32-bit: a sequence has 2^32 values.
+
+use crate::rng;
+
+/// The seed-derived constants of one scramble.
+#[derive(Clone, Copy, Debug)]
+pub struct Scramble {
+    add: u32,
+    even: [u32; 2],
+    odd: u32,
+    /// Key of the jitter below the 32-bit resolution.
+    jitter: u64,
+}
+
+impl Scramble {
+    /// The scramble of `seed` (any 64-bit seed; different seeds give independent
+    /// scrambles).
+    pub fn new(seed: u64) -> Self {
+        let word = |i: u64| rng::hash3(seed, 0x5052_4f47, i);
+        Self {
+            add: word(0) as u32,
+            even: [(word(1) as u32) & !1, (word(2) as u32) & !1],
+            odd: (word(3) as u32) | 1,
+            jitter: rng::stream_key(seed, 0x4a49_5454),
+        }
+    }
+
+    /// The bijection `P`: output bit `i` is input bit `i` flipped by a function of
+    /// the input bits below `i`.
+    #[inline]
+    fn permute(&self, mut x: u32) -> u32 {
+        x = x.wrapping_add(self.add);
+        x ^= x.wrapping_mul(self.even[0]);
+        x = x.wrapping_mul(self.odd);
+        x ^= x.wrapping_mul(self.even[1]);
+        x
+    }
+
+    /// The top 32 bits of value `rank`: `reverse_bits(P(rank))`.
+    #[inline]
+    pub fn bits(&self, rank: u32) -> u32 {
+        self.permute(rank).reverse_bits()
+    }
+
+    /// Value `rank` of the sequence, in `[0, 1)`.
+    #[inline]
+    pub fn value(&self, rank: u32) -> f64 {
+        let jitter = rng::unit_f64(rng::keyed_hash(self.jitter, u64::from(rank)));
+        ((f64::from(self.bits(rank)) + jitter) / 4_294_967_296.0).min(1.0 - f64::EPSILON)
+    }
+
+    /// The lowest rank whose value lies in `[j / 2^m, (j + 1) / 2^m)`; the others are
+    /// that rank plus multiples of `2^m`. O(m).
+    ///
+    /// # Panics
+    /// If `m > 32` or `j >= 2^m`.
+    pub fn first_rank_in(&self, m: u32, j: u32) -> u32 {
+        assert!(m <= 32, "at most 32 levels, got {m}");
+        assert!(
+            m == 32 || j < (1u32 << m),
+            "interval {j} out of range at level {m}"
+        );
+        if m == 0 {
+            return 0;
+        }
+        // Low m bits of P(r) must be the m top value bits reversed.
+        let target = j.reverse_bits() >> (32 - m);
+        let mut r = 0u32;
+        for i in 0..m {
+            // P's bit i is r's bit i flipped by the bits below: with r's bit i at 0,
+            // P(r)'s bit i is that flip.
+            let flip = (self.permute(r) >> i) & 1;
+            r |= (((target >> i) & 1) ^ flip) << i;
+        }
+        r
+    }
+
+    /// The ranks from `from` on (ascending, below 2^32) whose values lie in the
+    /// dyadic interval `[j / 2^m, (j + 1) / 2^m)`.
+    pub fn ranks_in(&self, m: u32, j: u32, from: u32) -> impl Iterator<Item = u32> {
+        let first = u64::from(self.first_rank_in(m, j));
+        let step = 1u64 << m;
+        let start = if u64::from(from) <= first {
+            first
+        } else {
+            first + (u64::from(from) - first).div_ceil(step) * step
+        };
+        (0..)
+            .map(move |t| start + t * step)
+            .take_while(|&r| r <= u64::from(u32::MAX))
+            .map(|r| r as u32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permute_is_a_triangular_bijection() {
+        let s = Scramble::new(11);
+        // Bit i of P depends only on bits <= i: changing bit i of the input changes
+        // bit i of the output and nothing below it.
+        for x in [0u32, 1, 0xdead_beef, u32::MAX, 12345] {
+            for i in 0..32 {
+                let d = s.permute(x) ^ s.permute(x ^ (1 << i));
+                assert_eq!(
+                    d & ((1u32 << i) | ((1u32 << i) - 1)),
+                    1 << i,
+                    "x {x} bit {i}"
+                );
+            }
+        }
+        // A bijection on the low 12 bits (and so on all words).
+        let mut seen = vec![false; 1 << 12];
+        for x in 0..1u32 << 12 {
+            let y = (s.permute(x) & 0xfff) as usize;
+            assert!(!seen[y]);
+            seen[y] = true;
+        }
+    }
+
+    #[test]
+    fn every_power_of_two_prefix_is_stratified() {
+        for seed in [0, 1, 99] {
+            let s = Scramble::new(seed);
+            for m in 0..=14u32 {
+                let n = 1u32 << m;
+                let mut seen = vec![false; n as usize];
+                for k in 0..n {
+                    let v = s.value(k);
+                    assert!((0.0..1.0).contains(&v));
+                    let j = (v * f64::from(n)) as usize;
+                    assert!(!seen[j], "seed {seed} m {m}: two values in interval {j}");
+                    seen[j] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn any_prefix_puts_one_or_two_values_per_interval() {
+        let s = Scramble::new(5);
+        for n in [3u32, 100, 1000, 1500, 3000, 12_345] {
+            let m = 31 - n.leading_zeros(); // floor(log2 n)
+            let mut counts = vec![0u32; 1 << m];
+            for k in 0..n {
+                counts[(s.value(k) * f64::from(1u32 << m)) as usize] += 1;
+            }
+            assert!(counts.iter().all(|&c| c == 1 || c == 2), "n {n}");
+        }
+    }
+
+    #[test]
+    fn seeds_give_different_sequences() {
+        let (a, b) = (Scramble::new(1), Scramble::new(2));
+        let same = (0..1000).filter(|&k| a.bits(k) == b.bits(k)).count();
+        assert!(same < 5, "{same}");
+        assert_eq!(Scramble::new(1).value(77), a.value(77));
+    }
+
+    #[test]
+    fn ranks_in_an_interval_equal_a_filtered_scan() {
+        let s = Scramble::new(3);
+        for (m, j) in [(0u32, 0u32), (1, 1), (4, 9), (7, 100), (10, 1023)] {
+            let scan: Vec<u32> = (0..1u32 << 14)
+                .filter(|&k| (s.value(k) * f64::from(1u32 << m)) as u32 == j)
+                .collect();
+            let listed: Vec<u32> = s.ranks_in(m, j, 0).take_while(|&k| k < 1 << 14).collect();
+            assert_eq!(listed, scan, "m {m} j {j}");
+            assert!(!scan.is_empty());
+            // From a later rank: the same list, cut.
+            let later: Vec<u32> = s
+                .ranks_in(m, j, 5000)
+                .take_while(|&k| k < 1 << 14)
+                .collect();
+            let cut: Vec<u32> = scan.into_iter().filter(|&k| k >= 5000).collect();
+            assert_eq!(later, cut, "m {m} j {j} from 5000");
+        }
+    }
+
+    #[test]
+    fn ranks_stop_at_the_last_32_bit_rank() {
+        let s = Scramble::new(8);
+        let tail: Vec<u32> = s.ranks_in(31, 0, u32::MAX - 10).collect();
+        assert!(tail.len() <= 1);
+        assert!(
+            tail.iter()
+                .all(|&r| (s.value(r) * 2f64.powi(31)) as u64 == 0)
+        );
+    }
+}
