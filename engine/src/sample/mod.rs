@@ -9,6 +9,7 @@
 //! on the thread count), no allocation.
 
 mod faces;
+pub mod lod;
 pub mod progressive;
 mod sampler;
 mod stratified;

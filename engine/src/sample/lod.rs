@@ -1,0 +1,188 @@
+//! View-dependent level of detail over progressive samples (issue 19): a density
+//! multiplier over the surface from a camera, and the rank threshold that turns it
+//! into a visible set.
+//!
+//! **Multiplier.** For a pinhole camera with focal length `f` in pixels, a surface
+//! element of area `dA` at point `p` with unit normal `n` covers on screen
+//!
+//! ```text
+//! a(p) dA = f^2 |cos theta| d / z^3 dA     (pixels^2)
+//! ```
+//!
+//! with `d = |p - eye|`, `z` the depth of `p` along the view axis (the clip-space
+//! `w`) and `cos theta = n . (eye - p) / d` (the solid angle `dA cos theta / d^2`,
+//! times `f^2 / cos^3 alpha` for a direction `alpha` off the axis, `cos alpha = z / d`).
+//! The multiplier is `lod(p) = min(a(p) / reference, max)`: 1 where a unit of surface
+//! covers `reference` pixels^2, 0 outside the view frustum (clip space `|x|, |y| <= w`,
+//! `0 <= z <= w`, `w > 0`: wgpu's convention) and, when asked, on faces turned away
+//! from the eye.
+//!
+//! **Visible set.** With progressive samples (rank `k` at `p_k`, [`Sampler::progressive_into`](super::Sampler::progressive_into))
+//! and a base count `N` (the samples of the whole surface at multiplier 1), rank `k`
+//! is visible when `k < N lod(p_k)`, and its fade weight is
+//! `clamp(N lod(p_k) - k, 0, 1)`: a renderer scales or blends samples by it so that
+//! they appear and vanish smoothly as the multiplier changes (rank thresholding as in
+//! Kopf et al., "Recursive Wang tiles for real-time blue noise", 2006). Where the
+//! multiplier is `m`, the visible samples are the first `N m` ranks of the sequence
+//! restricted there, so their density is `m` times the base density and stays
+//! stratified, and a larger multiplier only adds samples: none moves.
+
+use glam::{DMat4, DVec3, DVec4};
+
+/// A camera's level-of-detail request, in plain numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewLod {
+    /// Clip-from-world matrix of a perspective camera (clip `w` is the view depth).
+    pub clip_from_world: DMat4,
+    /// The camera position, world space.
+    pub eye: DVec3,
+    /// Focal length in pixels: `height / (2 tan(fov_y / 2))` for a viewport `height`
+    /// pixels tall.
+    pub focal_pixels: f64,
+    /// Screen area (pixels^2) that a unit of surface area covers where the multiplier
+    /// is 1. Positive.
+    pub reference: f64,
+    /// Largest multiplier (`f64::INFINITY`: none).
+    pub max: f64,
+    /// Whether faces turned away from the eye get 0.
+    pub cull_back_faces: bool,
+}
+
+impl ViewLod {
+    /// The density multiplier at point `p` with unit normal `normal` (module docs).
+    pub fn multiplier(&self, p: DVec3, normal: DVec3) -> f64 {
+        let clip = self.clip_from_world * DVec4::new(p.x, p.y, p.z, 1.0);
+        let w = clip.w;
+        if !(w > 0.0 && clip.x.abs() <= w && clip.y.abs() <= w && (0.0..=w).contains(&clip.z)) {
+            return 0.0;
+        }
+        let to_eye = self.eye - p;
+        let d = to_eye.length();
+        if !(d > 0.0) {
+            return 0.0;
+        }
+        let cos = normal.dot(to_eye) / d;
+        if self.cull_back_faces && cos < 0.0 {
+            return 0.0;
+        }
+        let area = self.focal_pixels * self.focal_pixels * cos.abs() * d / (w * w * w);
+        (area / self.reference).min(self.max)
+    }
+}
+
+/// Whether rank `rank` is visible under base count `base` and multiplier `lod`:
+/// `rank < base lod`.
+pub fn visible(rank: u32, base: f64, lod: f64) -> bool {
+    f64::from(rank) < base * lod
+}
+
+/// The fade weight of rank `rank`: `clamp(base lod - rank, 0, 1)`; positive exactly
+/// when the rank is [`visible`].
+pub fn fade(rank: u32, base: f64, lod: f64) -> f64 {
+    (base * lod - f64::from(rank)).clamp(0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A camera at `eye` looking at the origin, 60 degrees tall, 800 x 600 pixels.
+    fn view(eye: DVec3, cull: bool) -> ViewLod {
+        let fov = 60f64.to_radians();
+        let proj =
+            glam::camera::rh::proj::directx::perspective(fov as f32, 800.0 / 600.0, 0.01, 100.0);
+        let look =
+            glam::camera::rh::view::look_at_mat4(eye.as_vec3(), glam::Vec3::ZERO, glam::Vec3::Y);
+        ViewLod {
+            clip_from_world: (proj * look).as_dmat4(),
+            eye,
+            focal_pixels: 600.0 / (2.0 * (fov / 2.0).tan()),
+            reference: 1000.0,
+            max: f64::INFINITY,
+            cull_back_faces: cull,
+        }
+    }
+
+    /// The pixel area of the small square `p + s (a u + b v)`, `a, b in [0, 1]`,
+    /// projected by `view` onto its 800 x 600 viewport.
+    fn projected_area(view: &ViewLod, p: DVec3, u: DVec3, v: DVec3, s: f64) -> f64 {
+        let pixel = |q: DVec3| {
+            let c = view.clip_from_world * DVec4::new(q.x, q.y, q.z, 1.0);
+            glam::DVec2::new(c.x / c.w * 400.0, c.y / c.w * 300.0)
+        };
+        let [a, b, c, d] = [p, p + s * u, p + s * (u + v), p + s * v].map(pixel);
+        // Shoelace formula.
+        0.5 * ((a.perp_dot(b) + b.perp_dot(c) + c.perp_dot(d) + d.perp_dot(a)).abs())
+    }
+
+    #[test]
+    fn the_multiplier_is_the_projected_area_per_unit_area() {
+        let lod = view(DVec3::new(0.3, 0.8, 4.0), false);
+        let s = 1e-4;
+        for (p, n) in [
+            (DVec3::ZERO, DVec3::Z),
+            (
+                DVec3::new(0.9, -0.4, 0.2),
+                DVec3::new(0.3, 0.2, 1.0).normalize(),
+            ),
+            (
+                DVec3::new(-1.1, 0.6, -0.5),
+                DVec3::new(-0.6, 0.1, 0.4).normalize(),
+            ),
+        ] {
+            let u = n.any_orthonormal_vector();
+            let v = n.cross(u);
+            let pixels = projected_area(&lod, p, u, v, s) / (s * s);
+            let m = lod.multiplier(p, n);
+            assert!(
+                (m * lod.reference - pixels).abs() <= 1e-3 * pixels,
+                "{p}: {} against {pixels}",
+                m * lod.reference
+            );
+        }
+    }
+
+    #[test]
+    fn facing_the_camera_on_its_axis_falls_with_the_square_of_the_distance() {
+        for d in [1.0, 2.0, 4.0] {
+            let lod = view(DVec3::new(0.0, 0.0, d), false);
+            let expected = lod.focal_pixels * lod.focal_pixels / (d * d) / lod.reference;
+            let m = lod.multiplier(DVec3::ZERO, DVec3::Z);
+            assert!((m - expected).abs() <= 1e-9 * expected, "{m} {expected}");
+        }
+    }
+
+    #[test]
+    fn outside_the_frustum_behind_the_eye_and_on_back_faces_is_zero() {
+        let lod = view(DVec3::new(0.0, 0.0, 4.0), true);
+        assert_eq!(lod.multiplier(DVec3::new(30.0, 0.0, 0.0), DVec3::Z), 0.0);
+        assert_eq!(lod.multiplier(DVec3::new(0.0, 0.0, 9.0), DVec3::Z), 0.0);
+        assert_eq!(lod.multiplier(DVec3::new(0.0, 0.0, -200.0), DVec3::Z), 0.0);
+        assert_eq!(lod.multiplier(DVec3::ZERO, -DVec3::Z), 0.0);
+        let both = view(DVec3::new(0.0, 0.0, 4.0), false);
+        assert_eq!(
+            both.multiplier(DVec3::ZERO, -DVec3::Z),
+            both.multiplier(DVec3::ZERO, DVec3::Z)
+        );
+        let clamped = ViewLod { max: 0.5, ..both };
+        assert_eq!(clamped.multiplier(DVec3::ZERO, DVec3::Z), 0.5);
+    }
+
+    #[test]
+    fn visible_ranks_and_fades_follow_their_definition() {
+        let (base, lod) = (1000.0, 0.25);
+        let shown: Vec<u32> = (0..2000).filter(|&k| visible(k, base, lod)).collect();
+        assert_eq!(shown, (0..250).collect::<Vec<_>>());
+        for k in 0..2000 {
+            assert_eq!(fade(k, base, lod) > 0.0, visible(k, base, lod), "{k}");
+        }
+        assert_eq!(fade(100, base, lod), 1.0);
+        assert!((fade(249, 1000.0, 0.2495) - 0.5).abs() < 1e-9);
+        // A larger multiplier only adds ranks.
+        for k in 0..2000 {
+            if visible(k, base, lod) {
+                assert!(visible(k, base, lod * 1.01));
+            }
+        }
+    }
+}
