@@ -83,7 +83,13 @@ fn main() -> Result<(), BoxError> {
     let rect = TriMesh::new(positions, plane.triangles().to_vec())?;
     let metric_aniso = sampler(rect, 4.0)?;
     let cases = [
-        ("isotropic", &square_iso, DVec2::ONE, &square_iso, DVec2::ONE),
+        (
+            "isotropic",
+            &square_iso,
+            DVec2::ONE,
+            &square_iso,
+            DVec2::ONE,
+        ),
         (
             "4:1",
             &square_aniso,
@@ -92,7 +98,9 @@ fn main() -> Result<(), BoxError> {
             DVec2::new(2.0, 0.5),
         ),
     ];
-    println!("| field | order | sup slope | L2 slope | low-frequency energy / RAPSD peak at N = 1000, 1024, 1500, 2048, 3000, 4096 |");
+    println!(
+        "| field | order | sup slope | L2 slope | low-frequency energy / RAPSD peak at N = 1000, 1024, 1500, 2048, 3000, 4096 |"
+    );
     println!("| --- | --- | --- | --- | --- |");
     for (name, square, axis, metric, to_metric) in cases {
         for progressive in [false, true] {
@@ -117,7 +125,11 @@ fn main() -> Result<(), BoxError> {
             }
             println!(
                 "| {name} | {} | {:.3} | {:.3} | {} |",
-                if progressive { "progressive" } else { "stratified" },
+                if progressive {
+                    "progressive"
+                } else {
+                    "stratified"
+                },
                 curve.sup_slope(),
                 curve.l2_slope(),
                 spectra.join(", ")
