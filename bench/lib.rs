@@ -1,6 +1,8 @@
 //! Shared helpers for strata benchmarks.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use strata_systems::config::SceneConfig;
 
 /// The shared meshes, largest first, as the benchmark tables list them.
 pub const SHARED_MESHES: [&str; 8] = [
@@ -33,4 +35,25 @@ pub fn repeats_arg(default: usize) -> Result<usize, std::num::ParseIntError> {
         .map(|a| a.parse())
         .transpose()
         .map(|r| r.unwrap_or(default))
+}
+
+/// The second command-line argument as a count of Loop subdivision levels, or
+/// `default`.
+pub fn levels_arg(default: usize) -> Result<usize, std::num::ParseIntError> {
+    std::env::args()
+        .nth(2)
+        .map(|a| a.parse())
+        .transpose()
+        .map(|r| r.unwrap_or(default))
+}
+
+/// The bundled scenes `(name, file in configs/)`, loaded, with their names.
+pub fn bundled_scenes<'a>(
+    scenes: &[(&'a str, &str)],
+) -> Result<Vec<(&'a str, SceneConfig)>, Box<dyn std::error::Error>> {
+    let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs");
+    scenes
+        .iter()
+        .map(|(name, file)| Ok((*name, SceneConfig::load(&configs.join(file))?)))
+        .collect()
 }

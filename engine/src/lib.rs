@@ -32,3 +32,14 @@ pub mod rng;
 pub mod sample;
 pub mod segment;
 pub mod surface;
+
+/// Runs `f` on a new rayon pool of `threads` threads: the tests' check that results do
+/// not depend on the thread count.
+#[cfg(test)]
+pub(crate) fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(f)
+}

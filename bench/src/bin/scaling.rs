@@ -13,7 +13,6 @@
 //! field today). Rows print as they finish.
 
 use std::io::Write;
-use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -84,16 +83,8 @@ fn row(
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(1)?;
-    let levels: usize = std::env::args()
-        .nth(2)
-        .map(|a| a.parse())
-        .transpose()?
-        .unwrap_or(2);
-    let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs");
-    let scenes = SCENES
-        .iter()
-        .map(|(name, file)| Ok((*name, SceneConfig::load(&configs.join(file))?)))
-        .collect::<Result<Vec<_>, Box<dyn std::error::Error>>>()?;
+    let levels = strata_bench::levels_arg(2)?;
+    let scenes = strata_bench::bundled_scenes(&SCENES)?;
     let mut mesh = Arc::new(strata_systems::scene::load_mesh(&scenes[0].1)?);
     println!(
         "| field | faces | field (s) | isotropic directions (s) | segmentation (s) | parameterization (s) | cells (s) | total (s) | segments | singular faces | bytes per face |"

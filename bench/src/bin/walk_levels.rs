@@ -12,7 +12,6 @@
 //! boundaries on field turns), the labels' connected parts, and the share of faces
 //! with the same label in both.
 
-use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -20,7 +19,6 @@ use strata_engine::mesh::{NONE, TriMesh, loop_subdivide};
 use strata_engine::segment::{
     FaceField, WalkSystem, connected_parts, face_frames, place_seeds, random_walk, walk_weights,
 };
-use strata_systems::config::SceneConfig;
 
 const SCENES: [(&str, &str); 2] = [
     ("constant 3:1", "stanford-bunny-anisotropic.ron"),
@@ -63,16 +61,8 @@ fn boundary_weight(mesh: &TriMesh, weights: &[f64], labels: &[u32]) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(1)?;
-    let levels: usize = std::env::args()
-        .nth(2)
-        .map(|a| a.parse())
-        .transpose()?
-        .unwrap_or(2);
-    let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs");
-    let scenes = SCENES
-        .iter()
-        .map(|(name, file)| Ok((*name, SceneConfig::load(&configs.join(file))?)))
-        .collect::<Result<Vec<_>, Box<dyn std::error::Error>>>()?;
+    let levels = strata_bench::levels_arg(2)?;
+    let scenes = strata_bench::bundled_scenes(&SCENES)?;
     let mut mesh = Arc::new(strata_systems::scene::load_mesh(&scenes[0].1)?);
     println!(
         "| field | faces | seeds | walk | time (s) | mean turn to seed (rad) | boundary weight | connected parts | same label |"

@@ -8,6 +8,7 @@
 //! per call, parallel over fixed chunks of the output (so the result does not depend
 //! on the thread count), no allocation.
 
+mod chains;
 mod faces;
 pub mod lod;
 pub mod progressive;

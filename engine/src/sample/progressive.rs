@@ -20,6 +20,11 @@
 //!
 //! Ranks are 32-bit: a sequence has 2^32 values.
 
+use rayon::prelude::*;
+
+use super::sampler::{CHUNK, Record, SegmentSampling};
+use super::{Sample, SampleSite, Sampler};
+use crate::curve::{DomainPoint, LeafScratch};
 use crate::rng;
 
 /// The seed-derived constants of one scramble.
@@ -109,6 +114,97 @@ impl Scramble {
             .map(move |t| start + t * step)
             .take_while(|&r| r <= u64::from(u32::MAX))
             .map(|r| r as u32)
+    }
+}
+
+/// Levels of the continuous map inside a leaf for progressive samples: fixed, since a
+/// sample's place may not depend on the count (4^12 sub-cells per leaf separate far
+/// more samples than a leaf receives).
+const PROGRESSIVE_LEVELS: u32 = 12;
+
+/// The progressive order of a [`Sampler`].
+impl Sampler {
+    /// Fills `out` with the progressive samples of ranks `first_rank..first_rank +
+    /// out.len()` for `seed` (issue 19): sample `k` is value `k` of one
+    /// [progressive sequence](self) over the curves of all segments
+    /// concatenated in chain order, mapped through the cumulative measure to a leaf
+    /// cell and along the continuous Hilbert curve to a point.
+    ///
+    /// A sample's place depends only on the seed and its rank, never on how many are
+    /// drawn: the first `N` samples of any request are the samples of an `N`-sample
+    /// request, bit for bit (only [`Sample::spacing`]'s scale, which follows the count
+    /// `first_rank + out.len()`, differs). Every prefix of `2^m` ranks puts one sample
+    /// in each `1/2^m` of the total measure along the curves; counts per segment come
+    /// from the sequence, with nothing rounded per segment. [`sample_into`](Sampler::sample_into)
+    /// places a fixed `N` more evenly (exactly stratified for every `N`), so use this
+    /// where samples must persist as the count changes (level of detail), and that
+    /// where one fixed count is drawn.
+    ///
+    /// # Panics
+    /// If a rank reaches `2^32` (the sequence's length).
+    pub fn progressive_into(&self, seed: u64, first_rank: u32, out: &mut [Sample]) {
+        self.fill_progressive(seed, first_rank, out);
+    }
+
+    /// As [`progressive_into`](Self::progressive_into), writing only where each sample
+    /// lies ([`SampleSite`]).
+    ///
+    /// # Panics
+    /// As [`progressive_into`](Self::progressive_into).
+    pub fn progressive_sites_into(&self, seed: u64, first_rank: u32, out: &mut [SampleSite]) {
+        self.fill_progressive(seed, first_rank, out);
+    }
+
+    /// The records of progressive ranks `first_rank..first_rank + out.len()`.
+    fn fill_progressive<T: Record>(&self, seed: u64, first_rank: u32, out: &mut [T]) {
+        let count = u64::from(first_rank) + out.len() as u64;
+        assert!(
+            count <= 1 << 32,
+            "progressive ranks end at 2^32, asked up to {count}"
+        );
+        if out.is_empty() {
+            return;
+        }
+        let scramble = Scramble::new(seed);
+        let scale = (self.total_measure / count as f64).sqrt();
+        out.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(chunk, dst)| {
+                let mut scratch = LeafScratch::default();
+                let start = first_rank + (chunk * CHUNK) as u32;
+                for (i, slot) in dst.iter_mut().enumerate() {
+                    let rank = start + i as u32;
+                    let m = scramble.value(rank) * self.total_measure;
+                    let (seg, p) = self.progressive_point(m, &mut scratch);
+                    *slot = T::make(self, seg, &p, rank, scale);
+                }
+            });
+    }
+
+    /// The segment and domain point at measure `m` along the curves in chain order,
+    /// resolved to [`PROGRESSIVE_LEVELS`] levels inside its leaf.
+    #[inline]
+    fn progressive_point<'a>(
+        &'a self,
+        m: f64,
+        scratch: &mut LeafScratch<'a>,
+    ) -> (&'a SegmentSampling, DomainPoint) {
+        let cum = &self.chain_cumulative;
+        // The segment whose measure range holds m (positive measure: it ends above m).
+        let k = cum[1..]
+            .partition_point(|&c| c <= m)
+            .min(self.chains.order.len() - 1);
+        let seg = &self.segments[self.chains.order[k] as usize];
+        let curve = &seg.curve;
+        let leaves = curve.cumulative();
+        let ml = (m - cum[k]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
+        let leaf = leaves[1..]
+            .partition_point(|&c| c <= ml)
+            .min(leaves.len() - 2);
+        let (w0, w1) = (leaves[leaf], leaves[leaf + 1]);
+        let t = if w1 > w0 { (ml - w0) / (w1 - w0) } else { 0.0 };
+        let p = curve.point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, scratch);
+        (seg, p)
     }
 }
 

@@ -4,8 +4,8 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use super::chains::link_chains;
 use super::faces::{FaceTensors, face_point};
-use super::progressive::Scramble;
 use super::stratified::{Allocation, stratified_value_keyed};
 use super::types::{Sample, SampleSite};
 use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
@@ -14,12 +14,7 @@ use crate::mesh::TriMesh;
 
 /// Samples are produced in fixed chunks of this many outputs, each chunk on one rayon
 /// task; the chunking, not the thread count, decides the work split.
-const CHUNK: usize = 4096;
-
-/// Levels of the continuous map inside a leaf for progressive samples: fixed, since a
-/// sample's place may not depend on the count (4^12 sub-cells per leaf separate far
-/// more samples than a leaf receives).
-const PROGRESSIVE_LEVELS: u32 = 12;
+pub(super) const CHUNK: usize = 4096;
 
 /// One segment ready for sampling: its cells and the mesh face of each domain triangle.
 #[derive(Clone, Debug)]
@@ -79,15 +74,15 @@ pub struct Sampler {
     field: Arc<TensorField>,
     /// The field's corner tensors of every face in the face's frame.
     face_tensors: FaceTensors,
-    segments: Vec<SegmentSampling>,
-    total_measure: f64,
+    pub(super) segments: Vec<SegmentSampling>,
+    pub(super) total_measure: f64,
     /// Segments one by one: `0..t` as groups of one (order, offsets, measures).
     singles: Groups,
     /// Chains of neighbouring segments (section 6.2), used when `t / N >= 1/3`.
-    chains: Groups,
+    pub(super) chains: Groups,
     /// The measure before each segment of `chains.order` (and the total at the end):
     /// the progressive sequence runs over the curves concatenated in chain order.
-    chain_cumulative: Vec<f64>,
+    pub(super) chain_cumulative: Vec<f64>,
 }
 
 /// One sampling request as every chunk of it sees it.
@@ -104,8 +99,8 @@ struct Request<'a> {
 
 /// Groups of segments sampled with one stratified sequence each, in CSR form.
 #[derive(Clone, Debug, Default)]
-struct Groups {
-    order: Vec<u32>,
+pub(super) struct Groups {
+    pub(super) order: Vec<u32>,
     offsets: Vec<u32>,
     measures: Vec<f64>,
 }
@@ -133,70 +128,9 @@ impl Groups {
         self.measures.len()
     }
 
-    fn members(&self, i: usize) -> &[u32] {
+    pub(super) fn members(&self, i: usize) -> &[u32] {
         &self.order[self.offsets[i] as usize..self.offsets[i + 1] as usize]
     }
-}
-
-/// Links neighbouring segments into chains (section 6.2): a chain starts at the
-/// unchained segment with the fewest unchained neighbours (the edge of what is left,
-/// the paper's "weighted toward the boundary"; ties by lowest index) and repeatedly
-/// appends the smallest-measure unchained neighbour of its last segment, until there
-/// is none. Deterministic.
-fn link_chains(mesh: &TriMesh, segments: &[SegmentSampling]) -> Vec<Vec<u32>> {
-    let mut owner = vec![u32::MAX; mesh.face_count()];
-    for (i, s) in segments.iter().enumerate() {
-        for &f in &s.faces {
-            owner[f as usize] = i as u32;
-        }
-    }
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); segments.len()];
-    for [a, b] in mesh.edge_faces() {
-        if *a == crate::mesh::NONE || *b == crate::mesh::NONE {
-            continue;
-        }
-        let (x, y) = (owner[*a as usize], owner[*b as usize]);
-        if x != y && x != u32::MAX && y != u32::MAX {
-            neighbours[x as usize].push(y);
-            neighbours[y as usize].push(x);
-        }
-    }
-    for n in &mut neighbours {
-        n.sort_unstable();
-        n.dedup();
-    }
-    let measure = |i: u32| segments[i as usize].curve.measure();
-    let mut chained = vec![false; segments.len()];
-    let mut chains = Vec::new();
-    loop {
-        let free_neighbours = |i: usize, chained: &[bool]| {
-            neighbours[i]
-                .iter()
-                .filter(|&&n| !chained[n as usize])
-                .count()
-        };
-        let Some(start) = (0..segments.len())
-            .filter(|&i| !chained[i])
-            .min_by_key(|&i| (free_neighbours(i, &chained), i))
-        else {
-            break;
-        };
-        let mut chain = vec![start as u32];
-        chained[start] = true;
-        let mut current = start;
-        while let Some(next) = neighbours[current]
-            .iter()
-            .copied()
-            .filter(|&n| !chained[n as usize])
-            .min_by(|&a, &b| measure(a).total_cmp(&measure(b)).then(a.cmp(&b)))
-        {
-            chained[next as usize] = true;
-            chain.push(next);
-            current = next as usize;
-        }
-        chains.push(chain);
-    }
-    chains
 }
 
 impl Sampler {
@@ -370,89 +304,6 @@ impl Sampler {
     pub fn sample_sites_into(&self, seed: u64, out: &mut [SampleSite]) {
         let linked = self.uses_chains(out.len());
         self.fill(seed, out, linked);
-    }
-
-    /// Fills `out` with the progressive samples of ranks `first_rank..first_rank +
-    /// out.len()` for `seed` (issue 19): sample `k` is value `k` of one
-    /// [progressive sequence](super::progressive) over the curves of all segments
-    /// concatenated in chain order, mapped through the cumulative measure to a leaf
-    /// cell and along the continuous Hilbert curve to a point.
-    ///
-    /// A sample's place depends only on the seed and its rank, never on how many are
-    /// drawn: the first `N` samples of any request are the samples of an `N`-sample
-    /// request, bit for bit (only [`Sample::spacing`]'s scale, which follows the count
-    /// `first_rank + out.len()`, differs). Every prefix of `2^m` ranks puts one sample
-    /// in each `1/2^m` of the total measure along the curves; counts per segment come
-    /// from the sequence, with nothing rounded per segment. [`sample_into`](Self::sample_into)
-    /// places a fixed `N` more evenly (exactly stratified for every `N`), so use this
-    /// where samples must persist as the count changes (level of detail), and that
-    /// where one fixed count is drawn.
-    ///
-    /// # Panics
-    /// If a rank reaches `2^32` (the sequence's length).
-    pub fn progressive_into(&self, seed: u64, first_rank: u32, out: &mut [Sample]) {
-        self.fill_progressive(seed, first_rank, out);
-    }
-
-    /// As [`progressive_into`](Self::progressive_into), writing only where each sample
-    /// lies ([`SampleSite`]).
-    ///
-    /// # Panics
-    /// As [`progressive_into`](Self::progressive_into).
-    pub fn progressive_sites_into(&self, seed: u64, first_rank: u32, out: &mut [SampleSite]) {
-        self.fill_progressive(seed, first_rank, out);
-    }
-
-    /// The records of progressive ranks `first_rank..first_rank + out.len()`.
-    fn fill_progressive<T: Record>(&self, seed: u64, first_rank: u32, out: &mut [T]) {
-        let count = u64::from(first_rank) + out.len() as u64;
-        assert!(
-            count <= 1 << 32,
-            "progressive ranks end at 2^32, asked up to {count}"
-        );
-        if out.is_empty() {
-            return;
-        }
-        let scramble = Scramble::new(seed);
-        let scale = (self.total_measure / count as f64).sqrt();
-        out.par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(chunk, dst)| {
-                let mut scratch = LeafScratch::default();
-                let start = first_rank + (chunk * CHUNK) as u32;
-                for (i, slot) in dst.iter_mut().enumerate() {
-                    let rank = start + i as u32;
-                    let m = scramble.value(rank) * self.total_measure;
-                    let (seg, p) = self.progressive_point(m, &mut scratch);
-                    *slot = T::make(self, seg, &p, rank, scale);
-                }
-            });
-    }
-
-    /// The segment and domain point at measure `m` along the curves in chain order,
-    /// resolved to [`PROGRESSIVE_LEVELS`] levels inside its leaf.
-    #[inline]
-    fn progressive_point<'a>(
-        &'a self,
-        m: f64,
-        scratch: &mut LeafScratch<'a>,
-    ) -> (&'a SegmentSampling, DomainPoint) {
-        let cum = &self.chain_cumulative;
-        // The segment whose measure range holds m (positive measure: it ends above m).
-        let k = cum[1..]
-            .partition_point(|&c| c <= m)
-            .min(self.chains.order.len() - 1);
-        let seg = &self.segments[self.chains.order[k] as usize];
-        let curve = &seg.curve;
-        let leaves = curve.cumulative();
-        let ml = (m - cum[k]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
-        let leaf = leaves[1..]
-            .partition_point(|&c| c <= ml)
-            .min(leaves.len() - 2);
-        let (w0, w1) = (leaves[leaf], leaves[leaf + 1]);
-        let t = if w1 > w0 { (ml - w0) / (w1 - w0) } else { 0.0 };
-        let p = curve.point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, scratch);
-        (seg, p)
     }
 
     /// Fills `out` with the records of an `out.len()`-sample request.
@@ -710,7 +561,7 @@ impl Sampler {
 
 /// A record the per-chunk loop writes for each sample: a full [`Sample`] or only its
 /// [`SampleSite`] (one loop, compiled once per record type).
-trait Record: Copy + Send {
+pub(super) trait Record: Copy + Send {
     /// The record of domain point `p` of `seg`, sample `index` of a request whose
     /// spacing scale is `scale`.
     fn make(
@@ -964,15 +815,11 @@ mod tests {
     fn progressive_samples_do_not_depend_on_the_thread_count() {
         let pre = torus();
         let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("pool")
-                .install(|| {
-                    let mut out = vec![super::Sample::default(); 20_000];
-                    pre.sampler.progressive_into(3, 0, &mut out);
-                    out.iter().map(place).collect::<Vec<_>>()
-                })
+            crate::on_threads(threads, || {
+                let mut out = vec![super::Sample::default(); 20_000];
+                pre.sampler.progressive_into(3, 0, &mut out);
+                out.iter().map(place).collect::<Vec<_>>()
+            })
         };
         assert_eq!(run(1), run(2));
     }

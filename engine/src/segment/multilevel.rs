@@ -448,11 +448,9 @@ mod tests {
         let seeds = place_seeds(&mesh, &frames, &weights, &mask, FRAC_PI_4 / 8.0, 5);
         assert!(seeds.len() > 16, "several blocks of seeds: {}", seeds.len());
         let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("pool")
-                .install(|| random_walk(&mesh, &weights, &mask, &seeds).expect("walk"))
+            crate::on_threads(threads, || {
+                random_walk(&mesh, &weights, &mask, &seeds).expect("walk")
+            })
         };
         let one = run(1);
         assert_eq!(run(2), one);

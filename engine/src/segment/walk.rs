@@ -700,15 +700,11 @@ mod tests {
     fn same_output_for_any_thread_count() {
         let (mesh, field) = turning_field(lattice(24));
         let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("pool")
-                .install(|| {
-                    let (faces, seeds, labels) = segment(&mesh, &field, 0.12, &no_blocks(&mesh), 4);
-                    let parts = connected_parts(&mesh, &labels, &no_blocks(&mesh));
-                    (faces, seeds, labels, parts)
-                })
+            crate::on_threads(threads, || {
+                let (faces, seeds, labels) = segment(&mesh, &field, 0.12, &no_blocks(&mesh), 4);
+                let parts = connected_parts(&mesh, &labels, &no_blocks(&mesh));
+                (faces, seeds, labels, parts)
+            })
         };
         let one = run(1);
         assert!(
