@@ -48,8 +48,58 @@ pub struct ViewLod {
     pub cull_back_faces: bool,
 }
 
+/// A [`ViewLod`] setting out of its range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LodError {
+    /// A setting with a value out of range.
+    #[error("level of detail: {setting} = {value} must be {expected}")]
+    Invalid {
+        /// The setting's name.
+        setting: &'static str,
+        /// The value given (for vectors and matrices: their first non-finite entry).
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
+}
+
 impl ViewLod {
-    /// The density multiplier at point `p` with unit normal `normal` (module docs).
+    /// Checks every setting: a finite matrix and eye, a positive finite focal length
+    /// and reference, a positive `max` (infinity allowed). [`multiplier`](Self::multiplier)
+    /// assumes them.
+    pub fn validate(&self) -> Result<(), LodError> {
+        let bad = |setting, value, expected| {
+            Err(LodError::Invalid {
+                setting,
+                value,
+                expected,
+            })
+        };
+        if let Some(&v) = self
+            .clip_from_world
+            .to_cols_array()
+            .iter()
+            .find(|v| !v.is_finite())
+        {
+            return bad("clip_from_world", v, "finite");
+        }
+        if let Some(&v) = self.eye.to_array().iter().find(|v| !v.is_finite()) {
+            return bad("eye", v, "finite");
+        }
+        if !(self.focal_pixels > 0.0 && self.focal_pixels.is_finite()) {
+            return bad("focal_pixels", self.focal_pixels, "finite and > 0");
+        }
+        if !(self.reference > 0.0 && self.reference.is_finite()) {
+            return bad("reference", self.reference, "finite and > 0");
+        }
+        if !(self.max > 0.0) {
+            return bad("max", self.max, "> 0 (infinity for no clamp)");
+        }
+        Ok(())
+    }
+
+    /// The density multiplier at point `p` with unit normal `normal` (module docs), for
+    /// settings that pass [`validate`](Self::validate).
     pub fn multiplier(&self, p: DVec3, normal: DVec3) -> f64 {
         let clip = self.clip_from_world * DVec4::new(p.x, p.y, p.z, 1.0);
         let w = clip.w;
@@ -166,6 +216,64 @@ mod tests {
         );
         let clamped = ViewLod { max: 0.5, ..both };
         assert_eq!(clamped.multiplier(DVec3::ZERO, DVec3::Z), 0.5);
+    }
+
+    #[test]
+    fn settings_out_of_range_are_named() {
+        let good = view(DVec3::new(0.0, 0.0, 4.0), false);
+        assert_eq!(good.validate(), Ok(()));
+        let named = |lod: ViewLod| match lod.validate() {
+            Err(LodError::Invalid { setting, .. }) => setting,
+            Ok(()) => "accepted",
+        };
+        assert_eq!(
+            named(ViewLod {
+                reference: 0.0,
+                ..good
+            }),
+            "reference"
+        );
+        assert_eq!(
+            named(ViewLod {
+                reference: f64::NAN,
+                ..good
+            }),
+            "reference"
+        );
+        assert_eq!(
+            named(ViewLod {
+                focal_pixels: -1.0,
+                ..good
+            }),
+            "focal_pixels"
+        );
+        assert_eq!(named(ViewLod { max: 0.0, ..good }), "max");
+        assert_eq!(
+            named(ViewLod {
+                eye: DVec3::new(f64::INFINITY, 0.0, 0.0),
+                ..good
+            }),
+            "eye"
+        );
+        let mut m = good.clip_from_world;
+        m.w_axis.x = f64::NAN;
+        assert_eq!(
+            named(ViewLod {
+                clip_from_world: m,
+                ..good
+            }),
+            "clip_from_world"
+        );
+        let e = ViewLod {
+            reference: -2.0,
+            ..good
+        }
+        .validate()
+        .expect_err("bad");
+        assert_eq!(
+            e.to_string(),
+            "level of detail: reference = -2 must be finite and > 0"
+        );
     }
 
     #[test]
