@@ -30,18 +30,19 @@ pub fn shared_mesh_dir() -> Result<PathBuf, String> {
 
 /// The first command-line argument as a repeat count, or `default`.
 pub fn repeats_arg(default: usize) -> Result<usize, std::num::ParseIntError> {
-    std::env::args()
-        .nth(1)
-        .map(|a| a.parse())
-        .transpose()
-        .map(|r| r.unwrap_or(default))
+    count_arg(1, default)
 }
 
 /// The second command-line argument as a count of Loop subdivision levels, or
 /// `default`.
 pub fn levels_arg(default: usize) -> Result<usize, std::num::ParseIntError> {
+    count_arg(2, default)
+}
+
+/// Command-line argument `position` as a count, or `default` when absent.
+fn count_arg(position: usize, default: usize) -> Result<usize, std::num::ParseIntError> {
     std::env::args()
-        .nth(2)
+        .nth(position)
         .map(|a| a.parse())
         .transpose()
         .map(|r| r.unwrap_or(default))

@@ -60,11 +60,7 @@ fn points(samples: &[Sample], scale: DVec2) -> Vec<DVec2> {
 }
 
 fn main() -> Result<(), BoxError> {
-    let runs: u64 = std::env::args()
-        .nth(1)
-        .map(|a| a.parse())
-        .transpose()?
-        .unwrap_or(8);
+    let runs = strata_bench::repeats_arg(8)? as u64;
     let mut ns: Vec<usize> = (6..=13)
         .flat_map(|l| [1usize << l, (1 << l) + (1 << (l - 1))])
         .chain([1000, 1500, 3000])

@@ -15,6 +15,48 @@ use std::collections::{BTreeMap, VecDeque};
 
 use super::{NONE, TriMesh};
 
+/// The faces of a mask, ascending, and each one's place among them: the index of code
+/// that sizes its arrays by a mask rather than the mesh, so that work on a small
+/// segment of a large mesh costs in proportion to the segment. Building it is one
+/// O(F) scan of the mask; [`index`](Self::index) is the identity when the mask is the
+/// whole mesh and a binary search otherwise.
+#[derive(Clone, Debug)]
+pub(crate) struct MaskFaces {
+    faces: Vec<u32>,
+    whole: bool,
+}
+
+impl MaskFaces {
+    /// The faces where `mask` holds.
+    pub(crate) fn new(mask: &[bool]) -> Self {
+        let faces: Vec<u32> = (0..mask.len() as u32)
+            .filter(|&f| mask[f as usize])
+            .collect();
+        let whole = faces.len() == mask.len();
+        Self { faces, whole }
+    }
+
+    /// The faces, ascending.
+    pub(crate) fn faces(&self) -> &[u32] {
+        &self.faces
+    }
+
+    /// The place of face `f` among the faces; `None` if it is not one.
+    #[inline]
+    pub(crate) fn index(&self, f: u32) -> Option<usize> {
+        if self.whole {
+            (f < self.faces.len() as u32).then_some(f as usize)
+        } else {
+            self.faces.binary_search(&f).ok()
+        }
+    }
+
+    /// The faces, ascending, by value.
+    pub(crate) fn into_faces(self) -> Vec<u32> {
+        self.faces
+    }
+}
+
 /// A subset of a mesh's faces: a membership flag per mesh face (built once, O(1) to
 /// test) and the member faces in the order given (to iterate).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -269,6 +311,17 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
+
+    #[test]
+    fn mask_faces_index_their_members_only() {
+        let part = MaskFaces::new(&[false, true, true, false, true]);
+        assert_eq!(part.faces(), &[1, 2, 4]);
+        let places: Vec<Option<usize>> = (0..6).map(|f| part.index(f)).collect();
+        assert_eq!(places, [None, Some(0), Some(1), None, Some(2), None]);
+        let whole = MaskFaces::new(&[true; 3]);
+        assert_eq!((whole.index(2), whole.index(3)), (Some(2), None));
+        assert_eq!(whole.into_faces(), vec![0, 1, 2]);
+    }
     use crate::mesh::shapes;
 
     /// A strip of `n` triangles, face `i` sharing an edge with faces `i - 1` and

@@ -298,6 +298,12 @@ mod tests {
     #[test]
     fn ranks_stop_at_the_last_32_bit_rank() {
         let s = Scramble::new(8);
+        // The last two ranks differ in their lowest bit, so one falls in each half.
+        for j in 0..2 {
+            let tail: Vec<u32> = s.ranks_in(1, j, u32::MAX - 1).collect();
+            assert_eq!(tail.len(), 1, "half {j}");
+            assert_eq!((s.value(tail[0]) * 2.0) as u32, j);
+        }
         let tail: Vec<u32> = s.ranks_in(31, 0, u32::MAX - 10).collect();
         assert!(tail.len() <= 1);
         assert!(

@@ -326,18 +326,23 @@ pub fn singularity_tree(
     let faces: Vec<u32> = (0..mesh.face_count() as u32)
         .filter(|&f| region[f as usize])
         .collect();
-    let mut verts: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.triangles()[f as usize])
-        .collect();
-    verts.sort_unstable();
-    verts.dedup();
-    let mut edges: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.face_edges()[f as usize])
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
+    let sorted_unique = |mut v: Vec<u32>| {
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let verts = sorted_unique(
+        faces
+            .iter()
+            .flat_map(|&f| mesh.triangles()[f as usize])
+            .collect(),
+    );
+    let edges = sorted_unique(
+        faces
+            .iter()
+            .flat_map(|&f| mesh.face_edges()[f as usize])
+            .collect(),
+    );
     let at = |v: u32| verts.binary_search(&v).expect("a corner of a region face");
     let vertices = Vertices {
         count: verts.len(),

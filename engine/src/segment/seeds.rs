@@ -27,7 +27,7 @@ use rayon::prelude::*;
 
 use super::{line_angle, unfold};
 use crate::field::TensorField;
-use crate::mesh::face_set::across;
+use crate::mesh::face_set::{MaskFaces, across};
 use crate::mesh::{NONE, TriMesh};
 use crate::rng::Rng;
 
@@ -226,21 +226,12 @@ pub(crate) fn grow_regions(
         line_angle(reference, faces.major[g as usize])
             * direction_confidence(faces.anisotropy[g as usize])
     };
-    // Everything below is sized by the mask, not the mesh, so that seeding a small
-    // segment of a large mesh costs in proportion to the segment: `members_of_mask`
-    // lists the mask's faces ascending, and `at(f)` is face `f`'s index in it.
-    let members_of_mask: Vec<u32> = (0..n as u32).filter(|&f| mask[f as usize]).collect();
+    // Everything below is sized by the mask, not the mesh (`at(f)`: face `f`'s place
+    // among the mask's faces).
+    let mask_faces = MaskFaces::new(mask);
+    let members_of_mask = mask_faces.faces();
     let m = members_of_mask.len();
-    let whole = m == n;
-    let at = |f: u32| -> usize {
-        if whole {
-            f as usize
-        } else {
-            members_of_mask
-                .binary_search(&f)
-                .expect("a face of the mask")
-        }
-    };
+    let at = |f: u32| -> usize { mask_faces.index(f).expect("a face of the mask") };
     // Per face of the region being grown, its reference direction carried into the
     // face's plane along the growth (unfolded across each edge crossed), so that only
     // the field's own turning counts, not the surface's bending.

@@ -39,7 +39,7 @@ use super::multilevel::multilevel_labels;
 use super::seeds::{FaceField, direction_confidence, for_each_walk_neighbor};
 use super::{SegmentError, line_angle};
 pub use crate::mesh::connected_parts;
-use crate::mesh::face_set::is_interior;
+use crate::mesh::face_set::{MaskFaces, is_interior};
 use crate::mesh::{NONE, TriMesh};
 
 /// Largest exponent `d*/sigma` used in a weight: weights never fall below
@@ -230,30 +230,23 @@ pub(crate) fn face_graph(mesh: &TriMesh, weights: &[f64], mask: &[bool]) -> (Wal
     let n = mesh.face_count();
     assert_eq!(weights.len(), mesh.edge_count(), "one weight per edge");
     assert_eq!(mask.len(), n, "one mask flag per face");
-    let faces: Vec<u32> = (0..n as u32).filter(|&f| mask[f as usize]).collect();
-    // Node of a mask face: the identity when the mask is the whole mesh.
-    let all = faces.len() == n;
-    let local = |f: u32| -> u32 {
-        if all {
-            f
-        } else {
-            faces.binary_search(&f).map_or(NONE, |i| i as u32)
-        }
-    };
+    let nodes = MaskFaces::new(mask);
+    let local = |f: u32| nodes.index(f).map_or(NONE, |i| i as u32);
+    let faces = nodes.faces();
     let mut graph = WalkGraph {
         offsets: Vec::with_capacity(faces.len() + 1),
         targets: Vec::with_capacity(3 * faces.len()),
         weights: Vec::with_capacity(3 * faces.len()),
     };
     graph.offsets.push(0);
-    for &f in &faces {
+    for &f in faces {
         for_each_walk_neighbor(mesh, weights, mask, f, |g, w| {
             graph.targets.push(local(g));
             graph.weights.push(w);
         });
         graph.offsets.push(graph.targets.len());
     }
-    (graph, faces)
+    (graph, nodes.into_faces())
 }
 
 /// `seeds` (mesh faces) as nodes of the face graph of `mask` with node faces `faces`.
