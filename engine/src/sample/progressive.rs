@@ -156,24 +156,47 @@ impl Sampler {
     }
 
     /// The records of progressive ranks `first_rank..first_rank + out.len()`.
+    /// The sites of progressive ranks `ranks` (any ranks, in any order) for `seed`:
+    /// `out[i]` is the site of rank `ranks[i]`, bit-identical to entry `ranks[i] - k`
+    /// of a [`progressive_sites_into`](Self::progressive_sites_into) call starting at
+    /// rank `k`. With [`progressive_ranks_in_segment`](Self::progressive_ranks_in_segment)
+    /// it refines one region without drawing the rest. Panics when the two slices differ
+    /// in length.
+    pub fn progressive_sites_of(&self, seed: u64, ranks: &[u32], out: &mut [SampleSite]) {
+        assert_eq!(ranks.len(), out.len(), "one site per rank");
+        // Sites carry no spacing, so the count behind the scale does not matter.
+        self.fill_ranks(seed, 1, |i| ranks[i], out);
+    }
+
     fn fill_progressive<T: Record>(&self, seed: u64, first_rank: u32, out: &mut [T]) {
         let count = u64::from(first_rank) + out.len() as u64;
         assert!(
             count <= 1 << 32,
             "progressive ranks end at 2^32, asked up to {count}"
         );
+        self.fill_ranks(seed, count, |i| first_rank + i as u32, out);
+    }
+
+    /// Writes the record of rank `rank_of(i)` into `out[i]`, with the spacings of a
+    /// `count`-sample request, in parallel over fixed chunks.
+    fn fill_ranks<T: Record>(
+        &self,
+        seed: u64,
+        count: u64,
+        rank_of: impl Fn(usize) -> u32 + Sync,
+        out: &mut [T],
+    ) {
         if out.is_empty() {
             return;
         }
         let scramble = Scramble::new(seed);
-        let scale = (self.total_measure / count as f64).sqrt();
+        let scale = (self.total_measure / count.max(1) as f64).sqrt();
         out.par_chunks_mut(CHUNK)
             .enumerate()
             .for_each(|(chunk, dst)| {
                 let mut scratch = LeafScratch::default();
-                let start = first_rank + (chunk * CHUNK) as u32;
                 for (i, slot) in dst.iter_mut().enumerate() {
-                    let rank = start + i as u32;
+                    let rank = rank_of(chunk * CHUNK + i);
                     let m = scramble.value(rank) * self.total_measure;
                     let (seg, p) = self.progressive_point(m, &mut scratch);
                     *slot = T::make(self, seg, &p, rank, scale);
@@ -181,8 +204,96 @@ impl Sampler {
             });
     }
 
-    /// The segment and domain point at measure `m` along the curves in chain order,
-    /// resolved to [`PROGRESSIVE_LEVELS`] levels inside its leaf.
+    /// Appends to `out`, in increasing order, the progressive ranks in `from..to` whose
+    /// samples lie in segment `segment` (an index into [`segments`](Self::segments)),
+    /// and returns the rank below which every such rank is listed: `to`, or one past the
+    /// last rank listed when `limit` ranks were listed first.
+    ///
+    /// Cost O(k + 1) for k ranks listed. The segment's share of the sequence is one
+    /// interval of values; it is covered by at most 24 dyadic intervals of a level `m`
+    /// at which it spans eight to sixteen of them, and the ranks of each are one residue
+    /// modulo `2^m` ([`Scramble::first_rank_in`]), so every block of `2^m` consecutive
+    /// ranks holds the same sorted offsets. Candidates in the cover's end intervals
+    /// are kept only when their sample lies in the segment, by the very test the
+    /// samplers use, so the list equals a filtered scan of the sequence. Panics when
+    /// `segment` is out of range.
+    pub fn progressive_ranks_in_segment(
+        &self,
+        seed: u64,
+        segment: usize,
+        from: u32,
+        to: u32,
+        limit: usize,
+        out: &mut Vec<u32>,
+    ) -> u32 {
+        let chain = self
+            .chains
+            .order
+            .iter()
+            .position(|&s| s as usize == segment)
+            .unwrap_or_else(|| panic!("segment {segment} out of range"));
+        if from >= to {
+            return to;
+        }
+        let total = self.total_measure;
+        let (a, b) = (
+            self.chain_cumulative[chain] / total,
+            self.chain_cumulative[chain + 1] / total,
+        );
+        let width = (b - a).max(0.0);
+        if !(width > 0.0) {
+            return to;
+        }
+        // 2^-m in (width / 16, width / 8].
+        let m = ((8.0 / width).log2().ceil().max(0.0) as u32).min(32);
+        let cells = (1u64 << m) as f64;
+        let last = (1u64 << m) - 1;
+        // One interval more on each side: the membership test, not this rounding,
+        // decides.
+        let first_j = ((a * cells).floor() as u64).saturating_sub(1);
+        let last_j = (((b * cells).ceil() as u64) + 1).min(last);
+        let mut offsets = [0u32; 24];
+        let n = (last_j - first_j + 1) as usize;
+        debug_assert!(n <= offsets.len(), "cover of {n} intervals");
+        let n = n.min(offsets.len());
+        let scramble = Scramble::new(seed);
+        for (slot, j) in offsets[..n].iter_mut().zip(first_j..) {
+            *slot = scramble.first_rank_in(m, j as u32);
+        }
+        offsets[..n].sort_unstable();
+        let (lo, hi) = (u64::from(from), u64::from(to));
+        let mut listed = 0usize;
+        for block in (lo >> m)..=((hi - 1) >> m) {
+            for &o in &offsets[..n] {
+                let r = (block << m) + u64::from(o);
+                if r < lo {
+                    continue;
+                }
+                if r >= hi {
+                    break;
+                }
+                let rank = r as u32;
+                if self.chain_index(scramble.value(rank) * total) == chain {
+                    if listed == limit {
+                        return rank;
+                    }
+                    out.push(rank);
+                    listed += 1;
+                }
+            }
+        }
+        to
+    }
+
+    /// The position in chain order of the segment holding measure `m` of the
+    /// concatenated curves.
+    #[inline]
+    fn chain_index(&self, m: f64) -> usize {
+        self.chain_cumulative[1..]
+            .partition_point(|&c| c <= m)
+            .min(self.chains.order.len() - 1)
+    }
+
     #[inline]
     fn progressive_point<'a>(
         &'a self,

@@ -1,0 +1,264 @@
+//! Issue 19's `lod` bench: a camera moves along fixed paths around the bunny (3:1
+//! field, seed 3; the default scene when the shared meshes are absent) and a
+//! progressive pool ([`LodPool`]) serves the visible set of every frame:
+//! `cargo run --release -p strata-bench --bin lod [-- frames]`.
+//!
+//! The camera starts 2.5 bounding radii from the mesh's centre (45-degree vertical
+//! field of view, 1280 x 720, back faces culled, multiplier clamped at 4). The
+//! reference area is the projected area per unit area of a surface facing the camera
+//! at the centre, and the base count is set once so that the first frame shows about
+//! 10^6 samples. The pool holds the ranks `0..base` and grows by rank enumeration per
+//! segment. Paths, `frames` steps each (default 20):
+//!
+//! - `count`: base count times 1.01 per frame, camera still;
+//! - `dolly in` / `dolly out`: the distance to the centre times 0.99 / 1.01 per frame;
+//! - `orbit`: 1 degree per frame about the vertical axis through the centre.
+//!
+//! Per path: the visible samples of the first frame; the kept share (the samples of
+//! frame t visible in frame t+1 with the same rank and site, over those of frame t,
+//! worst and mean over the steps); the same share among the samples that stay in view
+//! (multiplier above 0 in frame t+1); whether a kept sample ever moved; the CPU time
+//! of `LodPool::update` per frame (median and mean: the whole per-frame CPU work of a
+//! renderer that culls on the GPU, besides a uniform write); and the bytes a GPU copy
+//! of the pool receives per frame (20 per new entry: site and rank). The visible sets
+//! are computed on the CPU (`LodPool::fades_into`), outside the timing.
+//!
+//! For comparison, `stratified` redraws `N` and `1.01 N` samples in today's stratified
+//! order and counts the samples that kept their place.
+
+use std::time::Instant;
+
+use glam::DVec3;
+use strata_engine::sample::lod::ViewLod;
+use strata_engine::sample::{LodPool, PoolChange, SampleSite, Sampler};
+use strata_systems::scene::Scene;
+
+const WIDTH: f64 = 1280.0;
+const HEIGHT: f64 = 720.0;
+const FOV_Y: f64 = std::f64::consts::FRAC_PI_4;
+const SEED: u64 = 3;
+
+/// A camera at `eye` looking at `target`.
+fn view(eye: DVec3, target: DVec3, reference: f64) -> ViewLod {
+    let proj = glam::dcamera::rh::proj::directx::perspective(FOV_Y, WIDTH / HEIGHT, 0.001, 1000.0);
+    let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
+    ViewLod {
+        clip_from_world: proj * look,
+        eye,
+        focal_pixels: HEIGHT / (2.0 * (FOV_Y / 2.0).tan()),
+        reference,
+        max: 4.0,
+        cull_back_faces: true,
+    }
+}
+
+/// The visible samples of the pool, as (rank, site) sorted by rank.
+fn visible(
+    pool: &LodPool,
+    s: &Sampler,
+    v: &ViewLod,
+    base: f64,
+    fades: &mut Vec<f32>,
+) -> Vec<(u32, SampleSite)> {
+    fades.resize(pool.len(), 0.0);
+    pool.fades_into(s, v, base, fades);
+    let mut shown: Vec<(u32, SampleSite)> = (0..pool.len())
+        .filter(|&i| fades[i] > 0.0)
+        .map(|i| (pool.ranks()[i], pool.sites()[i]))
+        .collect();
+    shown.sort_unstable_by_key(|e| e.0);
+    shown
+}
+
+/// Samples of `a` also in `b` with the same site, and whether any rank of both moved.
+fn kept(a: &[(u32, SampleSite)], b: &[(u32, SampleSite)]) -> (usize, bool) {
+    let (mut i, mut j, mut same, mut moved) = (0, 0, 0, false);
+    while i < a.len() && j < b.len() {
+        match a[i].0.cmp(&b[j].0) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                if a[i].1 == b[j].1 {
+                    same += 1;
+                } else {
+                    moved = true;
+                }
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    (same, moved)
+}
+
+/// Samples of `a` whose multiplier under `v` is 0 (they left the view).
+fn leaving(a: &[(u32, SampleSite)], s: &Sampler, v: &ViewLod) -> usize {
+    a.iter()
+        .filter(|(k, site)| {
+            let r = s
+                .record(site.face, site.barycentric().map(f64::from), 0, *k, 1)
+                .expect("a pool site is on the mesh");
+            let p = DVec3::from(r.position.map(f64::from));
+            let n = DVec3::from(r.normal.map(f64::from));
+            v.multiplier(p, n) == 0.0
+        })
+        .count()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let frames = strata_bench::repeats_arg(20)?.max(1);
+    let file = match strata_bench::shared_mesh_dir() {
+        Ok(_) => "stanford-bunny-anisotropic.ron",
+        Err(e) => {
+            eprintln!("{e}; using the default scene");
+            "default.ron"
+        }
+    };
+    let (name, config) = strata_bench::bundled_scenes(&[("scene", file)])?.remove(0);
+    let mut config = config;
+    config.sampling.seed = SEED;
+    let scene = Scene::build(&config)?;
+    let s = &scene.sampler;
+    let (lo, hi) = scene
+        .mesh
+        .positions()
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let centre = 0.5 * (lo + hi);
+    let radius = scene
+        .mesh
+        .positions()
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0, f64::max);
+    let distance = 2.5 * radius;
+    let focal = HEIGHT / (2.0 * (FOV_Y / 2.0).tan());
+    let reference = focal * focal / (distance * distance);
+    let start = centre + DVec3::new(0.0, 0.0, distance);
+    let first = view(start, centre, reference);
+
+    // Calibrate the base count on a small pool: visible samples grow linearly with it.
+    let probe_base = 100_000.0;
+    let mut probe = LodPool::new(s, SEED, probe_base as u32, usize::MAX / 4);
+    probe.update(s, &first, probe_base);
+    let mut fades = Vec::new();
+    let shown = visible(&probe, s, &first, probe_base, &mut fades).len() as f64;
+    let base = (probe_base * 1e6 / shown).round();
+    println!(
+        "{name} `{file}`: {} faces, {} segments; base count {base:.0}, reference {reference:.1} px^2 per unit area, {frames} frames per path.\n",
+        scene.mesh.face_count(),
+        s.segments().len(),
+    );
+
+    let t = Instant::now();
+    let budget = 8_000_000;
+    let prefix = LodPool::new(s, SEED, base as u32, budget);
+    println!(
+        "Pool of ranks 0..{base:.0}: built in {:.0} ms ({:.1} MB of sites and ranks).\n",
+        t.elapsed().as_secs_f64() * 1e3,
+        prefix.len() as f64 * 20.0 / 1e6
+    );
+    println!(
+        "| path | visible (first frame) | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | upload KB per frame, mean | pool entries at end |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let paths: [(&str, Box<dyn Fn(usize) -> (ViewLod, f64)>); 4] = [
+        (
+            "count +1%",
+            Box::new(|t| (first, base * 1.01f64.powi(t as i32))),
+        ),
+        (
+            "dolly in 1%",
+            Box::new(|t| {
+                let eye = centre + (start - centre) * 0.99f64.powi(t as i32);
+                (view(eye, centre, reference), base)
+            }),
+        ),
+        (
+            "dolly out 1%",
+            Box::new(|t| {
+                let eye = centre + (start - centre) * 1.01f64.powi(t as i32);
+                (view(eye, centre, reference), base)
+            }),
+        ),
+        (
+            "orbit 1 degree",
+            Box::new(|t| {
+                let turn = glam::DQuat::from_rotation_y((t as f64).to_radians());
+                (
+                    view(centre + turn * (start - centre), centre, reference),
+                    base,
+                )
+            }),
+        ),
+    ];
+    for (path, frame) in paths {
+        let mut pool = prefix.clone();
+        let (v, b) = frame(0);
+        pool.update(s, &v, b);
+        let mut before = visible(&pool, s, &v, b, &mut fades);
+        let shown = before.len();
+        let (mut shares, mut in_view, mut times, mut bytes) = (vec![], vec![], vec![], vec![]);
+        let mut moved = false;
+        for t in 1..=frames {
+            let (v, b) = frame(t);
+            let clock = Instant::now();
+            let change = pool.update(s, &v, b);
+            times.push(clock.elapsed().as_secs_f64() * 1e3);
+            bytes.push(match change {
+                PoolChange::Unchanged => 0.0,
+                PoolChange::Appended(r) => r.len() as f64 * 20.0,
+                PoolChange::Rebuilt => (pool.len() - pool.prefix() as usize) as f64 * 20.0,
+            });
+            let after = visible(&pool, s, &v, b, &mut fades);
+            let (same, m) = kept(&before, &after);
+            moved |= m;
+            let gone = leaving(&before, s, &v);
+            shares.push(same as f64 / before.len() as f64);
+            in_view.push(same as f64 / (before.len() - gone).max(1) as f64);
+            before = after;
+        }
+        let worst = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        println!(
+            "| {path} | {shown} | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1} | {} |",
+            100.0 * worst(&shares),
+            100.0 * mean(&shares),
+            100.0 * worst(&in_view),
+            if moved { "yes" } else { "no" },
+            median(times.clone()),
+            mean(&times),
+            mean(&bytes) / 1e3,
+            pool.len(),
+        );
+    }
+
+    // Today's stratified order, N to N + 1%.
+    let n = 1_000_000usize;
+    let (mut a, mut b) = (
+        vec![SampleSite::default(); n],
+        vec![SampleSite::default(); n + n / 100],
+    );
+    s.sample_sites_into(SEED, &mut a);
+    s.sample_sites_into(SEED, &mut b);
+    let key = |x: &SampleSite| (x.face, x.segment, x.bary[0].to_bits(), x.bary[1].to_bits());
+    let mut set: Vec<_> = b.iter().map(key).collect();
+    set.sort_unstable();
+    let same = a
+        .iter()
+        .filter(|x| set.binary_search(&key(x)).is_ok())
+        .count();
+    println!(
+        "\nStratified order, {n} to {} samples: {:.1}% kept their place.",
+        n + n / 100,
+        100.0 * same as f64 / n as f64
+    );
+    Ok(())
+}

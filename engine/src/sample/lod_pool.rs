@@ -1,0 +1,538 @@
+//! A pool of progressive sample sites that grows where a view asks for more (issue 19).
+//!
+//! A renderer that thresholds progressive ranks against a view's multiplier
+//! ([`lod`](super::lod)) needs every rank `k < N lod(p_k)` at hand. The pool holds the
+//! sites of ranks `0..P` (a prefix of the sequence, computed once: the rank of entry
+//! `k < P` is `k`) and, beyond them, an extension of higher ranks drawn only in the
+//! segments whose multiplier asks for them: for each segment an upper bound of the
+//! multiplier over a sphere around it gives the rank it needs,
+//! `ceil(N bound)`, and the ranks it lacks are enumerated in that segment alone
+//! ([`Sampler::progressive_ranks_in_segment`]), so an update costs in proportion to the
+//! new ranks. Segment `s` holds every rank below `reach[s]` that falls in it.
+//!
+//! Entries are only ever appended, so a GPU copy of the pool is extended by streaming
+//! the new tail ([`PoolChange::Appended`]). When the extension would outgrow its budget
+//! and holds ranks the view no longer needs, it is rebuilt for the current view
+//! ([`PoolChange::Rebuilt`]); when the current view alone needs more than the budget,
+//! segments are served in index order until it is spent and the rest keep the ranks
+//! they have ([`LodPool::complete`] says whether every visible rank is held).
+//!
+//! Which ranks are visible, and where each lies, depend only on the seed, the view and
+//! the ranks held, never on the path that led there: the pool's order of entries
+//! differs with the path, the samples do not.
+
+use std::ops::Range;
+
+use glam::{DVec3, DVec4, Vec4Swizzles};
+use rayon::prelude::*;
+
+use super::lod::{ViewLod, fade};
+use super::{SampleSite, Sampler};
+
+/// What an [`LodPool::update`] changed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PoolChange {
+    /// Nothing: the pool already held every rank the view needs (or the budget is
+    /// spent on ranks the view still needs).
+    Unchanged,
+    /// Entries in this range were appended; the entries before it are as they were.
+    Appended(Range<usize>),
+    /// The extension was rebuilt: entries from [`LodPool::prefix`] on changed.
+    Rebuilt,
+}
+
+/// Progressive sample sites for one sampler and seed: a prefix of the sequence plus
+/// ranks drawn per segment where views need them. See the module docs.
+#[derive(Clone, Debug)]
+pub struct LodPool {
+    seed: u64,
+    prefix: u32,
+    budget: usize,
+    sites: Vec<SampleSite>,
+    ranks: Vec<u32>,
+    /// Per segment (index into `Sampler::segments`): every rank below it that falls in
+    /// the segment is held.
+    reach: Vec<u32>,
+    /// Per segment: where its faces lie and which way its normals point.
+    bounds: Vec<SegmentBound>,
+}
+
+/// A sphere holding a segment's faces and a cone holding its vertex normals (hence
+/// every interpolated normal of its samples), for an upper bound of a view's
+/// multiplier over the segment.
+#[derive(Clone, Copy, Debug)]
+struct SegmentBound {
+    centre: DVec3,
+    radius: f64,
+    /// Unit axis of the normal cone.
+    axis: DVec3,
+    /// Half-angle of the normal cone in radians (pi: no bound).
+    spread: f64,
+}
+
+impl SegmentBound {
+    fn new(mesh: &crate::mesh::TriMesh, faces: &[u32]) -> Self {
+        let corners = || {
+            faces
+                .iter()
+                .flat_map(|&f| mesh.triangles()[f as usize].map(|v| v as usize))
+        };
+        let (lo, hi) = corners().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| (lo.min(mesh.positions()[v]), hi.max(mesh.positions()[v])),
+        );
+        let centre = 0.5 * (lo + hi);
+        let radius = corners()
+            .map(|v| mesh.positions()[v].distance(centre))
+            .fold(0.0, f64::max);
+        let normals = mesh.vertex_normals();
+        let axis = corners()
+            .map(|v| normals[v])
+            .sum::<DVec3>()
+            .normalize_or_zero();
+        // The smallest cosine to the axis; a cone of half-angle under 90 degrees is
+        // convex, so it holds every normalised blend of its corner normals too.
+        let least = corners()
+            .map(|v| normals[v].dot(axis))
+            .fold(1.0f64, f64::min);
+        let spread = if axis != DVec3::ZERO && least > 1e-3 {
+            // A little slack for the f32 normals a renderer interpolates.
+            least.clamp(-1.0, 1.0).acos() + 1e-4
+        } else {
+            std::f64::consts::PI
+        };
+        Self {
+            centre,
+            radius,
+            axis,
+            spread,
+        }
+    }
+
+    /// An upper bound of `|cos theta|` (or of `cos theta` when back faces are
+    /// culled, 0 when every normal faces away) over the segment.
+    fn cos_bound(&self, view: &ViewLod) -> f64 {
+        use std::f64::consts::{FRAC_PI_2, PI};
+        let to_eye = view.eye - self.centre;
+        let d = to_eye.length();
+        if !(self.spread < FRAC_PI_2) || !(d > self.radius) {
+            return 1.0;
+        }
+        // Directions from the sphere to the eye stay within `seen` of the centre's.
+        let seen = (self.radius / d).asin();
+        let off = self.axis.dot(to_eye / d).clamp(-1.0, 1.0).acos();
+        let front = (off - self.spread - seen).max(0.0);
+        let back = (PI - off - self.spread - seen).max(0.0);
+        if view.cull_back_faces {
+            if front >= FRAC_PI_2 { 0.0 } else { front.cos() }
+        } else {
+            front.cos().max(back.cos())
+        }
+    }
+}
+
+impl LodPool {
+    /// The pool of `sampler`'s progressive sequence for `seed` holding ranks
+    /// `0..prefix`, with room for `budget` more ranks drawn per segment. Memory:
+    /// 20 bytes per entry. Room for `min(budget, prefix)` more entries is reserved up
+    /// front, and the pool grows geometrically beyond, so that updates soon stop
+    /// allocating.
+    pub fn new(sampler: &Sampler, seed: u64, prefix: u32, budget: usize) -> Self {
+        let capacity = prefix as usize + budget.min(prefix as usize);
+        let mut sites = Vec::with_capacity(capacity);
+        sites.resize(prefix as usize, SampleSite::default());
+        sampler.progressive_sites_into(seed, 0, &mut sites);
+        let mut ranks = Vec::with_capacity(capacity);
+        ranks.extend(0..prefix);
+        let bounds = sampler
+            .segments()
+            .par_iter()
+            .map(|seg| SegmentBound::new(sampler.mesh(), &seg.faces))
+            .collect();
+        Self {
+            seed,
+            prefix,
+            budget,
+            sites,
+            ranks,
+            reach: vec![prefix; sampler.segments().len()],
+            bounds,
+        }
+    }
+
+    /// The seed of the sequence.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Ranks `0..prefix` are the first `prefix` entries.
+    pub fn prefix(&self) -> u32 {
+        self.prefix
+    }
+
+    /// Every entry's site.
+    pub fn sites(&self) -> &[SampleSite] {
+        &self.sites
+    }
+
+    /// Every entry's rank (entry `k < prefix` has rank `k`).
+    pub fn ranks(&self) -> &[u32] {
+        &self.ranks
+    }
+
+    /// Entries held.
+    pub fn len(&self) -> usize {
+        self.sites.len()
+    }
+
+    /// Whether the pool holds no entry.
+    pub fn is_empty(&self) -> bool {
+        self.sites.is_empty()
+    }
+
+    /// An upper bound of `view`'s multiplier over segment `segment`, from a sphere
+    /// around its faces and a cone around its normals: 0 when the sphere lies outside
+    /// the frustum or (back faces culled) every normal faces away; `view.max` when the
+    /// sphere reaches the eye's plane.
+    pub fn bound(&self, segment: usize, view: &ViewLod) -> f64 {
+        let b = &self.bounds[segment];
+        let (c, r) = (b.centre, b.radius);
+        let m = view.clip_from_world;
+        let [x, y, z, w] = [m.row(0), m.row(1), m.row(2), m.row(3)];
+        let at = DVec4::new(c.x, c.y, c.z, 1.0);
+        // The frustum's planes in world space: w - x >= 0, w + x >= 0, ..., z >= 0.
+        for plane in [w - x, w + x, w - y, w + y, z, w - z] {
+            if plane.dot(at) < -r * plane.xyz().length() {
+                return 0.0;
+            }
+        }
+        let nearest = w.dot(at) - r * w.xyz().length();
+        if !(nearest > 0.0) {
+            return view.max;
+        }
+        let farthest = view.eye.distance(c) + r;
+        let area = view.focal_pixels * view.focal_pixels * b.cos_bound(view) * farthest
+            / nearest.powi(3);
+        (area / view.reference).min(view.max)
+    }
+
+    /// The rank segment `segment` needs under `view` with base count `base`.
+    fn need(&self, segment: usize, view: &ViewLod, base: f64) -> u32 {
+        (base * self.bound(segment, view))
+            .ceil()
+            .min(f64::from(u32::MAX)) as u32
+    }
+
+    /// Whether every rank visible under `view` with base count `base` is held.
+    pub fn complete(&self, view: &ViewLod, base: f64) -> bool {
+        (0..self.reach.len()).all(|s| self.reach[s] >= self.need(s, view, base))
+    }
+
+    /// Draws the ranks `view` with base count `base` needs and the pool lacks. Cost in
+    /// proportion to the segments plus the ranks drawn; no allocation while the
+    /// extension stays within its budget.
+    pub fn update(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> PoolChange {
+        let start = self.sites.len();
+        if self.extend(sampler, view, base) {
+            return self.finish(sampler, start);
+        }
+        // The budget ran out. Rebuild if the extension holds ranks the view does not
+        // need; otherwise keep what is there.
+        let stale = (0..self.reach.len())
+            .any(|s| self.reach[s] > self.prefix.max(self.need(s, view, base)));
+        if !stale {
+            return self.finish(sampler, start);
+        }
+        self.sites.truncate(self.prefix as usize);
+        self.ranks.truncate(self.prefix as usize);
+        self.reach.fill(self.prefix);
+        self.extend(sampler, view, base);
+        self.finish(sampler, self.prefix as usize);
+        PoolChange::Rebuilt
+    }
+
+    /// Lists the missing ranks of every segment in index order; false when the budget
+    /// ran out first.
+    fn extend(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> bool {
+        for s in 0..self.reach.len() {
+            let need = self.need(s, view, base);
+            if need <= self.reach[s] {
+                continue;
+            }
+            let room = self.budget - (self.ranks.len() - self.prefix as usize);
+            self.reach[s] = sampler.progressive_ranks_in_segment(
+                self.seed,
+                s,
+                self.reach[s],
+                need,
+                room,
+                &mut self.ranks,
+            );
+            if self.reach[s] < need {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Computes the sites of the ranks listed from entry `start` on.
+    fn finish(&mut self, sampler: &Sampler, start: usize) -> PoolChange {
+        let end = self.ranks.len();
+        if end == start {
+            return PoolChange::Unchanged;
+        }
+        self.sites.resize(end, SampleSite::default());
+        sampler.progressive_sites_of(self.seed, &self.ranks[start..], &mut self.sites[start..]);
+        PoolChange::Appended(start..end)
+    }
+
+    /// Writes each entry's fade weight under `view` with base count `base` into `out`
+    /// (0 for an entry that is not visible), computing positions and normals on the
+    /// CPU as [`Sampler::record`] does: the reference a GPU cull is checked against.
+    /// Panics when `out` is not one weight per entry.
+    pub fn fades_into(&self, sampler: &Sampler, view: &ViewLod, base: f64, out: &mut [f32]) {
+        assert_eq!(out.len(), self.len(), "one weight per entry");
+        out.par_chunks_mut(4096)
+            .zip(self.sites.par_chunks(4096))
+            .zip(self.ranks.par_chunks(4096))
+            .for_each(|((dst, sites), ranks)| {
+                for ((slot, site), &rank) in dst.iter_mut().zip(sites).zip(ranks) {
+                    let b = site.barycentric().map(f64::from);
+                    *slot = sampler
+                        .record(site.face, b, site.segment, rank, 1)
+                        .map_or(0.0, |s| {
+                            let p = DVec3::from(s.position.map(f64::from));
+                            let n = DVec3::from(s.normal.map(f64::from));
+                            fade(rank, base, view.multiplier(p, n)) as f32
+                        });
+                }
+            });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::FieldSpec;
+    use crate::surface::{Preprocessed, SurfaceOptions};
+    use std::sync::Arc;
+
+    /// The torus fixture of `surface` (1 by 0.4, a 3:1 field), preprocessed.
+    fn torus_sampler() -> Sampler {
+        let (mesh, field) = crate::surface::tests::torus_case();
+        Preprocessed::build(mesh, field, &SurfaceOptions::default())
+            .expect("preprocessed")
+            .sampler
+    }
+
+    fn view(eye: DVec3, max: f64) -> ViewLod {
+        view_at(eye, DVec3::ZERO, max)
+    }
+
+    fn view_at(eye: DVec3, target: DVec3, max: f64) -> ViewLod {
+        let fov = 50f64.to_radians();
+        let proj = glam::camera::rh::proj::directx::perspective(fov as f32, 1.0, 0.01, 100.0);
+        let look =
+            glam::camera::rh::view::look_at_mat4(eye.as_vec3(), target.as_vec3(), glam::Vec3::Y);
+        ViewLod {
+            clip_from_world: (proj * look).as_dmat4(),
+            eye,
+            focal_pixels: 500.0 / (2.0 * (fov / 2.0).tan()),
+            reference: 5000.0,
+            max,
+            cull_back_faces: false,
+        }
+    }
+
+    /// The visible ranks and their sites, by a scan of the whole sequence up to `end`.
+    fn scan(s: &Sampler, seed: u64, end: u32, v: &ViewLod, base: f64) -> Vec<(u32, SampleSite)> {
+        let mut sites = vec![SampleSite::default(); end as usize];
+        s.progressive_sites_into(seed, 0, &mut sites);
+        (0..end)
+            .zip(sites)
+            .filter(|&(k, site)| {
+                let r = s
+                    .record(site.face, site.barycentric().map(f64::from), 0, k, 1)
+                    .expect("record");
+                let p = DVec3::from(r.position.map(f64::from));
+                let n = DVec3::from(r.normal.map(f64::from));
+                fade(k, base, v.multiplier(p, n)) > 0.0
+            })
+            .collect()
+    }
+
+    fn held_visible(pool: &LodPool, s: &Sampler, v: &ViewLod, base: f64) -> Vec<(u32, SampleSite)> {
+        let mut fades = vec![0.0; pool.len()];
+        pool.fades_into(s, v, base, &mut fades);
+        let mut shown: Vec<(u32, SampleSite)> = (0..pool.len())
+            .filter(|&i| fades[i] > 0.0)
+            .map(|i| (pool.ranks()[i], pool.sites()[i]))
+            .collect();
+        shown.sort_by_key(|e| e.0);
+        shown
+    }
+
+    #[test]
+    fn segment_ranks_equal_a_filtered_scan() {
+        let s = torus_sampler();
+        assert!(s.segments().len() > 3, "{}", s.segments().len());
+        let seed = 7;
+        let end = 40_000u32;
+        let mut sites = vec![SampleSite::default(); end as usize];
+        s.progressive_sites_into(seed, 0, &mut sites);
+        for (i, seg) in s.segments().iter().enumerate() {
+            let scan: Vec<u32> = (0..end)
+                .filter(|&k| sites[k as usize].segment == seg.segment)
+                .collect();
+            let mut listed = Vec::new();
+            let reach = s.progressive_ranks_in_segment(seed, i, 0, end, usize::MAX, &mut listed);
+            assert_eq!(reach, end);
+            assert_eq!(listed, scan, "segment {i}");
+            // From the middle, and cut short by a limit.
+            let mut part = Vec::new();
+            let reach = s.progressive_ranks_in_segment(seed, i, 1234, end, 10, &mut part);
+            let expected: Vec<u32> = scan.iter().copied().filter(|&k| k >= 1234).collect();
+            assert_eq!(part, expected[..10]);
+            assert_eq!(reach, expected[10]);
+        }
+    }
+
+    #[test]
+    fn sites_of_listed_ranks_equal_the_sequence() {
+        let s = torus_sampler();
+        let ranks = [5u32, 99_999, 3, 70_000, 0];
+        let mut out = [SampleSite::default(); 5];
+        s.progressive_sites_of(4, &ranks, &mut out);
+        for (site, &k) in out.iter().zip(&ranks) {
+            let mut one = [SampleSite::default()];
+            s.progressive_sites_into(4, k, &mut one);
+            assert_eq!(*site, one[0], "rank {k}");
+        }
+    }
+
+    #[test]
+    fn the_bound_holds_over_every_segment() {
+        let s = torus_sampler();
+        let pool = LodPool::new(&s, 1, 20_000, 0);
+        for (eye, cull) in [
+            (DVec3::new(0.0, 0.2, 3.0), false),
+            (DVec3::new(0.0, 0.2, 3.0), true),
+            (DVec3::new(1.2, 0.4, 0.9), false),
+            (DVec3::new(1.2, 0.4, 0.9), true),
+        ] {
+            let v = ViewLod {
+                cull_back_faces: cull,
+                ..view(eye, f64::INFINITY)
+            };
+            if cull {
+                // Seen from outside, some segments face away entirely.
+                let hidden = (0..s.segments().len()).filter(|&i| pool.bound(i, &v) == 0.0);
+                assert!(hidden.count() > 0, "{eye}");
+            }
+            let mut checked = 0;
+            for (site, &k) in pool.sites().iter().zip(pool.ranks()) {
+                let seg = s
+                    .segments()
+                    .iter()
+                    .position(|g| g.segment == site.segment)
+                    .expect("segment");
+                let r = s
+                    .record(site.face, site.barycentric().map(f64::from), 0, k, 1)
+                    .expect("record");
+                let m = v.multiplier(
+                    DVec3::from(r.position.map(f64::from)),
+                    DVec3::from(r.normal.map(f64::from)),
+                );
+                assert!(m <= pool.bound(seg, &v) * (1.0 + 1e-9), "{eye} rank {k}");
+                checked += usize::from(m > 0.0);
+            }
+            assert!(checked > 1000, "{checked}");
+        }
+    }
+
+    #[test]
+    fn the_pool_holds_every_visible_rank_of_a_moving_view() {
+        let s = torus_sampler();
+        let base = 20_000.0;
+        let mut pool = LodPool::new(&s, 3, 20_000, 400_000);
+        // Zoom in on one side of the sphere: the view asks for far more than the prefix.
+        for (t, d) in [8.0, 5.0, 3.5, 2.5].into_iter().enumerate() {
+            let v = view(DVec3::new(0.3, 0.1, d), 10.0);
+            let before = pool.len();
+            let change = pool.update(&s, &v, base);
+            assert!(pool.complete(&v, base));
+            if t > 0 {
+                assert_eq!(change, PoolChange::Appended(before..pool.len()), "step {t}");
+            }
+            let end = pool.ranks().iter().copied().max().unwrap_or(0) + 1;
+            assert_eq!(
+                held_visible(&pool, &s, &v, base),
+                scan(&s, 3, end, &v, base)
+            );
+        }
+        let v = view(DVec3::new(0.3, 0.1, 2.5), 10.0);
+        assert_eq!(pool.update(&s, &v, base), PoolChange::Unchanged);
+    }
+
+    #[test]
+    fn an_outgrown_budget_rebuilds_for_the_view_and_caps_in_segment_order() {
+        let s = torus_sampler();
+        let base = 20_000.0;
+        // Two close-ups of opposite sides of the ring.
+        let near = view_at(DVec3::new(1.0, 0.0, 1.2), DVec3::X, 50.0);
+        let other = view_at(DVec3::new(-1.0, 0.0, 1.2), -DVec3::X, 50.0);
+        let mut probe = LodPool::new(&s, 3, 20_000, usize::MAX / 2);
+        probe.update(&s, &near, base);
+        let needed = probe.len() - 20_000;
+        // Room for one view's ranks, not two.
+        let mut pool = LodPool::new(&s, 3, 20_000, needed + needed / 4);
+        assert!(matches!(
+            pool.update(&s, &near, base),
+            PoolChange::Appended(_)
+        ));
+        assert_eq!(pool.update(&s, &other, base), PoolChange::Rebuilt);
+        assert!(pool.complete(&other, base));
+        let end = pool.ranks().iter().copied().max().unwrap_or(0) + 1;
+        assert_eq!(
+            held_visible(&pool, &s, &other, base),
+            scan(&s, 3, end, &other, base)
+        );
+        // A view needing more than the budget gets what fits, and no rebuild loop.
+        let greedy = view(DVec3::new(0.0, 0.0, 1.1), 1e4);
+        pool.update(&s, &greedy, base);
+        assert!(!pool.complete(&greedy, base));
+        assert!(pool.len() - 20_000 <= needed + needed / 4);
+        assert_eq!(pool.update(&s, &greedy, base), PoolChange::Unchanged);
+    }
+
+    #[test]
+    fn the_pool_is_the_same_for_any_thread_count() {
+        let s = torus_sampler();
+        let v = view(DVec3::new(0.5, 0.0, 1.6), 100.0);
+        let run = || {
+            let mut pool = LodPool::new(&s, 9, 10_000, 200_000);
+            pool.update(&s, &v, 10_000.0);
+            (pool.sites().to_vec(), pool.ranks().to_vec())
+        };
+        assert_eq!(crate::on_threads(1, run), crate::on_threads(2, run));
+    }
+
+    #[test]
+    fn a_single_segment_sampler_enumerates_every_rank() {
+        let mesh = Arc::new(crate::mesh::shapes::plane(1.0, 4).expect("plane"));
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        let pre =
+            Preprocessed::build(mesh, Arc::new(field), &SurfaceOptions::default()).expect("built");
+        let s = pre.sampler;
+        assert_eq!(s.segments().len(), 1);
+        let mut all = Vec::new();
+        s.progressive_ranks_in_segment(2, 0, 10, 300, usize::MAX, &mut all);
+        assert_eq!(all, (10..300).collect::<Vec<_>>());
+    }
+}
