@@ -105,6 +105,9 @@ fn leaving(a: &[(u32, SampleSite)], s: &Sampler, v: &ViewLod) -> usize {
         .count()
 }
 
+/// A camera path: frame `t`'s view and base count.
+type Path<'a> = Box<dyn Fn(usize) -> (ViewLod, f64) + 'a>;
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -169,7 +172,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| path | visible (first frame) | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | upload KB per frame, mean | pool entries at end |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    let paths: [(&str, Box<dyn Fn(usize) -> (ViewLod, f64)>); 4] = [
+    let paths: [(&str, Path); 4] = [
         (
             "count +1%",
             Box::new(|t| (first, base * 1.01f64.powi(t as i32))),

@@ -68,6 +68,13 @@ impl SegmentCurve {
         &self.cumulative
     }
 
+    /// The domain triangles overlapping leaf `leaf` (every point of the leaf in the
+    /// domain lies in one of them). Panics when `leaf` is out of range.
+    pub fn leaf_triangles(&self, leaf: usize) -> &[u32] {
+        let off = &self.candidate_offsets[leaf..leaf + 2];
+        &self.candidates[off[0] as usize..off[1] as usize]
+    }
+
     /// The options the cells were built with.
     pub fn options(&self) -> &CurveOptions {
         &self.options

@@ -3,18 +3,20 @@
 //! A renderer that thresholds progressive ranks against a view's multiplier
 //! ([`lod`](super::lod)) needs every rank `k < N lod(p_k)` at hand. The pool holds the
 //! sites of ranks `0..P` (a prefix of the sequence, computed once: the rank of entry
-//! `k < P` is `k`) and, beyond them, an extension of higher ranks drawn only in the
-//! segments whose multiplier asks for them: for each segment an upper bound of the
-//! multiplier over a sphere around it gives the rank it needs,
-//! `ceil(N bound)`, and the ranks it lacks are enumerated in that segment alone
-//! ([`Sampler::progressive_ranks_in_segment`]), so an update costs in proportion to the
-//! new ranks. Segment `s` holds every rank below `reach[s]` that falls in it.
+//! `k < P` is `k`) and, beyond them, an extension of higher ranks drawn only where the
+//! multiplier asks for them. The surface is cut into bins, about [`BINS`] runs of
+//! consecutive cells of equal measure (a bin never spans two segments). For each bin
+//! an upper bound of the multiplier, from a sphere around the faces its cells overlap
+//! and a cone around their normals, gives the rank it needs, `ceil(N bound)`, and the
+//! ranks it lacks are enumerated in that bin alone
+//! ([`Sampler::progressive_ranks_in_leaves`]), so an update costs in proportion to the
+//! bins plus the new ranks. Bin `b` holds every rank below `reach[b]` that falls in it.
 //!
 //! Entries are only ever appended, so a GPU copy of the pool is extended by streaming
 //! the new tail ([`PoolChange::Appended`]). When the extension would outgrow its budget
 //! and holds ranks the view no longer needs, it is rebuilt for the current view
 //! ([`PoolChange::Rebuilt`]); when the current view alone needs more than the budget,
-//! segments are served in index order until it is spent and the rest keep the ranks
+//! bins are served in order until it is spent and the rest keep the ranks
 //! they have ([`LodPool::complete`] says whether every visible rank is held).
 //!
 //! Which ranks are visible, and where each lies, depend only on the seed, the view and
@@ -27,7 +29,13 @@ use glam::{DVec3, DVec4, Vec4Swizzles};
 use rayon::prelude::*;
 
 use super::lod::{ViewLod, fade};
+use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
+
+/// The pool cuts the surface into about this many bins, each with its own bound of a
+/// view's multiplier: finer bins bound more tightly (fewer ranks drawn that no view
+/// shows) and cost more per update (one bound per bin).
+pub const BINS: usize = 4096;
 
 /// What an [`LodPool::update`] changed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -50,18 +58,30 @@ pub struct LodPool {
     budget: usize,
     sites: Vec<SampleSite>,
     ranks: Vec<u32>,
-    /// Per segment (index into `Sampler::segments`): every rank below it that falls in
-    /// the segment is held.
+    /// The bins, in segment order and cell order within a segment.
+    bins: Vec<Bin>,
+    /// Per bin: every rank below it that falls in the bin is held.
     reach: Vec<u32>,
-    /// Per segment: where its faces lie and which way its normals point.
-    bounds: Vec<SegmentBound>,
+    /// The ranks listed by an update, as runs of one bin: (bin, end entry).
+    runs: Vec<(u32, u32)>,
 }
 
-/// A sphere holding a segment's faces and a cone holding its vertex normals (hence
-/// every interpolated normal of its samples), for an upper bound of a view's
-/// multiplier over the segment.
+/// A run of consecutive cells of one segment's curve, with a bound of its region.
+#[derive(Clone, Debug)]
+struct Bin {
+    /// Index into `Sampler::segments`.
+    segment: u32,
+    /// Leaves of the segment's curve.
+    leaves: Range<u32>,
+    bound: RegionBound,
+    /// The dyadic intervals over the bin's values.
+    cover: RankCover,
+}
+
+/// A sphere holding some faces and a cone holding their vertex normals (hence every
+/// normal interpolated on them), for an upper bound of a view's multiplier there.
 #[derive(Clone, Copy, Debug)]
-struct SegmentBound {
+struct RegionBound {
     centre: DVec3,
     radius: f64,
     /// Unit axis of the normal cone.
@@ -70,13 +90,12 @@ struct SegmentBound {
     spread: f64,
 }
 
-impl SegmentBound {
-    fn new(mesh: &crate::mesh::TriMesh, faces: &[u32]) -> Self {
-        let corners = || {
-            faces
-                .iter()
-                .flat_map(|&f| mesh.triangles()[f as usize].map(|v| v as usize))
-        };
+impl RegionBound {
+    /// The bound of the faces whose corners (vertex indices) `corners` lists.
+    fn new<I: Iterator<Item = usize>>(
+        mesh: &crate::mesh::TriMesh,
+        corners: impl Fn() -> I,
+    ) -> Self {
         let (lo, hi) = corners().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), v| (lo.min(mesh.positions()[v]), hi.max(mesh.positions()[v])),
@@ -144,10 +163,39 @@ impl LodPool {
         sampler.progressive_sites_into(seed, 0, &mut sites);
         let mut ranks = Vec::with_capacity(capacity);
         ranks.extend(0..prefix);
-        let bounds = sampler
+        let bins: Vec<Bin> = sampler
             .segments()
             .par_iter()
-            .map(|seg| SegmentBound::new(sampler.mesh(), &seg.faces))
+            .enumerate()
+            .flat_map_iter(|(i, seg)| {
+                let target = sampler.total_measure() / BINS as f64;
+                let cumulative = seg.curve.cumulative();
+                let cells = seg.curve.cell_count();
+                let mut runs = Vec::new();
+                let mut start = 0;
+                for leaf in 0..cells {
+                    if cumulative[leaf + 1] - cumulative[start] >= target || leaf + 1 == cells {
+                        runs.push(start..leaf + 1);
+                        start = leaf + 1;
+                    }
+                }
+                runs.into_iter().map(move |leaves| {
+                    let mesh = sampler.mesh();
+                    let bound = RegionBound::new(mesh, || {
+                        leaves
+                            .clone()
+                            .flat_map(|l| seg.curve.leaf_triangles(l))
+                            .flat_map(|&t| mesh.triangles()[seg.faces[t as usize] as usize])
+                            .map(|v| v as usize)
+                    });
+                    Bin {
+                        segment: i as u32,
+                        leaves: leaves.start as u32..leaves.end as u32,
+                        bound,
+                        cover: sampler.progressive_cover(seed, i, leaves),
+                    }
+                })
+            })
             .collect();
         Self {
             seed,
@@ -155,8 +203,9 @@ impl LodPool {
             budget,
             sites,
             ranks,
-            reach: vec![prefix; sampler.segments().len()],
-            bounds,
+            reach: vec![prefix; bins.len()],
+            bins,
+            runs: Vec::new(),
         }
     }
 
@@ -190,12 +239,27 @@ impl LodPool {
         self.sites.is_empty()
     }
 
-    /// An upper bound of `view`'s multiplier over segment `segment`, from a sphere
-    /// around its faces and a cone around its normals: 0 when the sphere lies outside
-    /// the frustum or (back faces culled) every normal faces away; `view.max` when the
-    /// sphere reaches the eye's plane.
-    pub fn bound(&self, segment: usize, view: &ViewLod) -> f64 {
-        let b = &self.bounds[segment];
+    /// The number of bins.
+    pub fn bins(&self) -> usize {
+        self.bins.len()
+    }
+
+    /// Bin `bin`'s segment (an index into [`Sampler::segments`]) and cells (leaves of
+    /// the segment's curve).
+    pub fn bin(&self, bin: usize) -> (usize, Range<usize>) {
+        let b = &self.bins[bin];
+        (
+            b.segment as usize,
+            b.leaves.start as usize..b.leaves.end as usize,
+        )
+    }
+
+    /// An upper bound of `view`'s multiplier over bin `bin`, from a sphere around the
+    /// faces its cells overlap and a cone around their normals: 0 when the sphere lies
+    /// outside the frustum or (back faces culled) every normal faces away; `view.max`
+    /// when the sphere reaches the eye's plane.
+    pub fn bound(&self, bin: usize, view: &ViewLod) -> f64 {
+        let b = &self.bins[bin].bound;
         let (c, r) = (b.centre, b.radius);
         let m = view.clip_from_world;
         let [x, y, z, w] = [m.row(0), m.row(1), m.row(2), m.row(3)];
@@ -211,8 +275,8 @@ impl LodPool {
             return view.max;
         }
         let farthest = view.eye.distance(c) + r;
-        let area = view.focal_pixels * view.focal_pixels * b.cos_bound(view) * farthest
-            / nearest.powi(3);
+        let area =
+            view.focal_pixels * view.focal_pixels * b.cos_bound(view) * farthest / nearest.powi(3);
         (area / view.reference).min(view.max)
     }
 
@@ -233,6 +297,7 @@ impl LodPool {
     /// extension stays within its budget.
     pub fn update(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> PoolChange {
         let start = self.sites.len();
+        self.runs.clear();
         if self.extend(sampler, view, base) {
             return self.finish(sampler, start);
         }
@@ -246,28 +311,32 @@ impl LodPool {
         self.sites.truncate(self.prefix as usize);
         self.ranks.truncate(self.prefix as usize);
         self.reach.fill(self.prefix);
+        self.runs.clear();
         self.extend(sampler, view, base);
         self.finish(sampler, self.prefix as usize);
         PoolChange::Rebuilt
     }
 
-    /// Lists the missing ranks of every segment in index order; false when the budget
-    /// ran out first.
+    /// Lists the missing ranks of every bin in order; false when the budget ran out
+    /// first.
     fn extend(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> bool {
         for s in 0..self.reach.len() {
             let need = self.need(s, view, base);
             if need <= self.reach[s] {
                 continue;
             }
-            let room = self.budget - (self.ranks.len() - self.prefix as usize);
-            self.reach[s] = sampler.progressive_ranks_in_segment(
-                self.seed,
-                s,
+            let listed = self.ranks.len();
+            let room = self.budget - (listed - self.prefix as usize);
+            self.reach[s] = sampler.progressive_ranks_in_cover(
+                &self.bins[s].cover,
                 self.reach[s],
                 need,
                 room,
                 &mut self.ranks,
             );
+            if self.ranks.len() > listed {
+                self.runs.push((s as u32, self.ranks.len() as u32));
+            }
             if self.reach[s] < need {
                 return false;
             }
@@ -282,7 +351,28 @@ impl LodPool {
             return PoolChange::Unchanged;
         }
         self.sites.resize(end, SampleSite::default());
-        sampler.progressive_sites_of(self.seed, &self.ranks[start..], &mut self.sites[start..]);
+        let (runs, bins, ranks) = (&self.runs, &self.bins, &self.ranks);
+        // Fixed chunks of entries, each split at the bins' runs: a bin's cells are
+        // searched alone, and the work split does not depend on the thread count.
+        self.sites[start..]
+            .par_chunks_mut(1024)
+            .enumerate()
+            .for_each(|(c, dst)| {
+                let (first, last) = (start + c * 1024, start + c * 1024 + dst.len());
+                let mut run = runs.partition_point(|&(_, end)| end as usize <= first);
+                let mut at = first;
+                while at < last {
+                    let (bin, end) = runs[run];
+                    let stop = (end as usize).min(last);
+                    sampler.progressive_cover_sites_of(
+                        &bins[bin as usize].cover,
+                        &ranks[at..stop],
+                        &mut dst[at - first..stop - first],
+                    );
+                    at = stop;
+                    run += 1;
+                }
+            });
         PoolChange::Appended(start..end)
     }
 
@@ -411,9 +501,32 @@ mod tests {
     }
 
     #[test]
-    fn the_bound_holds_over_every_segment() {
+    fn bins_partition_every_segment_and_bound_its_samples() {
         let s = torus_sampler();
-        let pool = LodPool::new(&s, 1, 20_000, 0);
+        let pool = LodPool::new(&s, 1, 0, 0);
+        assert!(pool.bins() > 2 * s.segments().len(), "{} bins", pool.bins());
+        let end = 20_000u32;
+        let mut sites = vec![SampleSite::default(); end as usize];
+        s.progressive_sites_into(1, 0, &mut sites);
+        // The bins' ranks are the segments' ranks, each exactly once.
+        let mut by_bin: Vec<Vec<u32>> = Vec::new();
+        for b in 0..pool.bins() {
+            let (segment, leaves) = pool.bin(b);
+            let mut ranks = Vec::new();
+            s.progressive_ranks_in_leaves(1, segment, leaves, 0, end, usize::MAX, &mut ranks);
+            by_bin.push(ranks);
+        }
+        for (i, seg) in s.segments().iter().enumerate() {
+            let mut union: Vec<u32> = (0..pool.bins())
+                .filter(|&b| pool.bin(b).0 == i)
+                .flat_map(|b| by_bin[b].iter().copied())
+                .collect();
+            union.sort_unstable();
+            let scan: Vec<u32> = (0..end)
+                .filter(|&k| sites[k as usize].segment == seg.segment)
+                .collect();
+            assert_eq!(union, scan, "segment {i}");
+        }
         for (eye, cull) in [
             (DVec3::new(0.0, 0.2, 3.0), false),
             (DVec3::new(0.0, 0.2, 3.0), true),
@@ -425,26 +538,24 @@ mod tests {
                 ..view(eye, f64::INFINITY)
             };
             if cull {
-                // Seen from outside, some segments face away entirely.
-                let hidden = (0..s.segments().len()).filter(|&i| pool.bound(i, &v) == 0.0);
+                // Seen from outside, some bins face away entirely.
+                let hidden = (0..pool.bins()).filter(|&b| pool.bound(b, &v) == 0.0);
                 assert!(hidden.count() > 0, "{eye}");
             }
             let mut checked = 0;
-            for (site, &k) in pool.sites().iter().zip(pool.ranks()) {
-                let seg = s
-                    .segments()
-                    .iter()
-                    .position(|g| g.segment == site.segment)
-                    .expect("segment");
-                let r = s
-                    .record(site.face, site.barycentric().map(f64::from), 0, k, 1)
-                    .expect("record");
-                let m = v.multiplier(
-                    DVec3::from(r.position.map(f64::from)),
-                    DVec3::from(r.normal.map(f64::from)),
-                );
-                assert!(m <= pool.bound(seg, &v) * (1.0 + 1e-9), "{eye} rank {k}");
-                checked += usize::from(m > 0.0);
+            for (b, ranks) in by_bin.iter().enumerate() {
+                for &k in ranks {
+                    let site = sites[k as usize];
+                    let r = s
+                        .record(site.face, site.barycentric().map(f64::from), 0, k, 1)
+                        .expect("record");
+                    let m = v.multiplier(
+                        DVec3::from(r.position.map(f64::from)),
+                        DVec3::from(r.normal.map(f64::from)),
+                    );
+                    assert!(m <= pool.bound(b, &v) * (1.0 + 1e-9), "{eye} rank {k}");
+                    checked += usize::from(m > 0.0);
+                }
             }
             assert!(checked > 1000, "{checked}");
         }

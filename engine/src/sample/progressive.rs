@@ -20,11 +20,13 @@
 //!
 //! Ranks are 32-bit: a sequence has 2^32 values.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use super::sampler::{CHUNK, Record, SegmentSampling};
 use super::{Sample, SampleSite, Sampler};
-use crate::curve::{DomainPoint, LeafScratch};
+use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
 use crate::rng;
 
 /// The seed-derived constants of one scramble.
@@ -121,6 +123,26 @@ impl Scramble {
 /// sample's place may not depend on the count (4^12 sub-cells per leaf separate far
 /// more samples than a leaf receives).
 const PROGRESSIVE_LEVELS: u32 = 12;
+
+/// Dyadic intervals in a [`RankCover`] at most.
+const COVER: usize = 24;
+
+/// The dyadic intervals covering a run of cells of one segment, for listing the
+/// progressive ranks that fall there ([`Sampler::progressive_cover`]): a level `m`,
+/// and the sorted residues modulo `2^m` of the ranks of each interval, marked where a
+/// rank must be tested (the intervals at the run's ends).
+#[derive(Clone, Debug)]
+pub struct RankCover {
+    scramble: Scramble,
+    segment: u32,
+    leaves: Range<u32>,
+    whole: bool,
+    level: u32,
+    count: u32,
+    offsets: [u32; COVER],
+    /// Bit `i`: offset `i`'s interval reaches past the run's ends.
+    checked: u32,
+}
 
 /// The progressive order of a [`Sampler`].
 impl Sampler {
@@ -226,23 +248,62 @@ impl Sampler {
         limit: usize,
         out: &mut Vec<u32>,
     ) -> u32 {
-        let chain = self
-            .chains
-            .order
-            .iter()
-            .position(|&s| s as usize == segment)
-            .unwrap_or_else(|| panic!("segment {segment} out of range"));
-        if from >= to {
-            return to;
-        }
-        let total = self.total_measure;
-        let (a, b) = (
-            self.chain_cumulative[chain] / total,
-            self.chain_cumulative[chain + 1] / total,
+        let leaves = self.segments[segment].curve.cell_count();
+        self.progressive_ranks_in_leaves(seed, segment, 0..leaves, from, to, limit, out)
+    }
+
+    /// As [`progressive_ranks_in_segment`](Self::progressive_ranks_in_segment), for the
+    /// samples in leaves `leaves` of the segment's curve (a run of consecutive cells,
+    /// so one interval of values). Panics when `segment` or `leaves` is out of range.
+    #[allow(clippy::too_many_arguments)]
+    pub fn progressive_ranks_in_leaves(
+        &self,
+        seed: u64,
+        segment: usize,
+        leaves: Range<usize>,
+        from: u32,
+        to: u32,
+        limit: usize,
+        out: &mut Vec<u32>,
+    ) -> u32 {
+        let cover = self.progressive_cover(seed, segment, leaves);
+        self.progressive_ranks_in_cover(&cover, from, to, limit, out)
+    }
+
+    /// The dyadic cover of leaves `leaves` of segment `segment`'s curve, for repeated
+    /// [`progressive_ranks_in_cover`](Self::progressive_ranks_in_cover) calls (what
+    /// [`progressive_ranks_in_leaves`](Self::progressive_ranks_in_leaves) computes per
+    /// call: at most 24 digit-by-digit searches). Panics when `segment` or `leaves` is
+    /// out of range.
+    pub fn progressive_cover(&self, seed: u64, segment: usize, leaves: Range<usize>) -> RankCover {
+        let chain = self.chain_slot[segment] as usize;
+        let curve = &self.segments[segment].curve;
+        assert!(
+            leaves.start <= leaves.end && leaves.end <= curve.cell_count(),
+            "leaves {leaves:?} of a curve of {} cells",
+            curve.cell_count()
         );
-        let width = (b - a).max(0.0);
-        if !(width > 0.0) {
-            return to;
+        let scramble = Scramble::new(seed);
+        let mut cover = RankCover {
+            scramble,
+            segment: segment as u32,
+            leaves: leaves.start as u32..leaves.end as u32,
+            whole: leaves.start == 0 && leaves.end == curve.cell_count(),
+            level: 0,
+            count: 0,
+            offsets: [0; COVER],
+            checked: 0,
+        };
+        let total = self.total_measure;
+        let before = self.chain_cumulative[chain];
+        let cells_measure = curve.cumulative();
+        let (lo, hi) = (
+            before + cells_measure[leaves.start],
+            before + cells_measure[leaves.end],
+        );
+        let width = ((hi - lo) / total).max(0.0);
+        if leaves.is_empty() || !(width > 0.0) {
+            return cover;
         }
         // 2^-m in (width / 16, width / 8].
         let m = ((8.0 / width).log2().ceil().max(0.0) as u32).min(32);
@@ -250,21 +311,58 @@ impl Sampler {
         let last = (1u64 << m) - 1;
         // One interval more on each side: the membership test, not this rounding,
         // decides.
-        let first_j = ((a * cells).floor() as u64).saturating_sub(1);
-        let last_j = (((b * cells).ceil() as u64) + 1).min(last);
-        let mut offsets = [0u32; 24];
-        let n = (last_j - first_j + 1) as usize;
-        debug_assert!(n <= offsets.len(), "cover of {n} intervals");
-        let n = n.min(offsets.len());
-        let scramble = Scramble::new(seed);
-        for (slot, j) in offsets[..n].iter_mut().zip(first_j..) {
-            *slot = scramble.first_rank_in(m, j as u32);
+        let first_j = ((lo / total * cells).floor() as u64).saturating_sub(1);
+        let last_j = (((hi / total * cells).ceil() as u64) + 1).min(last);
+        let n = ((last_j - first_j + 1) as usize).min(COVER);
+        debug_assert!(last_j - first_j < COVER as u64, "cover of {n} intervals");
+        // Intervals whose values lie inside the run by far more than any rounding of
+        // the measures need no test.
+        let margin = 1e-9 * total;
+        let mut entries = [(0u32, false); COVER];
+        for (slot, j) in entries[..n].iter_mut().zip(first_j..) {
+            let (start, end) = (j as f64 / cells * total, (j + 1) as f64 / cells * total);
+            let inside = start >= lo + margin && end <= hi - margin;
+            *slot = (scramble.first_rank_in(m, j as u32), !inside);
         }
-        offsets[..n].sort_unstable();
+        entries[..n].sort_unstable();
+        for (i, &(offset, check)) in entries[..n].iter().enumerate() {
+            cover.offsets[i] = offset;
+            cover.checked |= u32::from(check) << i;
+        }
+        cover.level = m;
+        cover.count = n as u32;
+        cover
+    }
+
+    /// The ranks of [`progressive_ranks_in_leaves`](Self::progressive_ranks_in_leaves)
+    /// for a cover made once: those in `from..to` in the cover's cells, appended in
+    /// increasing order, at most `limit`; returns the rank below which all are listed.
+    pub fn progressive_ranks_in_cover(
+        &self,
+        cover: &RankCover,
+        from: u32,
+        to: u32,
+        limit: usize,
+        out: &mut Vec<u32>,
+    ) -> u32 {
+        if from >= to || cover.count == 0 {
+            return to;
+        }
+        let segment = cover.segment as usize;
+        let chain = self.chain_slot[segment] as usize;
+        let curve = &self.segments[segment].curve;
+        let leaves = cover.leaves.start as usize..cover.leaves.end as usize;
+        let inside = |rank: u32| {
+            let at = cover.scramble.value(rank) * self.total_measure;
+            self.chain_index(at) == chain
+                && (cover.whole || leaves.contains(&self.leaf_at(chain, curve, at).0))
+        };
+        let m = cover.level;
+        let offsets = &cover.offsets[..cover.count as usize];
         let (lo, hi) = (u64::from(from), u64::from(to));
         let mut listed = 0usize;
         for block in (lo >> m)..=((hi - 1) >> m) {
-            for &o in &offsets[..n] {
+            for (i, &o) in offsets.iter().enumerate() {
                 let r = (block << m) + u64::from(o);
                 if r < lo {
                     continue;
@@ -273,7 +371,7 @@ impl Sampler {
                     break;
                 }
                 let rank = r as u32;
-                if self.chain_index(scramble.value(rank) * total) == chain {
+                if (cover.checked >> i) & 1 == 0 || inside(rank) {
                     if listed == limit {
                         return rank;
                     }
@@ -300,22 +398,65 @@ impl Sampler {
         m: f64,
         scratch: &mut LeafScratch<'a>,
     ) -> (&'a SegmentSampling, DomainPoint) {
-        let cum = &self.chain_cumulative;
-        // The segment whose measure range holds m (positive measure: it ends above m).
-        let k = cum[1..]
-            .partition_point(|&c| c <= m)
-            .min(self.chains.order.len() - 1);
+        let k = self.chain_index(m);
         let seg = &self.segments[self.chains.order[k] as usize];
-        let curve = &seg.curve;
-        let leaves = curve.cumulative();
-        let ml = (m - cum[k]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
-        let leaf = leaves[1..]
-            .partition_point(|&c| c <= ml)
-            .min(leaves.len() - 2);
-        let (w0, w1) = (leaves[leaf], leaves[leaf + 1]);
-        let t = if w1 > w0 { (ml - w0) / (w1 - w0) } else { 0.0 };
-        let p = curve.point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, scratch);
+        let (leaf, t) = self.leaf_at(k, &seg.curve, m);
+        let p = seg
+            .curve
+            .point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, scratch);
         (seg, p)
+    }
+
+    /// The leaf of `curve` (the curve at chain position `k`) holding measure `m` of the
+    /// concatenated curves, and the position in it as a fraction of its measure.
+    #[inline]
+    fn leaf_at(&self, k: usize, curve: &SegmentCurve, m: f64) -> (usize, f64) {
+        self.leaf_among(k, curve, m, 0..curve.cell_count())
+    }
+
+    /// [`leaf_at`](Self::leaf_at) searching only `leaves`, which must hold the answer:
+    /// then it is the same, bit for bit.
+    #[inline]
+    fn leaf_among(
+        &self,
+        k: usize,
+        curve: &SegmentCurve,
+        m: f64,
+        leaves: Range<usize>,
+    ) -> (usize, f64) {
+        let cum = curve.cumulative();
+        let ml = (m - self.chain_cumulative[k]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
+        // Leaves before `leaves` end at or below ml, leaves after it above; the last
+        // leaf takes what rounding leaves past the end.
+        let leaf = leaves.start + cum[leaves.start + 1..leaves.end].partition_point(|&c| c <= ml);
+        let (w0, w1) = (cum[leaf], cum[leaf + 1]);
+        (leaf, if w1 > w0 { (ml - w0) / (w1 - w0) } else { 0.0 })
+    }
+
+    /// The sites of `ranks`, which must all fall in `cover`'s cells (as
+    /// [`progressive_ranks_in_cover`](Self::progressive_ranks_in_cover) lists them):
+    /// the same sites as [`progressive_sites_of`](Self::progressive_sites_of), bit for
+    /// bit, found by searching the cover's cells only. Sequential: for callers that
+    /// split work by cover. Panics when the slices differ in length.
+    pub fn progressive_cover_sites_of(
+        &self,
+        cover: &RankCover,
+        ranks: &[u32],
+        out: &mut [SampleSite],
+    ) {
+        assert_eq!(ranks.len(), out.len(), "one site per rank");
+        let seg = &self.segments[cover.segment as usize];
+        let chain = self.chain_slot[cover.segment as usize] as usize;
+        let leaves = cover.leaves.start as usize..cover.leaves.end as usize;
+        let mut scratch = LeafScratch::default();
+        for (slot, &rank) in out.iter_mut().zip(ranks) {
+            let m = cover.scramble.value(rank) * self.total_measure;
+            let (leaf, t) = self.leaf_among(chain, &seg.curve, m, leaves.clone());
+            let p = seg
+                .curve
+                .point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, &mut scratch);
+            *slot = SampleSite::make(self, seg, &p, rank, 1.0);
+        }
     }
 }
 

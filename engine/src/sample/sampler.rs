@@ -83,6 +83,8 @@ pub struct Sampler {
     /// The measure before each segment of `chains.order` (and the total at the end):
     /// the progressive sequence runs over the curves concatenated in chain order.
     pub(super) chain_cumulative: Vec<f64>,
+    /// Per segment, its position in `chains.order`.
+    pub(super) chain_slot: Vec<u32>,
 }
 
 /// One sampling request as every chunk of it sees it.
@@ -213,6 +215,10 @@ impl Sampler {
             let before = chain_cumulative[chain_cumulative.len() - 1];
             chain_cumulative.push(before + segments[i as usize].curve.measure());
         }
+        let mut chain_slot = vec![0u32; segments.len()];
+        for (slot, &i) in chains.order.iter().enumerate() {
+            chain_slot[i as usize] = slot as u32;
+        }
         Ok(Self {
             mesh,
             field,
@@ -222,6 +228,7 @@ impl Sampler {
             singles,
             chains,
             chain_cumulative,
+            chain_slot,
         })
     }
 
@@ -269,6 +276,7 @@ impl Sampler {
             + groups(&self.singles)
             + groups(&self.chains)
             + self.chain_cumulative.capacity() * 8
+            + self.chain_slot.capacity() * 4
             + self.face_tensors.heap_bytes()
     }
 
