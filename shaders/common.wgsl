@@ -15,7 +15,7 @@ struct Sample {
     spacing: vec2<f32>,
 }
 
-// Twin of strata_systems::gpu::layout::FrameUniforms (160 bytes).
+// Twin of strata_systems::gpu::layout::FrameUniforms (176 bytes).
 struct Frame {
     view_proj: mat4x4<f32>,
     eye: vec4<f32>,
@@ -28,9 +28,12 @@ struct Frame {
     footprint: u32,
     mesh_mode: u32,
     normal_offset: f32,
+    // Bit 0: level of detail on; bit 1: back faces get multiplier 0.
+    lod_flags: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
+    // Base count, reference area (pixels^2 per unit area), clamp, focal length (pixels).
+    lod: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

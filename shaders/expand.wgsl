@@ -25,13 +25,16 @@ struct ExpandParams {
     tensors_at: u32,
     // Invocations per dispatch row.
     row: u32,
-    _pad: u32,
+    // cs_expand_ranked: the first entry expanded (entries first..count).
+    first: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: ExpandParams;
 @group(1) @binding(1) var<storage, read> sites: array<Site>;
 @group(1) @binding(2) var<storage, read> mesh: array<u32>;
 @group(1) @binding(3) var<storage, read_write> expanded: array<Sample>;
+// cs_expand_ranked only: the progressive rank of each site, written as its index.
+@group(1) @binding(4) var<storage, read> ranks: array<u32>;
 
 fn word_f(i: u32) -> f32 {
     return bitcast<f32>(mesh[i]);
@@ -61,7 +64,22 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>) {
     if k >= params.count {
         return;
     }
-    let site = sites[k];
+    expanded[k] = expand_site(sites[k], k);
+}
+
+// Expands entries first..count of a resident pool of sites whose ranks are in
+// `ranks` (systems/src/gpu/lod.rs): only the entries a pool update appended.
+@compute @workgroup_size(64)
+fn cs_expand_ranked(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = params.first + id.y * params.row + id.x;
+    if k >= params.count {
+        return;
+    }
+    expanded[k] = expand_site(sites[k], ranks[k]);
+}
+
+// The Sample record of `site` with index `index`.
+fn expand_site(site: Site, index: u32) -> Sample {
     let face = site.face;
     let t = params.triangles_at + 3u * face;
     let i = mesh[t];
@@ -116,5 +134,5 @@ fn cs_expand(@builtin(global_invocation_id) id: vec3<u32>) {
         params.scale / sqrt(l1),
         params.scale / sqrt(max(l2, 1.17549435e-38)),
     );
-    expanded[k] = Sample(position, face, normal, site.segment, major, k, site.bary, spacing);
+    return Sample(position, face, normal, site.segment, major, index, site.bary, spacing);
 }

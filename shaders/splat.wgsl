@@ -49,6 +49,39 @@ fn tangent_major(axis: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return normalize(major);
 }
 
+// Level of detail (systems/src/gpu/splat.rs, SplatLod; engine/src/sample/lod.rs for
+// the formula): the camera's projected area per unit surface area at p over the
+// reference, clamped; 0 outside the frustum and, when asked, on back faces.
+fn lod_multiplier(p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let clip = frame.view_proj * vec4<f32>(p, 1.0);
+    let w = clip.w;
+    if !(w > 0.0 && abs(clip.x) <= w && abs(clip.y) <= w && clip.z >= 0.0 && clip.z <= w) {
+        return 0.0;
+    }
+    let to_eye = frame.eye.xyz - p;
+    let d = length(to_eye);
+    if !(d > 0.0) {
+        return 0.0;
+    }
+    let c = dot(n, to_eye) / d;
+    if (frame.lod_flags & 2u) != 0u && c < 0.0 {
+        return 0.0;
+    }
+    let f = frame.lod.w;
+    let area = f * f * abs(c) * d / (w * w * w);
+    return min(area / frame.lod.y, frame.lod.z);
+}
+
+// A sample's fade weight clamp(N lod - rank, 0, 1) and its multiplier; (1, 1) when
+// level of detail is off.
+fn lod_fade(s: Sample, n: vec3<f32>) -> vec2<f32> {
+    if (frame.lod_flags & 1u) == 0u {
+        return vec2<f32>(1.0, 1.0);
+    }
+    let m = lod_multiplier(s.position, n);
+    return vec2<f32>(clamp(frame.lod.x * m - f32(s.index), 0.0, 1.0), m);
+}
+
 // Whether a sample faces away from the camera (dropped: a closed surface hides it).
 fn faces_away(s: Sample, n: vec3<f32>) -> bool {
     return dot(n, frame.eye.xyz - s.position) <= 0.0;
@@ -66,16 +99,20 @@ fn vs_splat(@builtin(vertex_index) corner: u32, input: SampleInput) -> SplatVary
     let q = vec2<f32>(f32(corner & 1u), f32(corner >> 1u)) * 2.0 - 1.0;
     out.q = q * extent;
     let n = normalize(s.normal);
-    // Back-facing splats are dropped (clipped away), as a closed surface hides them.
-    if faces_away(s, n) {
+    let lod = lod_fade(s, n);
+    // Back-facing splats are dropped (clipped away), as a closed surface hides them;
+    // so are those the level of detail leaves out.
+    if faces_away(s, n) || lod.x <= 0.0 {
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         out.color = vec3<f32>(0.0);
         return out;
     }
     let major = tangent_major(s.major_axis, n);
     let minor = cross(n, major);
-    let radius = 0.5 * frame.splat_scale * s.spacing;
-    let lift = frame.normal_offset * min(s.spacing.x, s.spacing.y);
+    // Spacings at the local density (lod times the base); splats grow in as they fade.
+    let spacing = s.spacing / sqrt(lod.y);
+    let radius = 0.5 * frame.splat_scale * spacing * lod.x;
+    let lift = frame.normal_offset * min(spacing.x, spacing.y);
     let world = s.position + n * lift + major * (out.q.x * radius.x) + minor * (out.q.y * radius.y);
     out.clip = frame.view_proj * vec4<f32>(world, 1.0);
     out.color = srgb_to_linear(splat_color(s)) * shade(n, s.position);
@@ -124,14 +161,16 @@ fn vs_glyph(@builtin(vertex_index) corner: u32, input: SampleInput) -> GlyphVary
     let s = to_sample(input);
     var out: GlyphVarying;
     let n = normalize(s.normal);
-    if faces_away(s, n) {
+    let lod = lod_fade(s, n);
+    if faces_away(s, n) || lod.x <= 0.0 {
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         out.color = vec3<f32>(0.0);
         return out;
     }
     let major = tangent_major(s.major_axis, n);
-    let half_length = 0.5 * frame.splat_scale * max(s.spacing.x, s.spacing.y);
-    let centre = s.position + n * (frame.normal_offset * min(s.spacing.x, s.spacing.y));
+    let spacing = s.spacing / sqrt(lod.y);
+    let half_length = 0.5 * frame.splat_scale * max(spacing.x, spacing.y) * lod.x;
+    let centre = s.position + n * (frame.normal_offset * min(spacing.x, spacing.y));
     let a = frame.view_proj * vec4<f32>(centre - major * half_length, 1.0);
     let b = frame.view_proj * vec4<f32>(centre + major * half_length, 1.0);
     // Screen-space direction of the stroke in pixels; a stroke seen end-on is a dot.
@@ -159,4 +198,20 @@ fn glyph_color(s: Sample) -> vec3<f32> {
 @fragment
 fn fs_glyph(v: GlyphVarying) -> @location(0) vec4<f32> {
     return vec4<f32>(v.color, 1.0);
+}
+
+// The fade weight of every sample under the frame's level of detail (0: not drawn),
+// as the splat pipelines compute it: the GPU's visible set, read back by
+// systems/src/gpu/lod.rs to check it against the CPU's and to count what is shown.
+@group(1) @binding(0) var<storage, read> lod_samples: array<Sample>;
+@group(1) @binding(1) var<storage, read_write> lod_fades: array<f32>;
+
+@compute @workgroup_size(64)
+fn cs_lod_fades(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = id.y * (64u * 1024u) + id.x;
+    if k >= arrayLength(&lod_fades) {
+        return;
+    }
+    let s = lod_samples[k];
+    lod_fades[k] = lod_fade(s, normalize(s.normal)).x;
 }

@@ -8,6 +8,7 @@ mod gpu;
 mod hot_reload;
 mod io;
 mod layout;
+mod lod;
 mod param;
 mod pipeline;
 mod segment;

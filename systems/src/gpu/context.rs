@@ -63,6 +63,15 @@ pub enum GpuError {
         /// wgpu's description.
         message: String,
     },
+    /// Data that does not fit what the GPU side was built for (a deformed mesh with
+    /// another vertex count, say).
+    #[error("{what} does not match: {detail}")]
+    Mismatch {
+        /// What was given.
+        what: &'static str,
+        /// How it differs.
+        detail: String,
+    },
     /// A render target or upload larger than the device allows.
     #[error("{what} of {requested} exceeds the device limit of {limit}")]
     Limit {

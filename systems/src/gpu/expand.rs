@@ -9,6 +9,7 @@
 //! 64 MB to 16 MB. The records agree with the CPU's to `f32` round-off (tested against
 //! [`Sampler::sample_into`] on whatever adapter wgpu finds).
 
+use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{SampleSite, Sampler};
 use wgpu::util::DeviceExt;
 
@@ -39,8 +40,8 @@ pub struct ExpandParams {
     pub tensors_at: u32,
     /// Invocations per row of the 2-D dispatch.
     pub row: u32,
-    /// Padding to 32 bytes.
-    pub _pad: u32,
+    /// The first entry of a ranked expansion (`cs_expand_ranked`); 0 otherwise.
+    pub first: u32,
 }
 
 /// The expansion pipeline, the mesh table of one sampler and a growable sites buffer.
@@ -52,6 +53,8 @@ pub struct ExpandParams {
 pub struct SiteExpander {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    ranked_pipeline: wgpu::ComputePipeline,
+    ranked_layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     mesh: wgpu::Buffer,
     offsets: ExpandParams,
@@ -150,21 +153,45 @@ impl SiteExpander {
                     storage(3, false),
                 ],
             });
+            let ranked_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("strata expand ranked"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: None,
+                        },
+                        count: None,
+                    },
+                    storage(1, true),
+                    storage(2, true),
+                    storage(3, false),
+                    storage(4, true),
+                ],
+            });
             // Group 0 is the render pipelines' frame uniforms, which this pass does
             // not use.
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("strata expand"),
-                bind_group_layouts: &[None, Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("strata expand"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("cs_expand"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let compute = |layout: &wgpu::BindGroupLayout, entry: &str| {
+                let pipeline_layout =
+                    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("strata expand"),
+                        bind_group_layouts: &[None, Some(layout)],
+                        immediate_size: 0,
+                    });
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some("strata expand"),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            };
+            let pipeline = compute(&layout, "cs_expand");
+            let ranked_pipeline = compute(&ranked_layout, "cs_expand_ranked");
             let params = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("strata expand params"),
                 size: std::mem::size_of::<ExpandParams>() as u64,
@@ -174,11 +201,13 @@ impl SiteExpander {
             let mesh = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("strata expand mesh"),
                 contents: bytemuck::cast_slice(&words),
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             });
             Self {
                 pipeline,
                 layout,
+                ranked_pipeline,
+                ranked_layout,
                 params,
                 mesh,
                 offsets,
@@ -280,6 +309,108 @@ impl SiteExpander {
     }
 }
 
+impl SiteExpander {
+    /// Replaces the positions and normals of the mesh table with those of `mesh`, a
+    /// deformation of the sampler's mesh (same vertices and triangles; the field's
+    /// face-frame tensors move with the faces): expansions from now on place the sites
+    /// on the deformed surface. 36 bytes per vertex and 12 per face, no resampling.
+    pub fn set_geometry(&self, queue: &wgpu::Queue, mesh: &TriMesh) -> Result<(), GpuError> {
+        let o = &self.offsets;
+        let vertices = (o.face_normals_at - o.normals_at) / 3;
+        let faces = (o.triangles_at - o.face_normals_at) / 3;
+        if mesh.vertex_count() != vertices as usize || mesh.face_count() != faces as usize {
+            return Err(GpuError::Mismatch {
+                what: "deformed mesh",
+                detail: format!(
+                    "{} vertices and {} faces, the sampler's mesh has {vertices} and {faces}",
+                    mesh.vertex_count(),
+                    mesh.face_count()
+                ),
+            });
+        }
+        let f32s = |v: &glam::DVec3| v.as_vec3().to_array().map(f32::to_bits);
+        let words = |v: &[glam::DVec3]| v.iter().flat_map(f32s).collect::<Vec<u32>>();
+        queue.write_buffer(
+            &self.mesh,
+            0,
+            bytemuck::cast_slice(&words(mesh.positions())),
+        );
+        let at = |w: u32| u64::from(w) * 4;
+        queue.write_buffer(
+            &self.mesh,
+            at(o.normals_at),
+            bytemuck::cast_slice(&words(mesh.vertex_normals())),
+        );
+        queue.write_buffer(
+            &self.mesh,
+            at(o.face_normals_at),
+            bytemuck::cast_slice(&words(mesh.face_normals())),
+        );
+        Ok(())
+    }
+
+    /// Records the expansion of entries `range` of a resident pool (`sites` and
+    /// `ranks`, one per entry, as [`LodPool`](strata_engine::sample::LodPool) holds
+    /// them) into the same entries of `samples`, with the spacings of `base` samples
+    /// over the surface and each sample's index its rank. Every buffer must hold at
+    /// least `range.end` entries.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn expand_ranked(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        sites: &wgpu::Buffer,
+        ranks: &wgpu::Buffer,
+        samples: &wgpu::Buffer,
+        range: std::ops::Range<u32>,
+        base: f64,
+    ) {
+        if range.is_empty() {
+            return;
+        }
+        let groups = (range.end - range.start).div_ceil(WORKGROUP);
+        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
+        let params = ExpandParams {
+            count: range.end,
+            scale: (self.total_measure / base.max(1.0)).sqrt() as f32,
+            row: gx * WORKGROUP,
+            first: range.start,
+            ..self.offsets
+        };
+        // A parameter buffer per pass: several passes may be recorded before a submit.
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("strata expand ranked params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
+        }
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("strata expand ranked"),
+            layout: &self.ranked_layout,
+            entries: &[
+                entry(0, &params),
+                entry(1, sites),
+                entry(2, &self.mesh),
+                entry(3, samples),
+                entry(4, ranks),
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("strata expand ranked"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.ranked_pipeline);
+        pass.set_bind_group(1, &bind_group, &[]);
+        pass.dispatch_workgroups(gx, gy, 1);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use std::mem::{offset_of, size_of};
@@ -318,7 +449,7 @@ mod tests {
                 ("triangles_at", offset_of!(ExpandParams, triangles_at)),
                 ("tensors_at", offset_of!(ExpandParams, tensors_at)),
                 ("row", offset_of!(ExpandParams, row)),
-                ("_pad", offset_of!(ExpandParams, _pad)),
+                ("first", offset_of!(ExpandParams, first)),
             ])
         );
     }

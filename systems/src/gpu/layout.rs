@@ -111,8 +111,14 @@ pub struct FrameUniforms {
     /// Splats are lifted along their normal by this fraction of their smaller spacing,
     /// so that they do not fight with the mesh for depth.
     pub normal_offset: f32,
-    /// Padding to a multiple of 16 bytes.
-    pub _pad: [u32; 3],
+    /// Level of detail: bit 0 on (splats are culled and faded by rank, see
+    /// [`SplatLod`](super::splat::SplatLod)), bit 1 back faces get multiplier 0.
+    pub lod_flags: u32,
+    /// Padding to the next 16 bytes.
+    pub _pad: [u32; 2],
+    /// Level of detail: base count, reference area (pixels^2 per unit area), the
+    /// multiplier's clamp and the focal length in pixels.
+    pub lod: [f32; 4],
 }
 
 /// One mesh vertex of the (unindexed) mesh drawn under the splats. WGSL twin: the
@@ -131,7 +137,7 @@ pub struct MeshVertex {
 }
 
 const _: () = assert!(size_of::<Sample>() == 64);
-const _: () = assert!(size_of::<FrameUniforms>() == 160);
+const _: () = assert!(size_of::<FrameUniforms>() == 176);
 const _: () = assert!(size_of::<FrameUniforms>().is_multiple_of(16));
 const _: () = assert!(size_of::<MeshVertex>() == 32);
 
@@ -285,6 +291,8 @@ pub(crate) mod tests {
             ("footprint", offset_of!(FrameUniforms, footprint)),
             ("mesh_mode", offset_of!(FrameUniforms, mesh_mode)),
             ("normal_offset", offset_of!(FrameUniforms, normal_offset)),
+            ("lod_flags", offset_of!(FrameUniforms, lod_flags)),
+            ("lod", offset_of!(FrameUniforms, lod)),
         ];
         for (name, offset) in expected {
             let found = members.iter().find(|(n, _)| n == name);

@@ -5,6 +5,7 @@
 //! - [`layout`]: the Pod structs shared with WGSL and their vertex layouts.
 //! - [`buffers`]: the growable sample (and sites) buffers with their staging rings.
 //! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
+//! - [`lod`]: GPU-resident progressive pools and the level-of-detail fade pass.
 //! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
 //! - [`headless`]: offscreen target, readback, PNG.
 //! - [`camera`]: orbit camera and framing.
@@ -22,6 +23,7 @@ pub mod context;
 pub mod expand;
 pub mod headless;
 pub mod layout;
+pub mod lod;
 pub mod shaders;
 pub mod splat;
 pub mod stream;
@@ -37,6 +39,7 @@ pub use context::{GpuContext, GpuError, GpuOptions};
 pub use expand::SiteExpander;
 pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
-pub use splat::{SplatRenderer, SplatStyle};
+pub use lod::{GpuLodPool, LodFades};
+pub use splat::{SplatLod, SplatRenderer, SplatStyle};
 pub use stream::SampleStream;
 pub use upload::{GpuSplats, upload_samples};

@@ -17,6 +17,7 @@
 
 use glam::Vec3;
 use strata_engine::mesh::TriMesh;
+use strata_engine::sample::lod::ViewLod;
 use strata_engine::sample::{Sample, Sampler};
 
 use super::buffers::GpuSampleBuffer;
@@ -59,6 +60,90 @@ pub struct SplatStyle {
     pub light_dir: Vec3,
     /// Clear colour, sRGB.
     pub background: [f32; 3],
+    /// Level of detail over progressive samples; `None` draws every sample.
+    pub lod: Option<SplatLod>,
+}
+
+/// Level of detail in the splat pipelines: the samples' `index` is their progressive
+/// rank, and a sample of rank `k` is drawn when `k < base x lod(p_k)`, its splat scaled
+/// by its fade weight `clamp(base x lod(p_k) - k, 0, 1)` and its spacings by
+/// `1 / sqrt(lod(p_k))` (the density there is `lod` times the base density), with the
+/// multiplier `lod` of [`ViewLod`](strata_engine::sample::lod::ViewLod) for the frame's
+/// camera, evaluated in `f32` per sample in the vertex shader.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplatLod {
+    /// Samples over the whole surface at multiplier 1.
+    pub base: f32,
+    /// Projected area (pixels^2) of a unit of surface at multiplier 1.
+    pub reference: f32,
+    /// Clamp of the multiplier.
+    pub max: f32,
+    /// Back faces get multiplier 0.
+    pub cull_back_faces: bool,
+}
+
+impl SplatLod {
+    /// The CPU twin of this level of detail for `camera` and a target of `size`
+    /// pixels: what [`LodPool`](strata_engine::sample::LodPool) and the reference
+    /// visible sets are computed with.
+    pub fn view(&self, camera: &OrbitCamera, size: (u32, u32)) -> ViewLod {
+        let (w, h) = size;
+        let aspect = w.max(1) as f32 / h.max(1) as f32;
+        ViewLod {
+            clip_from_world: camera.view_proj(aspect).as_dmat4(),
+            eye: camera.eye().as_dvec3(),
+            focal_pixels: focal_pixels(camera, h),
+            reference: f64::from(self.reference),
+            max: f64::from(self.max),
+            cull_back_faces: self.cull_back_faces,
+        }
+    }
+}
+
+/// The focal length in pixels of `camera` on a target `height` pixels high.
+fn focal_pixels(camera: &OrbitCamera, height: u32) -> f64 {
+    f64::from(height.max(1)) / (2.0 * (f64::from(camera.fov_y) / 2.0).tan())
+}
+
+/// The frame uniforms of `camera` and `style` on a target of `size` pixels, with
+/// splats lifted by `normal_offset` of their smaller spacing.
+pub(crate) fn frame_uniforms(
+    camera: &OrbitCamera,
+    style: &SplatStyle,
+    size: (u32, u32),
+    normal_offset: f32,
+) -> FrameUniforms {
+    let (w, h) = size;
+    let aspect = w.max(1) as f32 / h.max(1) as f32;
+    let light = style.light_dir.normalize_or(Vec3::Y);
+    let (lod_flags, lod) = match style.lod {
+        Some(l) => (
+            1 | (u32::from(l.cull_back_faces) << 1),
+            [l.base, l.reference, l.max, focal_pixels(camera, h) as f32],
+        ),
+        None => (0, [0.0; 4]),
+    };
+    FrameUniforms {
+        view_proj: camera.view_proj(aspect).to_cols_array_2d(),
+        eye: camera.eye().extend(1.0).to_array(),
+        light_dir: light.extend(0.0).to_array(),
+        base_color: [
+            style.base_color[0],
+            style.base_color[1],
+            style.base_color[2],
+            1.0,
+        ],
+        log_density_range: style.log_density_range,
+        viewport: [w as f32, h as f32],
+        splat_scale: style.splat_scale,
+        color_mode: style.color_mode.code(),
+        footprint: style.footprint.code(),
+        mesh_mode: style.mesh_mode.code(),
+        normal_offset,
+        lod_flags,
+        _pad: [0; 2],
+        lod,
+    }
 }
 
 impl Default for SplatStyle {
@@ -72,6 +157,7 @@ impl Default for SplatStyle {
             log_density_range: [0.0, 1.0],
             light_dir: Vec3::new(0.4, 0.8, 0.45),
             background: [0.07, 0.075, 0.09],
+            lod: None,
         }
     }
 }
@@ -208,33 +294,13 @@ impl SplatRenderer {
         camera: &OrbitCamera,
         style: &SplatStyle,
     ) -> Result<(), GpuError> {
-        let (w, h) = target.size;
-        let aspect = w.max(1) as f32 / h.max(1) as f32;
-        let light = style.light_dir.normalize_or(Vec3::Y);
-        let uniforms = FrameUniforms {
-            view_proj: camera.view_proj(aspect).to_cols_array_2d(),
-            eye: camera.eye().extend(1.0).to_array(),
-            light_dir: light.extend(0.0).to_array(),
-            base_color: [
-                style.base_color[0],
-                style.base_color[1],
-                style.base_color[2],
-                1.0,
-            ],
-            log_density_range: style.log_density_range,
-            viewport: [w as f32, h as f32],
-            splat_scale: style.splat_scale,
-            color_mode: style.color_mode.code(),
-            footprint: style.footprint.code(),
-            mesh_mode: style.mesh_mode.code(),
-            // Lifted only over a mesh, where flat splats would otherwise cut into it.
-            normal_offset: if style.mesh_mode == MeshMode::None || self.mesh.is_none() {
-                0.0
-            } else {
-                0.05
-            },
-            _pad: [0; 3],
+        // Lifted only over a mesh, where flat splats would otherwise cut into it.
+        let lift = if style.mesh_mode == MeshMode::None || self.mesh.is_none() {
+            0.0
+        } else {
+            0.05
         };
+        let uniforms = frame_uniforms(camera, style, target.size, lift);
         scoped(device, "drawing splats", || {
             queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {

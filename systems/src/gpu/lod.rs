@@ -1,0 +1,330 @@
+//! GPU-resident progressive pools and the level-of-detail visible set (issue 19).
+//!
+//! [`GpuLodPool`] keeps a copy of an engine [`LodPool`] on the GPU: its sites and ranks
+//! (20 bytes per entry) and their expanded samples in the renderer's sample buffer.
+//! After [`LodPool::update`] only the entries it appended are uploaded and expanded
+//! ([`GpuLodPool::sync`]); a pool rebuilt for a far view re-sends its extension. The
+//! splat pipelines then cull and fade by rank against the frame's camera
+//! ([`SplatLod`](super::splat::SplatLod), in the vertex shader), so a frame whose view
+//! needs no new ranks uploads nothing but its uniforms. A deforming mesh keeps its
+//! samples: [`SiteExpander::set_geometry`] and [`GpuLodPool::reexpand`] move them onto
+//! the new surface without resampling.
+//!
+//! [`LodFades`] reads back the fade weight of every sample as the splat pipelines
+//! compute it (the same WGSL function): the GPU's visible set, for tests against
+//! [`LodPool::fades_into`] and for counting what a frame shows.
+
+use strata_engine::sample::{LodPool, PoolChange, SampleSite};
+
+use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
+use super::camera::OrbitCamera;
+use super::context::{GpuError, scoped};
+use super::expand::SiteExpander;
+use super::shaders;
+use super::splat::{SplatStyle, frame_uniforms};
+
+const SITE_BYTES: u64 = std::mem::size_of::<SampleSite>() as u64;
+
+/// The GPU copy of an engine [`LodPool`]: see the module docs.
+#[derive(Debug)]
+pub struct GpuLodPool {
+    sites: wgpu::Buffer,
+    ranks: wgpu::Buffer,
+    capacity: usize,
+    len: usize,
+    base: f64,
+}
+
+impl GpuLodPool {
+    /// An empty copy; samples are expanded with the spacings of `base` samples over
+    /// the surface (the pool's base count, at multiplier 1).
+    pub fn new(device: &wgpu::Device, base: f64) -> Result<Self, GpuError> {
+        let capacity = 1024;
+        let (sites, ranks) = Self::allocate(device, capacity)?;
+        Ok(Self {
+            sites,
+            ranks,
+            capacity,
+            len: 0,
+            base,
+        })
+    }
+
+    fn allocate(
+        device: &wgpu::Device,
+        capacity: usize,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer), GpuError> {
+        let limits = device.limits();
+        let limit = limits
+            .max_buffer_size
+            .min(limits.max_storage_buffer_binding_size);
+        let bytes = capacity as u64 * SITE_BYTES;
+        if bytes > limit {
+            return Err(GpuError::Limit {
+                what: "progressive pool sites (bytes)",
+                requested: bytes,
+                limit,
+            });
+        }
+        scoped(device, "allocating the progressive pool", || {
+            let buffer = |label, size| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                })
+            };
+            (
+                buffer("strata pool sites", bytes),
+                buffer("strata pool ranks", capacity as u64 * 4),
+            )
+        })
+    }
+
+    /// Entries held on the GPU.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether no entry is held.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Brings the GPU copy up to `pool` after `change` (what the last
+    /// [`LodPool::update`] returned; anything for a first call) and expands the
+    /// entries that changed into `samples` with `expander` (built for the pool's
+    /// sampler). Returns the bytes uploaded: 20 per new entry. Records and submits;
+    /// never waits on the GPU.
+    pub fn sync(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pool: &LodPool,
+        change: &PoolChange,
+        expander: &SiteExpander,
+        samples: &mut GpuSampleBuffer,
+    ) -> Result<u64, GpuError> {
+        let n = pool.len();
+        let from = match change {
+            _ if self.len == 0 => 0,
+            PoolChange::Unchanged => n.min(self.len),
+            PoolChange::Appended(r) => r.start.min(self.len),
+            PoolChange::Rebuilt => (pool.prefix() as usize).min(self.len),
+        };
+        let count = u32::try_from(n).map_err(|_| GpuError::Limit {
+            what: "progressive pool entries",
+            requested: n as u64,
+            limit: u64::from(u32::MAX),
+        })?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("strata pool sync"),
+        });
+        if n > self.capacity {
+            // Grow on the GPU: the entries held are copied, not sent again.
+            let capacity = next_capacity(self.capacity, n);
+            let (sites, ranks) = Self::allocate(device, capacity)?;
+            let kept = self.len.min(from) as u64;
+            encoder.copy_buffer_to_buffer(&self.sites, 0, &sites, 0, kept * SITE_BYTES);
+            encoder.copy_buffer_to_buffer(&self.ranks, 0, &ranks, 0, kept * 4);
+            (self.sites, self.ranks, self.capacity) = (sites, ranks, capacity);
+        }
+        let new = &pool.sites()[from..];
+        queue.write_buffer(
+            &self.sites,
+            from as u64 * SITE_BYTES,
+            bytemuck::cast_slice(new),
+        );
+        queue.write_buffer(
+            &self.ranks,
+            from as u64 * 4,
+            bytemuck::cast_slice(&pool.ranks()[from..]),
+        );
+        let reallocations = samples.reallocations();
+        samples.resize(device, n)?;
+        // A reallocated sample buffer lost its contents: expand every entry.
+        let first = if samples.reallocations() != reallocations {
+            0
+        } else {
+            from as u32
+        };
+        scoped(device, "expanding the progressive pool", || {
+            expander.expand_ranked(
+                device,
+                &mut encoder,
+                &self.sites,
+                &self.ranks,
+                samples.buffer(),
+                first..count,
+                self.base,
+            );
+            queue.submit([encoder.finish()]);
+        })?;
+        self.len = n;
+        Ok((n - from) as u64 * (SITE_BYTES + 4))
+    }
+
+    /// Expands every entry again (after [`SiteExpander::set_geometry`] deformed the
+    /// mesh): no upload, no resampling.
+    pub fn reexpand(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        expander: &SiteExpander,
+        samples: &GpuSampleBuffer,
+    ) -> Result<(), GpuError> {
+        scoped(device, "expanding the progressive pool", || {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            expander.expand_ranked(
+                device,
+                &mut encoder,
+                &self.sites,
+                &self.ranks,
+                samples.buffer(),
+                0..self.len as u32,
+                self.base,
+            );
+            queue.submit([encoder.finish()]);
+        })
+    }
+}
+
+/// Rows of the fade pass's 2-D dispatch, in invocations (the shader's constant).
+const FADE_ROW: u32 = 64 * 1024;
+
+/// The fade-weight pass (`cs_lod_fades` in `shaders/splat.wgsl`): see the module docs.
+#[derive(Debug)]
+pub struct LodFades {
+    pipeline: wgpu::ComputePipeline,
+    frame_layout: wgpu::BindGroupLayout,
+    layout: wgpu::BindGroupLayout,
+}
+
+impl LodFades {
+    /// Builds the pass.
+    pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
+        scoped(device, "building the fade pass", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("strata lod fades"),
+                source: wgpu::ShaderSource::Wgsl(shaders::SPLAT.into()),
+            });
+            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            };
+            let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("strata lod frame"),
+                entries: &[entry(0, wgpu::BufferBindingType::Uniform)],
+            });
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("strata lod fades"),
+                entries: &[
+                    entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
+                    entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("strata lod fades"),
+                bind_group_layouts: &[Some(&frame_layout), Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("strata lod fades"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("cs_lod_fades"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            Self {
+                pipeline,
+                frame_layout,
+                layout,
+            }
+        })
+    }
+
+    /// The fade weight of each of `samples` for `camera` and `style` (whose `lod`
+    /// is used; 1 everywhere without one) on a target of `size` pixels, read back.
+    /// Waits for the device: for tests and statistics, not for the frame loop.
+    pub fn fades(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        samples: &GpuSampleBuffer,
+        camera: &OrbitCamera,
+        style: &SplatStyle,
+        size: (u32, u32),
+    ) -> Result<Vec<f32>, GpuError> {
+        let n = samples.len() as u64;
+        if n == 0 {
+            return Ok(Vec::new());
+        }
+        let uniforms = frame_uniforms(camera, style, size, 0.0);
+        let out = scoped(device, "computing fade weights", || {
+            let frame = wgpu::util::DeviceExt::create_buffer_init(
+                device,
+                &wgpu::util::BufferInitDescriptor {
+                    label: Some("strata lod frame"),
+                    contents: bytemuck::bytes_of(&uniforms),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                },
+            );
+            let out = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("strata lod fades"),
+                size: n * 4,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("strata lod frame"),
+                layout: &self.frame_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                }],
+            });
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("strata lod fades"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: samples.buffer(),
+                            offset: 0,
+                            size: wgpu::BufferSize::new(n * 64),
+                        }),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: out.as_entire_binding(),
+                    },
+                ],
+            });
+            let mut encoder = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &frame_group, &[]);
+                pass.set_bind_group(1, &group, &[]);
+                let rows = (n as u32).div_ceil(FADE_ROW);
+                let columns = (n as u32).min(FADE_ROW).div_ceil(64);
+                pass.dispatch_workgroups(columns, rows, 1);
+            }
+            queue.submit([encoder.finish()]);
+            out
+        })?;
+        let bytes = read_buffer(device, queue, &out, n * 4)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}

@@ -1,0 +1,211 @@
+//! View-dependent level of detail on the GPU (issue 19): a resident progressive pool,
+//! the rank cull of the splat pipelines checked against the CPU's visible set, and
+//! samples carried by a deforming mesh. On whatever adapter wgpu finds; without one
+//! these tests print a skip line (see `gpu.rs`).
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{DVec3, Vec3};
+use strata_engine::mesh::TriMesh;
+use strata_engine::sample::{LodPool, PoolChange};
+use strata_systems::config::SceneConfig;
+use strata_systems::gpu::{
+    GpuContext, GpuLodPool, GpuOptions, GpuSampleBuffer, LodFades, OrbitCamera, SiteExpander,
+    SplatLod, SplatStyle,
+};
+use strata_systems::scene::Scene;
+
+fn gpu(test: &str) -> Option<GpuContext> {
+    match GpuContext::headless(&GpuOptions::default()) {
+        Ok(ctx) => Some(ctx),
+        Err(e) => {
+            assert!(
+                std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
+                "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
+            );
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
+            None
+        }
+    }
+}
+
+/// A torus (radii 1 and 0.4) with a 3:1 field.
+fn torus() -> Scene {
+    let ron = "(mesh: Shape(Torus(major_radius: 1.0, minor_radius: 0.4, resolution: 24)), \
+         field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))";
+    let config = SceneConfig::from_ron(ron, Path::new("test.ron")).expect("parses");
+    Scene::build(&config).expect("builds")
+}
+
+const SIZE: (u32, u32) = (320, 240);
+const BASE: f64 = 20_000.0;
+
+fn lod() -> SplatLod {
+    SplatLod {
+        base: BASE as f32,
+        reference: 4000.0,
+        max: 8.0,
+        cull_back_faces: true,
+    }
+}
+
+fn camera(distance: f32, yaw: f32) -> OrbitCamera {
+    OrbitCamera {
+        target: Vec3::ZERO,
+        distance,
+        yaw,
+        pitch: 0.5,
+        fov_y: 40f32.to_radians(),
+        radius: 1.4,
+    }
+}
+
+/// The GPU's fade weights agree with the CPU's entry by entry, except where the
+/// threshold `N lod` falls within f32 round-off of the rank; the pool is synced by
+/// appending only what each view adds.
+#[test]
+fn the_gpu_cull_gives_the_cpu_visible_set() {
+    let Some(ctx) = gpu("the_gpu_cull_gives_the_cpu_visible_set") else {
+        return;
+    };
+    let scene = torus();
+    let s = &scene.sampler;
+    let expander = SiteExpander::new(&ctx.device, s).expect("expander");
+    let fades = LodFades::new(&ctx.device).expect("fade pass");
+    let mut pool = LodPool::new(s, 5, BASE as u32, 2_000_000);
+    let mut gpu_pool = GpuLodPool::new(&ctx.device, BASE).expect("pool");
+    let mut samples = GpuSampleBuffer::new(&ctx.device).expect("buffer");
+    let style = SplatStyle {
+        lod: Some(lod()),
+        ..SplatStyle::default()
+    };
+    let mut first = true;
+    for (distance, yaw) in [(5.0, 0.3), (3.5, 0.35), (2.6, 0.4)] {
+        let cam = camera(distance, yaw);
+        let view = lod().view(&cam, SIZE);
+        let change = pool.update(s, &view, BASE);
+        let held = gpu_pool.len();
+        let bytes = gpu_pool
+            .sync(
+                &ctx.device,
+                &ctx.queue,
+                &pool,
+                &change,
+                &expander,
+                &mut samples,
+            )
+            .expect("sync");
+        let sent = if first { pool.len() } else { pool.len() - held };
+        assert_eq!(bytes, sent as u64 * 20, "only new entries are sent");
+        if !first {
+            assert!(matches!(change, PoolChange::Appended(_)), "{change:?}");
+        }
+        first = false;
+        let gpu = fades
+            .fades(&ctx.device, &ctx.queue, &samples, &cam, &style, SIZE)
+            .expect("fades");
+        let mut cpu = vec![0.0f32; pool.len()];
+        pool.fades_into(s, &view, BASE, &mut cpu);
+        assert_eq!(gpu.len(), cpu.len());
+        let (mut shown, mut differ) = (0, 0);
+        for (i, (&g, &c)) in gpu.iter().zip(&cpu).enumerate() {
+            shown += usize::from(c > 0.0);
+            if (g > 0.0) != (c > 0.0) {
+                differ += 1;
+                let rank = f64::from(pool.ranks()[i]);
+                // Only a threshold within round-off of the rank may disagree.
+                let site = pool.sites()[i];
+                let r = s
+                    .record(site.face, site.barycentric().map(f64::from), 0, 0, 1)
+                    .expect("record");
+                let m = view.multiplier(
+                    DVec3::from(r.position.map(f64::from)),
+                    DVec3::from(r.normal.map(f64::from)),
+                );
+                assert!(
+                    (BASE * m - rank).abs() <= 1e-3 * BASE * m + 1.0,
+                    "entry {i}: rank {rank}, threshold {}",
+                    BASE * m
+                );
+            }
+        }
+        assert!(shown > 5000, "{shown} shown at distance {distance}");
+        assert!(differ * 1000 <= shown, "{differ} of {shown} differ");
+    }
+}
+
+/// After a deformation of the mesh, re-expanded pool samples lie on the deformed
+/// surface at their barycentric coordinates; nothing is resampled or uploaded.
+#[test]
+fn a_deformed_mesh_carries_its_samples() {
+    let Some(ctx) = gpu("a_deformed_mesh_carries_its_samples") else {
+        return;
+    };
+    let scene = torus();
+    let s = &scene.sampler;
+    let expander = SiteExpander::new(&ctx.device, s).expect("expander");
+    let mut pool = LodPool::new(s, 2, 5000, 0);
+    let mut gpu_pool = GpuLodPool::new(&ctx.device, 5000.0).expect("pool");
+    let mut samples = GpuSampleBuffer::new(&ctx.device).expect("buffer");
+    let view = lod().view(&camera(4.0, 0.0), SIZE);
+    let change = pool.update(s, &view, 5000.0);
+    gpu_pool
+        .sync(
+            &ctx.device,
+            &ctx.queue,
+            &pool,
+            &change,
+            &expander,
+            &mut samples,
+        )
+        .expect("sync");
+    // A twist about z and a stretch along it.
+    let mesh = s.mesh();
+    let moved: Vec<DVec3> = mesh
+        .positions()
+        .iter()
+        .map(|p| {
+            let (sin, cos) = (0.8 * p.z).sin_cos();
+            DVec3::new(
+                cos * p.x - sin * p.y,
+                sin * p.x + cos * p.y,
+                1.7 * p.z + 0.2,
+            )
+        })
+        .collect();
+    let deformed = Arc::new(TriMesh::new(moved, mesh.triangles().to_vec()).expect("mesh"));
+    expander
+        .set_geometry(&ctx.queue, &deformed)
+        .expect("same topology");
+    gpu_pool
+        .reexpand(&ctx.device, &ctx.queue, &expander, &samples)
+        .expect("reexpand");
+    let back = samples
+        .read_back(&ctx.device, &ctx.queue)
+        .expect("read back");
+    assert_eq!(back.len(), pool.len());
+    for (i, (got, site)) in back.iter().zip(pool.sites()).enumerate() {
+        assert_eq!(got.index, pool.ranks()[i], "entry {i} carries its rank");
+        let [a, b, c] =
+            deformed.triangles()[site.face as usize].map(|v| deformed.positions()[v as usize]);
+        let w = site.barycentric().map(f64::from);
+        let expected = a * w[0] + b * w[1] + c * w[2];
+        let p = DVec3::from(got.position.map(f64::from));
+        assert!(
+            p.distance(expected) < 1e-5,
+            "entry {i}: {p} against {expected}"
+        );
+    }
+    // The wrong topology is a typed error.
+    let small =
+        TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]).expect("triangle");
+    let err = expander
+        .set_geometry(&ctx.queue, &small)
+        .expect_err("mismatch");
+    assert!(
+        err.to_string().contains("deformed mesh does not match"),
+        "{err}"
+    );
+}
