@@ -209,3 +209,55 @@ fn a_deformed_mesh_carries_its_samples() {
         "{err}"
     );
 }
+
+/// `strata render --lod --frames 3 --dolly 0.8`: a numbered PNG per frame, and the
+/// pool's samples are found, not redrawn, as the camera moves in.
+#[test]
+fn render_command_writes_a_lod_sequence() {
+    use clap::Parser;
+    let Some(_ctx) = gpu("render_command_writes_a_lod_sequence") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sphere-anisotropic.ron");
+    let out = dir.path().join("seq.png");
+    let cli = strata_systems::cli::Cli::try_parse_from([
+        "strata".as_ref(),
+        "render".as_ref(),
+        config.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--width".as_ref(),
+        "160".as_ref(),
+        "--height".as_ref(),
+        "120".as_ref(),
+        "-n".as_ref(),
+        "3000".as_ref(),
+        "--lod".as_ref(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+        "--dolly".as_ref(),
+        "0.8".as_ref(),
+        "--orbit".as_ref(),
+        "2".as_ref(),
+    ])
+    .expect("arguments parse");
+    strata_systems::cli::run(cli).expect("render succeeds");
+    for frame in 0..3 {
+        let png = dir.path().join(format!("seq_{frame:04}.png"));
+        let bytes = std::fs::read(&png).expect("frame written");
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", png.display());
+    }
+    assert!(!out.exists(), "a sequence writes numbered frames only");
+    // The level-of-detail options need --lod.
+    let plain = strata_systems::cli::Cli::try_parse_from([
+        "strata".as_ref(),
+        "render".as_ref(),
+        config.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+    ]);
+    assert!(plain.is_err());
+}

@@ -1,13 +1,20 @@
 //! `strata render`: sample a scene and draw it headlessly to a PNG
-//! ([`HeadlessTarget::render_samples`](crate::gpu::HeadlessTarget::render_samples)).
+//! ([`HeadlessTarget::render_samples`](crate::gpu::HeadlessTarget::render_samples));
+//! with `--lod`, draw progressive samples with view-dependent level of detail
+//! ([`LodScene`](crate::gpu::LodScene)), for one still or, with `--frames`, a PNG
+//! sequence of a moving camera.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
 use super::LookArgs;
 use crate::config::SceneConfig;
-use crate::gpu::{GpuContext, HeadlessTarget, MeshMode};
+use strata_engine::sample::PoolChange;
+
+use crate::gpu::{
+    GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, SplatLod, SplatRenderer,
+};
 use crate::scene::Scene;
 
 /// Arguments of `strata render`.
@@ -30,6 +37,29 @@ pub struct RenderArgs {
     /// Camera, colours and sample count.
     #[command(flatten)]
     pub look: LookArgs,
+    /// Level of detail: the count is the samples over the whole surface where a unit
+    /// of surface covers as many pixels as one facing the camera at its target's
+    /// distance; nearer surface gets more, farther less, hidden none.
+    #[arg(long)]
+    pub lod: bool,
+    /// With `--lod`: the largest multiplier of the count's density.
+    #[arg(long, default_value_t = 4.0, requires = "lod")]
+    pub lod_max: f32,
+    /// With `--lod`: frames to draw; with more than one, `--out` gets a frame number
+    /// (`out.png` becomes `out_0000.png`, `out_0001.png`, ...).
+    #[arg(long, default_value_t = 1, requires = "lod")]
+    pub frames: u32,
+    /// With `--frames`: camera turn about the vertical axis per frame, degrees.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        requires = "lod"
+    )]
+    pub orbit: f32,
+    /// With `--frames`: camera distance factor per frame (0.99 moves 1% closer).
+    #[arg(long, default_value_t = 1.0, requires = "lod")]
+    pub dolly: f32,
 }
 
 /// Runs `strata render`.
@@ -52,6 +82,9 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "{count} samples do not fit in one GPU buffer on this adapter (at most {max})"
         );
     }
+    if args.lod {
+        return run_lod(args, &ctx, &target, &scene, count, seed);
+    }
     let samples = scene.sampler.sample(count, seed);
     let segments = (args.look.mesh != MeshMode::None)
         .then(|| crate::gpu::splat::face_segments(&scene.sampler));
@@ -71,4 +104,121 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// `strata render --lod`: a still or a sequence of a moving camera.
+fn run_lod(
+    args: &RenderArgs,
+    ctx: &GpuContext,
+    target: &HeadlessTarget,
+    scene: &Scene,
+    count: usize,
+    seed: u64,
+) -> anyhow::Result<()> {
+    if !(args.lod_max > 0.0 && args.lod_max.is_finite()) {
+        anyhow::bail!("--lod-max must be a positive number, not {}", args.lod_max);
+    }
+    if !(args.dolly > 0.0 && args.dolly.is_finite() && args.orbit.is_finite()) {
+        anyhow::bail!("--dolly must be a positive number and --orbit a number");
+    }
+    if args.frames == 0 {
+        anyhow::bail!("--frames must be at least 1");
+    }
+    let size = (args.width, args.height);
+    let base = u32::try_from(count).context("--count: at most 2^32 - 1 with --lod")?;
+    let mut camera = args
+        .look
+        .camera(scene, args.width as f32 / args.height as f32);
+    let lod = SplatLod::for_camera(&camera, args.height, base as f32, args.lod_max);
+    // Room for the ranks beyond the count that near surface asks for.
+    let budget = (f64::from(base) * f64::from(args.lod_max)) as usize;
+    let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
+    let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
+    if args.look.mesh != MeshMode::None {
+        let segments = crate::gpu::splat::face_segments(&scene.sampler);
+        renderer.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(&segments))?;
+    }
+    let fades = LodFades::new(&ctx.device)?;
+    // The colour map's range from the first ranks, with the spacings of the count.
+    let probe: Vec<_> = (lod_scene
+        .pool()
+        .sites()
+        .iter()
+        .zip(lod_scene.pool().ranks()))
+    .take(4096)
+    .filter_map(|(s, &k)| {
+        let b = s.barycentric().map(f64::from);
+        scene.sampler.record(s.face, b, s.segment, k, count)
+    })
+    .collect();
+    let look = args.look.style(&probe);
+    let mut shown_before: Option<Vec<bool>> = None;
+    for frame in 0..args.frames {
+        let step = lod_scene.frame(
+            &ctx.device,
+            &ctx.queue,
+            &scene.sampler,
+            renderer.samples_mut(),
+            &camera,
+            size,
+        )?;
+        let style = lod_scene.style(&look);
+        let weights = fades.fades(
+            &ctx.device,
+            &ctx.queue,
+            renderer.samples(),
+            &camera,
+            &style,
+            size,
+        )?;
+        let shown: Vec<bool> = weights.iter().map(|&w| w > 0.0).collect();
+        let visible = shown.iter().filter(|&&v| v).count();
+        let image = target.render(ctx, &renderer, &camera, &style)?;
+        let path = frame_path(&args.out, frame, args.frames);
+        image
+            .write_png(&path)
+            .with_context(|| format!("writing {}", path.display()))?;
+        // Entries keep their rank and site unless the pool was rebuilt.
+        let kept = match (&shown_before, &step.change) {
+            (Some(before), PoolChange::Appended(_) | PoolChange::Unchanged) => {
+                let was = before.iter().filter(|&&v| v).count();
+                let still = before.iter().zip(&shown).filter(|&(&a, &b)| a && b).count();
+                format!(
+                    ", {:.2}% of the last frame's kept",
+                    100.0 * still as f64 / was.max(1) as f64
+                )
+            }
+            _ => String::new(),
+        };
+        println!(
+            "frame {frame}: {visible} of {} pool samples shown, {:.1} KB sent, pool update {:.2} ms{kept}; wrote {}",
+            step.entries,
+            step.uploaded as f64 / 1e3,
+            step.update.as_secs_f64() * 1e3,
+            path.display()
+        );
+        shown_before = Some(shown);
+        camera.orbit(args.orbit.to_radians(), 0.0);
+        camera.distance *= args.dolly;
+    }
+    println!(
+        "level of detail: base {base} samples (seed {seed}), multiplier up to {} at {}x{} on {}",
+        args.lod_max,
+        args.width,
+        args.height,
+        ctx.adapter_summary()
+    );
+    Ok(())
+}
+
+/// `out` for a single frame; `out` with `_NNNN` before its extension in a sequence.
+fn frame_path(out: &Path, frame: u32, frames: u32) -> PathBuf {
+    if frames == 1 {
+        return out.to_path_buf();
+    }
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = out
+        .extension()
+        .map_or(String::new(), |e| format!(".{}", e.to_string_lossy()));
+    out.with_file_name(format!("{stem}_{frame:04}{ext}"))
 }

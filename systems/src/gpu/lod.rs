@@ -14,14 +14,14 @@
 //! compute it (the same WGSL function): the GPU's visible set, for tests against
 //! [`LodPool::fades_into`] and for counting what a frame shows.
 
-use strata_engine::sample::{LodPool, PoolChange, SampleSite};
+use strata_engine::sample::{LodPool, PoolChange, SampleSite, Sampler};
 
 use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
 use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
 use super::expand::SiteExpander;
 use super::shaders;
-use super::splat::{SplatStyle, frame_uniforms};
+use super::splat::{SplatLod, SplatStyle, frame_uniforms};
 
 const SITE_BYTES: u64 = std::mem::size_of::<SampleSite>() as u64;
 
@@ -326,5 +326,108 @@ impl LodFades {
         })?;
         let bytes = read_buffer(device, queue, &out, n * 4)?;
         Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+/// What one [`LodScene::frame`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LodFrame {
+    /// The engine pool's change.
+    pub change: PoolChange,
+    /// Bytes sent to the GPU for the pool (uniforms not counted).
+    pub uploaded: u64,
+    /// Entries in the pool (the instances drawn; the shader culls the rest).
+    pub entries: usize,
+    /// CPU time of the pool update (new ranks and their sites).
+    pub update: std::time::Duration,
+}
+
+/// A sampler drawn with level of detail: an engine [`LodPool`], its GPU copy and the
+/// expansion pass, brought up to each frame's camera by [`frame`](Self::frame) before
+/// the splat renderer draws with [`style`](Self::style).
+#[derive(Debug)]
+pub struct LodScene {
+    pool: LodPool,
+    gpu: GpuLodPool,
+    expander: SiteExpander,
+    lod: SplatLod,
+}
+
+impl LodScene {
+    /// A pool of `sampler`'s progressive sequence for `seed` holding ranks
+    /// `0..lod.base` and up to `budget` more where views ask for them.
+    pub fn new(
+        device: &wgpu::Device,
+        sampler: &Sampler,
+        seed: u64,
+        lod: SplatLod,
+        budget: usize,
+    ) -> Result<Self, GpuError> {
+        Ok(Self {
+            pool: LodPool::new(sampler, seed, lod.base as u32, budget),
+            gpu: GpuLodPool::new(device, f64::from(lod.base))?,
+            expander: SiteExpander::new(device, sampler)?,
+            lod,
+        })
+    }
+
+    /// The engine pool.
+    pub fn pool(&self) -> &LodPool {
+        &self.pool
+    }
+
+    /// The level of detail.
+    pub fn lod(&self) -> SplatLod {
+        self.lod
+    }
+
+    /// The expansion pass (for [`SiteExpander::set_geometry`] on a deforming mesh,
+    /// then [`reexpand`](Self::reexpand)).
+    pub fn expander(&self) -> &SiteExpander {
+        &self.expander
+    }
+
+    /// `style` drawing with this level of detail.
+    pub fn style(&self, style: &SplatStyle) -> SplatStyle {
+        SplatStyle {
+            lod: Some(self.lod),
+            ..*style
+        }
+    }
+
+    /// Draws the ranks `camera` on a target of `size` pixels needs and sends the new
+    /// entries into `samples` (the renderer's sample buffer).
+    pub fn frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        sampler: &Sampler,
+        samples: &mut GpuSampleBuffer,
+        camera: &OrbitCamera,
+        size: (u32, u32),
+    ) -> Result<LodFrame, GpuError> {
+        let view = self.lod.view(camera, size);
+        let clock = std::time::Instant::now();
+        let change = self.pool.update(sampler, &view, f64::from(self.lod.base));
+        let update = clock.elapsed();
+        let uploaded =
+            self.gpu
+                .sync(device, queue, &self.pool, &change, &self.expander, samples)?;
+        Ok(LodFrame {
+            change,
+            uploaded,
+            entries: self.pool.len(),
+            update,
+        })
+    }
+
+    /// Expands every entry again from the expander's current mesh.
+    pub fn reexpand(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        samples: &GpuSampleBuffer,
+    ) -> Result<(), GpuError> {
+        self.gpu.reexpand(device, queue, &self.expander, samples)
     }
 }

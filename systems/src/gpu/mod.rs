@@ -39,7 +39,7 @@ pub use context::{GpuContext, GpuError, GpuOptions};
 pub use expand::SiteExpander;
 pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
-pub use lod::{GpuLodPool, LodFades};
+pub use lod::{GpuLodPool, LodFades, LodFrame, LodScene};
 pub use splat::{SplatLod, SplatRenderer, SplatStyle};
 pub use stream::SampleStream;
 pub use upload::{GpuSplats, upload_samples};

@@ -83,6 +83,19 @@ pub struct SplatLod {
 }
 
 impl SplatLod {
+    /// `base` samples over the surface at multiplier 1, where 1 is the projected area
+    /// per unit area of a surface facing `camera` at its target's distance (so the
+    /// first frame shows about `base` samples per visible area), clamped at `max`.
+    pub fn for_camera(camera: &OrbitCamera, height: u32, base: f32, max: f32) -> Self {
+        let f = focal_pixels(camera, height) as f32;
+        Self {
+            base,
+            reference: f * f / (camera.distance * camera.distance),
+            max,
+            cull_back_faces: true,
+        }
+    }
+
     /// The CPU twin of this level of detail for `camera` and a target of `size`
     /// pixels: what [`LodPool`](strata_engine::sample::LodPool) and the reference
     /// visible sets are computed with.
