@@ -261,3 +261,75 @@ fn render_command_writes_a_lod_sequence() {
     ]);
     assert!(plain.is_err());
 }
+
+/// The ECS engine: a mesh entity with a `Lod` keeps a pool that follows its camera,
+/// and the upload system sends only the entries each update appends.
+#[test]
+fn ecs_lod_pools_follow_the_camera() {
+    use bevy_ecs::prelude::{Schedule, World};
+    use strata_engine::surface::SurfaceOptions;
+    use strata_systems::ecs::{self, Lod, LodState, MeshBundle};
+    use strata_systems::gpu::{GpuSplats, SplatRenderer, upload};
+    let Some(ctx) = gpu("ecs_lod_pools_follow_the_camera") else {
+        return;
+    };
+    let scene = torus();
+    let target = strata_systems::gpu::HeadlessTarget::new(&ctx.device, 16, 16, 1).expect("target");
+    let renderer = SplatRenderer::new(&ctx.device, target.format()).expect("renderer");
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    ecs::register(&mut world, &mut schedule);
+    upload::register(&mut schedule);
+    world.insert_resource(GpuSplats::new(ctx, renderer));
+    let settings = SurfaceOptions::default();
+    let lod_at = |distance: f32| Lod {
+        view: lod().view(&camera(distance, 0.3), SIZE),
+        base: 20_000,
+        budget: 1_000_000,
+    };
+    let e = world
+        .spawn((
+            MeshBundle::new(scene.mesh.clone(), scene.field.clone(), settings, 100, 5),
+            lod_at(5.0),
+            LodState::default(),
+        ))
+        .id();
+    schedule.run(&mut world);
+    let entries = |world: &World| {
+        let state = world.get::<LodState>(e).expect("state");
+        (state.pool.as_ref().map_or(0, |p| p.len()), state.builds)
+    };
+    let (first, builds) = entries(&world);
+    assert!(
+        first >= 20_000 && builds == 1,
+        "{first} entries, {builds} builds"
+    );
+    let gpu = world.resource::<GpuSplats>();
+    assert_eq!(gpu.lod_entries(), first);
+    assert_eq!(gpu.renderer.samples().len(), first);
+    let uploads = gpu.last.uploads;
+    // Closer: the pool grows and only the new entries are sent.
+    *world.get_mut::<Lod>(e).expect("lod") = lod_at(2.5);
+    schedule.run(&mut world);
+    let (second, builds) = entries(&world);
+    assert!(second > first && builds == 1, "{second} after {first}");
+    let gpu = world.resource::<GpuSplats>();
+    assert_eq!(gpu.last.count, second - first);
+    assert_eq!(gpu.lod_entries(), second);
+    assert_eq!(
+        world.get::<LodState>(e).and_then(|s| s.last.clone()),
+        Some(PoolChange::Appended(first..second))
+    );
+    // The same view: nothing drawn, nothing sent.
+    schedule.run(&mut world);
+    assert_eq!(entries(&world).0, second);
+    assert_eq!(world.resource::<GpuSplats>().last.uploads, uploads + 1);
+    // A new base count rebuilds the pool.
+    world.get_mut::<Lod>(e).expect("lod").base = 10_000;
+    schedule.run(&mut world);
+    assert_eq!(entries(&world).1, 2);
+    assert_eq!(
+        world.resource::<GpuSplats>().lod_entries(),
+        entries(&world).0
+    );
+}

@@ -26,6 +26,7 @@
 //! ```
 
 pub mod components;
+pub mod lod;
 pub mod preprocess;
 pub mod sampling;
 pub mod stats;
@@ -33,6 +34,7 @@ pub mod stats;
 use bevy_ecs::prelude::*;
 
 pub use components::*;
+pub use lod::{Lod, LodState, update_lod_pools};
 pub use preprocess::{
     assemble_samplers, build_curves, despawn_orphan_segments, parameterize_segments, segment_meshes,
 };
@@ -123,6 +125,6 @@ pub fn register(world: &mut World, schedule: &mut Schedule) {
         parameterize_segments.in_set(EngineSystems::Parameterize),
         build_curves.in_set(EngineSystems::Curves),
         assemble_samplers.in_set(EngineSystems::Chains),
-        sample_meshes.in_set(EngineSystems::Sample),
+        (sample_meshes, update_lod_pools).in_set(EngineSystems::Sample),
     ));
 }
