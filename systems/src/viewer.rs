@@ -27,13 +27,14 @@ use winit::window::{Window, WindowId};
 use strata_engine::mesh::TriMesh;
 
 use crate::ecs::{
-    EngineSettings, MeshData, MeshSampler, MeshTransform, SamplingSettings, Stage, StageStats,
+    EngineSettings, Lod, LodState, MeshData, MeshSampler, MeshTransform, SamplingSettings, Stage,
+    StageStats,
 };
 use crate::gpu::headless::DEPTH_FORMAT;
 use crate::gpu::splat::{FrameTarget, TargetFormat};
 use crate::gpu::{
-    ColorMode, Footprint, GpuContext, GpuOptions, GpuSplats, MeshMode, OrbitCamera, SplatRenderer,
-    SplatStyle,
+    ColorMode, Footprint, GpuContext, GpuOptions, GpuSplats, MeshMode, OrbitCamera, SplatLod,
+    SplatRenderer, SplatStyle,
 };
 use crate::hot_reload::StreamingEngine;
 
@@ -61,6 +62,10 @@ pub struct ViewerOptions {
     /// The splat style to start with (the keys change it; the density colour map is
     /// refitted to the samples).
     pub style: SplatStyle,
+    /// Level of detail up to this multiplier: the count is the base count of a
+    /// progressive pool ([`crate::ecs::Lod`]) that follows the camera, so zooming in
+    /// adds samples near the camera and moves none. `None`: every sample drawn.
+    pub lod_max: Option<f32>,
 }
 
 /// How a viewer run ended.
@@ -140,7 +145,16 @@ pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
         max_frames: options.max_frames,
         status: String::new(),
         refit_colors: true,
+        lod_max: options.lod_max,
+        lod: None,
     };
+    if options.lod_max.is_some() {
+        // The pool follows the camera; the sample buffer is not redrawn every frame.
+        app.engine
+            .world
+            .resource_mut::<EngineSettings>()
+            .sample_every_update = false;
+    }
     event_loop
         .run_app(&mut app)
         .map_err(|e| anyhow!("window event loop: {e}"))?;
@@ -217,6 +231,9 @@ struct Viewer {
     status: String,
     /// Refit the density colour map to the next frame's samples (after a count change).
     refit_colors: bool,
+    /// `--lod`: the clamp of the multiplier; the reference is fixed at the first frame.
+    lod_max: Option<f32>,
+    lod: Option<SplatLod>,
 }
 
 fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureView {
@@ -409,10 +426,36 @@ impl Viewer {
         Ok(sampling)
     }
 
+    /// With `--lod`: points the mesh entity's [`Lod`] at the current camera.
+    fn follow_camera(&mut self) {
+        let (Some(max), Some(camera), Some(gpu)) = (self.lod_max, &self.camera, &self.gpu) else {
+            return;
+        };
+        let size = (gpu.config.width, gpu.config.height);
+        let base = self.sampling().count.min(u32::MAX as usize) as u32;
+        let mut lod = *self
+            .lod
+            .get_or_insert_with(|| SplatLod::for_camera(camera, size.1, base as f32, max));
+        lod.base = base as f32;
+        self.lod = Some(lod);
+        self.style.lod = Some(lod);
+        let component = Lod {
+            view: lod.view(camera, size),
+            base,
+            budget: (f64::from(base) * f64::from(max)) as usize,
+        };
+        let mut entity = self.engine.world.entity_mut(self.mesh_entity);
+        if !entity.contains::<LodState>() {
+            entity.insert(LodState::default());
+        }
+        entity.insert(component);
+    }
+
     fn frame(&mut self) -> anyhow::Result<()> {
         if self.gpu.is_none() || self.camera.is_none() {
             return Ok(());
         }
+        self.follow_camera();
         let sampling = self.update_engine()?;
         let (count, upload) = {
             let splats = self.engine.world.resource::<GpuSplats>();
@@ -469,8 +512,13 @@ impl Viewer {
             };
         }
         self.last_frame = Some(now);
+        let what = if self.lod.is_some() {
+            "pool samples (level of detail)"
+        } else {
+            "samples"
+        };
         self.status = format!(
-            "{count} samples | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {:?}, {:?}",
+            "{count} {what} | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {:?}, {:?}",
             self.frame_ms,
             sampling.as_secs_f64() * 1e3,
             upload.as_secs_f64() * 1e3,

@@ -24,11 +24,22 @@ pub struct ViewArgs {
     /// Camera, colours and sample count.
     #[command(flatten)]
     pub look: LookArgs,
+    /// Level of detail: the count is the base count of progressive samples that follow
+    /// the camera (as `strata render --lod`); zooming in adds samples near the camera
+    /// and moves none.
+    #[arg(long)]
+    pub lod: bool,
+    /// With `--lod`: the largest multiplier of the count's density.
+    #[arg(long, default_value_t = 4.0, requires = "lod")]
+    pub lod_max: f32,
 }
 
 /// Runs `strata view` until the window closes.
 pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
     args.look.validate()?;
+    if !(args.lod_max > 0.0 && args.lod_max.is_finite()) {
+        anyhow::bail!("--lod-max must be a positive number, not {}", args.lod_max);
+    }
     let options = ViewerOptions {
         scene: args.config.clone(),
         size: (args.width, args.height),
@@ -42,6 +53,7 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
         camera: args.look.orientation(),
         zoom: args.look.zoom,
         style: args.look.style(&[]),
+        lod_max: args.lod.then_some(args.lod_max),
     };
     let outcome = viewer::run(&options)?;
     if args.frames.is_some() {
