@@ -64,6 +64,29 @@ pub struct LodPool {
     reach: Vec<u32>,
     /// The ranks listed by an update, as runs of one bin: (bin, end entry).
     runs: Vec<(u32, u32)>,
+    /// Per chunk of [`BIN_CHUNK`] bins, the lists of a parallel update (kept, so that
+    /// updates stop allocating).
+    lists: Vec<BinList>,
+}
+
+/// Bins per task of a parallel update.
+const BIN_CHUNK: usize = 64;
+
+/// Ranks a bin may list beyond its share of a rank range (an estimate's slack: the
+/// cover's end intervals).
+const COVER_SLACK: f64 = 24.0;
+
+/// One chunk's part of a parallel update.
+#[derive(Clone, Debug, Default)]
+struct BinList {
+    /// Each bin's needed rank.
+    needs: Vec<u32>,
+    /// The ranks listed, bin after bin.
+    ranks: Vec<u32>,
+    /// (bin, ranks listed) per bin that listed some.
+    runs: Vec<(u32, u32)>,
+    /// Each bin's reach after listing.
+    reach: Vec<u32>,
 }
 
 /// A run of consecutive cells of one segment's curve, with a bound of its region.
@@ -73,6 +96,8 @@ struct Bin {
     segment: u32,
     /// Leaves of the segment's curve.
     leaves: Range<u32>,
+    /// The bin's share of the total measure (of the sequence's values).
+    share: f64,
     bound: RegionBound,
     /// The dyadic intervals over the bin's values.
     cover: RankCover,
@@ -190,6 +215,8 @@ impl LodPool {
                     });
                     Bin {
                         segment: i as u32,
+                        share: (cumulative[leaves.end] - cumulative[leaves.start])
+                            / sampler.total_measure(),
                         leaves: leaves.start as u32..leaves.end as u32,
                         bound,
                         cover: sampler.progressive_cover(seed, i, leaves),
@@ -206,6 +233,7 @@ impl LodPool {
             reach: vec![prefix; bins.len()],
             bins,
             runs: Vec::new(),
+            lists: Vec::new(),
         }
     }
 
@@ -320,6 +348,9 @@ impl LodPool {
     /// Lists the missing ranks of every bin in order; false when the budget ran out
     /// first.
     fn extend(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> bool {
+        if self.extend_parallel(sampler, view, base) {
+            return true;
+        }
         for s in 0..self.reach.len() {
             let need = self.need(s, view, base);
             if need <= self.reach[s] {
@@ -341,6 +372,87 @@ impl LodPool {
                 return false;
             }
         }
+        true
+    }
+
+    /// [`extend`](Self::extend) over fixed chunks of bins in parallel, when the ranks
+    /// expected fit the budget twice over: each chunk lists into its own reused list,
+    /// and the lists are appended in chunk order, so the result is the sequential one.
+    /// False (nothing changed) when they might not fit.
+    fn extend_parallel(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> bool {
+        let room = self.budget - (self.ranks.len() - self.prefix as usize);
+        let chunks = self.bins.len().div_ceil(BIN_CHUNK);
+        let mut lists = std::mem::take(&mut self.lists);
+        lists.resize_with(chunks, Default::default);
+        let this = &*self;
+        let (bins, reach) = (&this.bins, &this.reach);
+        // The ranks a bin lacks, and how many of them it should hold.
+        let expected: f64 = lists
+            .par_iter_mut()
+            .enumerate()
+            .map(|(c, list)| {
+                list.needs.clear();
+                let mut expected = 0.0;
+                for s in c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(bins.len()) {
+                    let need = this.need(s, view, base);
+                    list.needs.push(need);
+                    if need > reach[s] {
+                        expected += f64::from(need - reach[s]) * bins[s].share + COVER_SLACK;
+                    }
+                }
+                expected
+            })
+            .sum();
+        if expected * 2.0 > room as f64 {
+            self.lists = lists;
+            return false;
+        }
+        let total: usize = lists
+            .par_iter_mut()
+            .enumerate()
+            .map(|(c, list)| {
+                list.ranks.clear();
+                list.runs.clear();
+                list.reach.clear();
+                for (i, s) in (c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(bins.len())).enumerate() {
+                    let need = list.needs[i];
+                    let before = list.ranks.len();
+                    let now = if need > reach[s] {
+                        sampler.progressive_ranks_in_cover(
+                            &bins[s].cover,
+                            reach[s],
+                            need,
+                            usize::MAX,
+                            &mut list.ranks,
+                        )
+                    } else {
+                        reach[s]
+                    };
+                    list.reach.push(now);
+                    if list.ranks.len() > before {
+                        list.runs
+                            .push((s as u32, (list.ranks.len() - before) as u32));
+                    }
+                }
+                list.ranks.len()
+            })
+            .sum();
+        if total > room {
+            // Far more than expected: let the sequential pass spend the budget.
+            self.lists = lists;
+            return false;
+        }
+        for (c, list) in lists.iter().enumerate() {
+            let first = c * BIN_CHUNK;
+            self.reach[first..first + list.reach.len()].copy_from_slice(&list.reach);
+            let mut end = self.ranks.len() as u32;
+            for &(bin, count) in &list.runs {
+                end += count;
+                self.runs.push((bin, end));
+            }
+            self.ranks.extend_from_slice(&list.ranks);
+        }
+        self.lists = lists;
         true
     }
 
@@ -614,6 +726,23 @@ mod tests {
         assert!(!pool.complete(&greedy, base));
         assert!(pool.len() - 20_000 <= needed + needed / 4);
         assert_eq!(pool.update(&s, &greedy, base), PoolChange::Unchanged);
+    }
+
+    #[test]
+    fn parallel_and_sequential_updates_list_the_same_entries() {
+        let s = torus_sampler();
+        let v = view_at(DVec3::new(1.0, 0.2, 1.3), DVec3::X, 30.0);
+        // A roomy budget takes the parallel path; one that the ranks exactly fill is
+        // refused by its estimate and takes the sequential one.
+        let mut roomy = LodPool::new(&s, 4, 10_000, 10_000_000);
+        roomy.update(&s, &v, 10_000.0);
+        let added = roomy.len() - 10_000;
+        assert!(added > 1000, "{added}");
+        let mut tight = LodPool::new(&s, 4, 10_000, added);
+        tight.update(&s, &v, 10_000.0);
+        assert!(tight.complete(&v, 10_000.0));
+        assert_eq!(tight.ranks(), roomy.ranks());
+        assert_eq!(tight.sites(), roomy.sites());
     }
 
     #[test]
