@@ -35,7 +35,7 @@ use super::{SampleSite, Sampler};
 /// The pool cuts the surface into about this many bins, each with its own bound of a
 /// view's multiplier: finer bins bound more tightly (fewer ranks drawn that no view
 /// shows) and cost more per update (one bound per bin).
-pub const BINS: usize = 4096;
+pub const BINS: usize = 16384;
 
 /// What an [`LodPool::update`] changed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -113,6 +113,37 @@ struct RegionBound {
     axis: DVec3,
     /// Half-angle of the normal cone in radians (pi: no bound).
     spread: f64,
+    /// Its cosine and sine.
+    spread_cos: f64,
+    spread_sin: f64,
+}
+
+/// A view made ready to bound many regions: its frustum planes with unit normals
+/// (world space), the depth's row and its gradient's length.
+struct Frustum<'a> {
+    view: &'a ViewLod,
+    planes: [DVec4; 6],
+    depth: DVec4,
+    depth_slope: f64,
+}
+
+impl<'a> Frustum<'a> {
+    fn new(view: &'a ViewLod) -> Self {
+        let m = view.clip_from_world;
+        let [x, y, z, w] = [m.row(0), m.row(1), m.row(2), m.row(3)];
+        // The planes w - x >= 0, w + x >= 0, ..., z >= 0, scaled to unit normals (a
+        // degenerate plane keeps its scale: it culls nothing).
+        let planes = [w - x, w + x, w - y, w + y, z, w - z].map(|p| {
+            let len = p.xyz().length();
+            if len > 0.0 { p / len } else { p }
+        });
+        Self {
+            view,
+            planes,
+            depth: w,
+            depth_slope: w.xyz().length(),
+        }
+    }
 }
 
 impl RegionBound {
@@ -150,28 +181,63 @@ impl RegionBound {
             radius,
             axis,
             spread,
+            spread_cos: spread.cos(),
+            spread_sin: spread.sin(),
         }
     }
 
+    /// An upper bound of the multiplier of `frustum`'s view over the region: 0 when
+    /// its sphere lies outside the frustum or (back faces culled) every normal faces
+    /// away; the view's clamp when the sphere reaches the eye's plane.
+    fn multiplier(&self, frustum: &Frustum) -> f64 {
+        let view = frustum.view;
+        let (c, r) = (self.centre, self.radius);
+        let at = DVec4::new(c.x, c.y, c.z, 1.0);
+        if frustum.planes.iter().any(|p| p.dot(at) < -r) {
+            return 0.0;
+        }
+        let nearest = frustum.depth.dot(at) - r * frustum.depth_slope;
+        if !(nearest > 0.0) {
+            return view.max;
+        }
+        let farthest = view.eye.distance(c) + r;
+        let area = view.focal_pixels * view.focal_pixels * self.cos_bound(view) * farthest
+            / (nearest * nearest * nearest);
+        (area / view.reference).min(view.max)
+    }
+
     /// An upper bound of `|cos theta|` (or of `cos theta` when back faces are
-    /// culled, 0 when every normal faces away) over the segment.
+    /// culled, 0 when every normal faces away) over the region. Normals lie within
+    /// `spread` of the axis and directions to the eye within `seen` of the centre's
+    /// (at angle `off` from the axis), so a normal meets a direction to the eye at an
+    /// angle of at least `off - spread - seen` (front) and at most `off + spread +
+    /// seen` (its cosine's least value; the back's bound). Cosines of sums, without
+    /// trigonometric calls.
     fn cos_bound(&self, view: &ViewLod) -> f64 {
-        use std::f64::consts::{FRAC_PI_2, PI};
         let to_eye = view.eye - self.centre;
         let d = to_eye.length();
-        if !(self.spread < FRAC_PI_2) || !(d > self.radius) {
+        if !(self.spread < std::f64::consts::FRAC_PI_2) || !(d > self.radius) {
             return 1.0;
         }
-        // Directions from the sphere to the eye stay within `seen` of the centre's.
-        let seen = (self.radius / d).asin();
-        let off = self.axis.dot(to_eye / d).clamp(-1.0, 1.0).acos();
-        let front = (off - self.spread - seen).max(0.0);
-        let back = (PI - off - self.spread - seen).max(0.0);
-        if view.cull_back_faces {
-            if front >= FRAC_PI_2 { 0.0 } else { front.cos() }
+        let (seen_sin, off_cos) = (self.radius / d, self.axis.dot(to_eye / d).clamp(-1.0, 1.0));
+        let seen_cos = (1.0 - seen_sin * seen_sin).max(0.0).sqrt();
+        let off_sin = (1.0 - off_cos * off_cos).max(0.0).sqrt();
+        // theta = spread + seen, in [0, pi).
+        let theta_cos = self.spread_cos * seen_cos - self.spread_sin * seen_sin;
+        let theta_sin = self.spread_sin * seen_cos + self.spread_cos * seen_sin;
+        // cos(off - theta) when off > theta, else 1.
+        let front = if off_cos >= theta_cos {
+            1.0
         } else {
-            front.cos().max(back.cos())
+            off_cos * theta_cos + off_sin * theta_sin
+        };
+        if view.cull_back_faces {
+            return front.max(0.0);
         }
+        // The back: cos(pi - off - theta) = -cos(off + theta), 1 when off + theta >= pi.
+        let sum_cos = off_cos * theta_cos - off_sin * theta_sin;
+        let back = if -off_cos >= theta_cos { 1.0 } else { -sum_cos };
+        front.max(back).max(0.0)
     }
 }
 
@@ -287,37 +353,19 @@ impl LodPool {
     /// outside the frustum or (back faces culled) every normal faces away; `view.max`
     /// when the sphere reaches the eye's plane.
     pub fn bound(&self, bin: usize, view: &ViewLod) -> f64 {
-        let b = &self.bins[bin].bound;
-        let (c, r) = (b.centre, b.radius);
-        let m = view.clip_from_world;
-        let [x, y, z, w] = [m.row(0), m.row(1), m.row(2), m.row(3)];
-        let at = DVec4::new(c.x, c.y, c.z, 1.0);
-        // The frustum's planes in world space: w - x >= 0, w + x >= 0, ..., z >= 0.
-        for plane in [w - x, w + x, w - y, w + y, z, w - z] {
-            if plane.dot(at) < -r * plane.xyz().length() {
-                return 0.0;
-            }
-        }
-        let nearest = w.dot(at) - r * w.xyz().length();
-        if !(nearest > 0.0) {
-            return view.max;
-        }
-        let farthest = view.eye.distance(c) + r;
-        let area =
-            view.focal_pixels * view.focal_pixels * b.cos_bound(view) * farthest / nearest.powi(3);
-        (area / view.reference).min(view.max)
+        self.bins[bin].bound.multiplier(&Frustum::new(view))
     }
 
-    /// The rank segment `segment` needs under `view` with base count `base`.
-    fn need(&self, segment: usize, view: &ViewLod, base: f64) -> u32 {
-        (base * self.bound(segment, view))
-            .ceil()
-            .min(f64::from(u32::MAX)) as u32
+    /// The rank bin `bin` needs under `frustum` with base count `base`.
+    fn need(&self, bin: usize, frustum: &Frustum, base: f64) -> u32 {
+        let bound = self.bins[bin].bound.multiplier(frustum);
+        (base * bound).ceil().min(f64::from(u32::MAX)) as u32
     }
 
     /// Whether every rank visible under `view` with base count `base` is held.
     pub fn complete(&self, view: &ViewLod, base: f64) -> bool {
-        (0..self.reach.len()).all(|s| self.reach[s] >= self.need(s, view, base))
+        let frustum = Frustum::new(view);
+        (0..self.reach.len()).all(|s| self.reach[s] >= self.need(s, &frustum, base))
     }
 
     /// Draws the ranks `view` with base count `base` needs and the pool lacks. Cost in
@@ -331,8 +379,9 @@ impl LodPool {
         }
         // The budget ran out. Rebuild if the extension holds ranks the view does not
         // need; otherwise keep what is there.
+        let frustum = Frustum::new(view);
         let stale = (0..self.reach.len())
-            .any(|s| self.reach[s] > self.prefix.max(self.need(s, view, base)));
+            .any(|s| self.reach[s] > self.prefix.max(self.need(s, &frustum, base)));
         if !stale {
             return self.finish(sampler, start);
         }
@@ -351,8 +400,9 @@ impl LodPool {
         if self.extend_parallel(sampler, view, base) {
             return true;
         }
+        let frustum = Frustum::new(view);
         for s in 0..self.reach.len() {
-            let need = self.need(s, view, base);
+            let need = self.need(s, &frustum, base);
             if need <= self.reach[s] {
                 continue;
             }
@@ -386,6 +436,7 @@ impl LodPool {
         lists.resize_with(chunks, Default::default);
         let this = &*self;
         let (bins, reach) = (&this.bins, &this.reach);
+        let frustum = Frustum::new(view);
         // The ranks a bin lacks, and how many of them it should hold.
         let expected: f64 = lists
             .par_iter_mut()
@@ -394,7 +445,7 @@ impl LodPool {
                 list.needs.clear();
                 let mut expected = 0.0;
                 for s in c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(bins.len()) {
-                    let need = this.need(s, view, base);
+                    let need = this.need(s, &frustum, base);
                     list.needs.push(need);
                     if need > reach[s] {
                         expected += f64::from(need - reach[s]) * bins[s].share + COVER_SLACK;
@@ -721,7 +772,7 @@ mod tests {
             scan(&s, 3, end, &other, base)
         );
         // A view needing more than the budget gets what fits, and no rebuild loop.
-        let greedy = view(DVec3::new(0.0, 0.0, 1.1), 1e4);
+        let greedy = view_at(DVec3::new(1.0, 0.0, 0.7), DVec3::X, 1e6);
         pool.update(&s, &greedy, base);
         assert!(!pool.complete(&greedy, base));
         assert!(pool.len() - 20_000 <= needed + needed / 4);
