@@ -375,20 +375,34 @@ fn seam_check(mesh: TriMesh, spec: FieldSpec) {
             .map(|(a, _)| a)
             .sum()
     };
-    let n = 200_000;
-    let samples = pre.sampler.sample(n, 9);
-    let in_seam = samples.iter().filter(|s| seam[s.face as usize]).count() as f64;
-    let (seam_area, inner_area) = (area(true), area(false));
-    let seam_rate = in_seam / seam_area;
-    let inner_rate = (n as f64 - in_seam) / inner_area;
-    println!(
-        "seam band {:.1}% of the area: {seam_rate:.1} vs interior {inner_rate:.1} samples per unit area",
-        100.0 * seam_area / (seam_area + inner_area)
-    );
-    assert!(
-        (seam_rate / inner_rate - 1.0).abs() < 0.1,
-        "seam {seam_rate} vs interior {inner_rate}"
-    );
+    // The stratified order, and progressive prefixes (issue 19: rank thresholding
+    // across segment boundaries draws no lines), at a power of two and between.
+    for (n, progressive) in [(200_000, false), (131_072, true), (200_000, true)] {
+        let samples = if progressive {
+            let mut out = vec![strata_engine::sample::Sample::default(); n];
+            pre.sampler.progressive_into(9, 0, &mut out);
+            out
+        } else {
+            pre.sampler.sample(n, 9)
+        };
+        let in_seam = samples.iter().filter(|s| seam[s.face as usize]).count() as f64;
+        let (seam_area, inner_area) = (area(true), area(false));
+        let seam_rate = in_seam / seam_area;
+        let inner_rate = (n as f64 - in_seam) / inner_area;
+        println!(
+            "seam band {:.1}% of the area, {n} {}: {seam_rate:.1} vs interior {inner_rate:.1} samples per unit area",
+            100.0 * seam_area / (seam_area + inner_area),
+            if progressive {
+                "progressive"
+            } else {
+                "stratified"
+            },
+        );
+        assert!(
+            (seam_rate / inner_rate - 1.0).abs() < 0.1,
+            "seam {seam_rate} vs interior {inner_rate} ({n}, progressive {progressive})"
+        );
+    }
 }
 
 #[test]

@@ -19,6 +19,7 @@ mod boundary;
 mod dda;
 mod discrepancy;
 mod output;
+mod progressive;
 mod quantization;
 mod samplers;
 mod spectrum;
@@ -37,13 +38,14 @@ type BoxError = Box<dyn std::error::Error + Send + Sync>;
 type Experiment = (&'static str, fn(&mut Ctx) -> Result<Section, BoxError>);
 
 /// Every experiment, in the order of the paper (and of `RESULTS.md`).
-const EXPERIMENTS: [Experiment; 6] = [
+const EXPERIMENTS: [Experiment; 7] = [
     ("7.2", discrepancy::section_7_2),
     ("7.3.1", alignment::section_7_3_1),
     ("7.3.2", boundary::section_7_3_2),
     ("7.3.3", quantization::section_7_3_3),
     ("7.4", spectrum::section_7_4),
     ("7.5", dda::section_7_5),
+    ("progressive", progressive::section_progressive),
 ];
 
 fn main() -> Result<(), BoxError> {
