@@ -352,10 +352,24 @@ impl Sampler {
         let chain = self.chain_slot[segment] as usize;
         let curve = &self.segments[segment].curve;
         let leaves = cover.leaves.start as usize..cover.leaves.end as usize;
+        // Whether the samplers would put a value's sample in the cover's cells: the
+        // same test as `chain_index` and `leaf_at`, without their searches (both count
+        // the cumulative measures at or below the value, so comparing with the two
+        // ends suffices).
+        let last_chain = self.chains.order.len() - 1;
+        let cum = &self.chain_cumulative;
+        let cells = curve.cumulative();
+        let last_leaf = curve.cell_count() - 1;
         let inside = |rank: u32| {
             let at = cover.scramble.value(rank) * self.total_measure;
-            self.chain_index(at) == chain
-                && (cover.whole || leaves.contains(&self.leaf_at(chain, curve, at).0))
+            let in_chain =
+                (chain == 0 || cum[chain] <= at) && (chain == last_chain || at < cum[chain + 1]);
+            if !in_chain || cover.whole {
+                return in_chain;
+            }
+            let ml = (at - cum[chain]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
+            (leaves.start == 0 || cells[leaves.start] <= ml)
+                && (leaves.end > last_leaf || ml < cells[leaves.end])
         };
         let m = cover.level;
         let offsets = &cover.offsets[..cover.count as usize];
