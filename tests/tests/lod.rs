@@ -210,8 +210,8 @@ fn a_deformed_mesh_carries_its_samples() {
     );
 }
 
-/// `strata render --lod --frames 3 --dolly 0.8`: a numbered PNG per frame, and the
-/// pool's samples are found, not redrawn, as the camera moves in.
+/// `strata render --lod --frames 3 --dolly 0.8 --twist 30`: a numbered PNG per frame
+/// of a twisting mesh seen from a camera moving in.
 #[test]
 fn render_command_writes_a_lod_sequence() {
     use clap::Parser;
@@ -240,6 +240,8 @@ fn render_command_writes_a_lod_sequence() {
         "0.8".as_ref(),
         "--orbit".as_ref(),
         "2".as_ref(),
+        "--twist".as_ref(),
+        "30".as_ref(),
     ])
     .expect("arguments parse");
     strata_systems::cli::run(cli).expect("render succeeds");

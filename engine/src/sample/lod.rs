@@ -61,6 +61,21 @@ pub enum LodError {
         /// What it must be.
         expected: &'static str,
     },
+    /// A deformed mesh whose vertices or triangles are not the sampler's.
+    #[error(
+        "level of detail: a deformed mesh must keep the sampler's vertices and triangles \
+         ({expected_vertices} vertices, {expected_faces} faces), got {vertices} and {faces}"
+    )]
+    Mismatch {
+        /// Vertices given.
+        vertices: usize,
+        /// Faces given.
+        faces: usize,
+        /// The sampler's mesh's vertices.
+        expected_vertices: usize,
+        /// Its faces.
+        expected_faces: usize,
+    },
 }
 
 impl ViewLod {
@@ -224,6 +239,7 @@ mod tests {
         assert_eq!(good.validate(), Ok(()));
         let named = |lod: ViewLod| match lod.validate() {
             Err(LodError::Invalid { setting, .. }) => setting,
+            Err(e) => panic!("{e}"),
             Ok(()) => "accepted",
         };
         assert_eq!(

@@ -28,9 +28,10 @@ use std::ops::Range;
 use glam::{DVec3, DVec4, Vec4Swizzles};
 use rayon::prelude::*;
 
-use super::lod::{ViewLod, fade};
+use super::lod::{LodError, ViewLod, fade};
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
+use crate::mesh::TriMesh;
 
 /// The pool cuts the surface into about this many bins, each with its own bound of a
 /// view's multiplier: finer bins bound more tightly (fewer ranks drawn that no view
@@ -241,7 +242,47 @@ impl RegionBound {
     }
 }
 
+/// The bound of the faces that cells `leaves` of segment `segment` overlap, with the
+/// positions and normals of `mesh` (the sampler's mesh, or a deformation of it).
+fn bin_bound(
+    sampler: &Sampler,
+    mesh: &TriMesh,
+    segment: usize,
+    leaves: Range<usize>,
+) -> RegionBound {
+    let seg = &sampler.segments()[segment];
+    RegionBound::new(mesh, || {
+        leaves
+            .clone()
+            .flat_map(|l| seg.curve.leaf_triangles(l))
+            .flat_map(|&t| mesh.triangles()[seg.faces[t as usize] as usize])
+            .map(|v| v as usize)
+    })
+}
+
 impl LodPool {
+    /// Bounds the bins on `mesh`, a deformation of the sampler's mesh (the same
+    /// vertices and triangles, moved): a deforming mesh keeps its samples (sites are
+    /// face and barycentric coordinates) and the pool keeps serving every visible rank
+    /// of views of the deformed surface. Cost O(faces); an error, and nothing changed,
+    /// when `mesh` has other vertices or triangles.
+    pub fn set_geometry(&mut self, sampler: &Sampler, mesh: &TriMesh) -> Result<(), LodError> {
+        let rest = sampler.mesh();
+        if mesh.vertex_count() != rest.vertex_count() || mesh.triangles() != rest.triangles() {
+            return Err(LodError::Mismatch {
+                vertices: mesh.vertex_count(),
+                faces: mesh.face_count(),
+                expected_vertices: rest.vertex_count(),
+                expected_faces: rest.face_count(),
+            });
+        }
+        self.bins.par_iter_mut().for_each(|bin| {
+            let leaves = bin.leaves.start as usize..bin.leaves.end as usize;
+            bin.bound = bin_bound(sampler, mesh, bin.segment as usize, leaves);
+        });
+        Ok(())
+    }
+
     /// The pool of `sampler`'s progressive sequence for `seed` holding ranks
     /// `0..prefix`, with room for `budget` more ranks drawn per segment. Memory:
     /// 20 bytes per entry. Room for `min(budget, prefix)` more entries is reserved up
@@ -271,14 +312,7 @@ impl LodPool {
                     }
                 }
                 runs.into_iter().map(move |leaves| {
-                    let mesh = sampler.mesh();
-                    let bound = RegionBound::new(mesh, || {
-                        leaves
-                            .clone()
-                            .flat_map(|l| seg.curve.leaf_triangles(l))
-                            .flat_map(|&t| mesh.triangles()[seg.faces[t as usize] as usize])
-                            .map(|v| v as usize)
-                    });
+                    let bound = bin_bound(sampler, sampler.mesh(), i, leaves.clone());
                     Bin {
                         segment: i as u32,
                         share: (cumulative[leaves.end] - cumulative[leaves.start])
@@ -567,6 +601,7 @@ impl LodPool {
 mod tests {
     use super::*;
     use crate::field::FieldSpec;
+    use crate::mesh::TriMesh;
     use crate::surface::{Preprocessed, SurfaceOptions};
     use std::sync::Arc;
 
@@ -794,6 +829,54 @@ mod tests {
         assert!(tight.complete(&v, 10_000.0));
         assert_eq!(tight.ranks(), roomy.ranks());
         assert_eq!(tight.sites(), roomy.sites());
+    }
+
+    #[test]
+    fn bounds_follow_a_deformed_mesh() {
+        let s = torus_sampler();
+        let mut pool = LodPool::new(&s, 1, 0, 0);
+        let rest = s.mesh();
+        // Stretched along z and bent: the bounds of the rest mesh no longer hold.
+        let moved: Vec<DVec3> = rest
+            .positions()
+            .iter()
+            .map(|p| DVec3::new(p.x, p.y + 0.5 * p.x * p.x, 3.0 * p.z))
+            .collect();
+        let bent = TriMesh::new(moved, rest.triangles().to_vec()).expect("mesh");
+        pool.set_geometry(&s, &bent).expect("same topology");
+        let v = view(DVec3::new(0.3, 0.8, 2.5), f64::INFINITY);
+        let end = 20_000u32;
+        let mut sites = vec![SampleSite::default(); end as usize];
+        s.progressive_sites_into(1, 0, &mut sites);
+        let mut checked = 0;
+        for b in 0..pool.bins() {
+            let (segment, leaves) = pool.bin(b);
+            let mut ranks = Vec::new();
+            s.progressive_ranks_in_leaves(1, segment, leaves, 0, end, usize::MAX, &mut ranks);
+            for k in ranks {
+                let site = sites[k as usize];
+                let w = site.barycentric().map(f64::from);
+                let [i, j, l] = bent.triangles()[site.face as usize].map(|x| x as usize);
+                let p = bent.positions()[i] * w[0]
+                    + bent.positions()[j] * w[1]
+                    + bent.positions()[l] * w[2];
+                let n = (bent.vertex_normals()[i] * w[0]
+                    + bent.vertex_normals()[j] * w[1]
+                    + bent.vertex_normals()[l] * w[2])
+                    .normalize();
+                let m = v.multiplier(p, n);
+                assert!(m <= pool.bound(b, &v) * (1.0 + 1e-9), "rank {k}");
+                checked += usize::from(m > 0.0);
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+        let other =
+            TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]]).expect("triangle");
+        let e = pool.set_geometry(&s, &other).expect_err("mismatch");
+        assert!(
+            e.to_string().contains("must keep the sampler's vertices"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -10,6 +10,7 @@ use anyhow::Context;
 
 use super::LookArgs;
 use crate::config::SceneConfig;
+use strata_engine::mesh::TriMesh;
 use strata_engine::sample::PoolChange;
 
 use crate::gpu::{
@@ -60,6 +61,16 @@ pub struct RenderArgs {
     /// With `--frames`: camera distance factor per frame (0.99 moves 1% closer).
     #[arg(long, default_value_t = 1.0, requires = "lod")]
     pub dolly: f32,
+    /// With `--lod`: twist the mesh about the vertical axis through its centre, up to
+    /// this many degrees between its bottom and top, swinging once over the frames:
+    /// the samples ride the deforming surface without being drawn again.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        requires = "lod"
+    )]
+    pub twist: f32,
 }
 
 /// Runs `strata render`.
@@ -139,6 +150,9 @@ fn run_lod(
         renderer.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(&segments))?;
     }
     let fades = LodFades::new(&ctx.device)?;
+    if !args.twist.is_finite() {
+        anyhow::bail!("--twist must be a number of degrees");
+    }
     // The colour map's range from the first ranks, with the spacings of the count.
     let probe: Vec<_> = (lod_scene
         .pool()
@@ -154,6 +168,25 @@ fn run_lod(
     let look = args.look.style(&probe);
     let mut shown_before: Option<Vec<bool>> = None;
     for frame in 0..args.frames {
+        if args.twist != 0.0 {
+            let phase =
+                std::f64::consts::TAU * f64::from(frame) / f64::from(args.frames.max(2) - 1);
+            let twisted = twist(
+                &scene.mesh,
+                f64::from(args.twist).to_radians() * phase.sin(),
+            )?;
+            lod_scene.deform(
+                &ctx.device,
+                &ctx.queue,
+                &scene.sampler,
+                &twisted,
+                renderer.samples(),
+            )?;
+            if args.look.mesh != MeshMode::None {
+                let segments = crate::gpu::splat::face_segments(&scene.sampler);
+                renderer.set_mesh(&ctx.device, &ctx.queue, &twisted, Some(&segments))?;
+            }
+        }
         let step = lod_scene.frame(
             &ctx.device,
             &ctx.queue,
@@ -209,6 +242,24 @@ fn run_lod(
         ctx.adapter_summary()
     );
     Ok(())
+}
+
+/// `mesh` twisted about the vertical axis through its bounding box's centre by
+/// `angle` radians between its bottom and top (linearly in height).
+fn twist(mesh: &TriMesh, angle: f64) -> anyhow::Result<TriMesh> {
+    let (lo, hi) = mesh.bounds();
+    let centre = 0.5 * (lo + hi);
+    let height = (hi.y - lo.y).max(f64::MIN_POSITIVE);
+    let moved = mesh
+        .positions()
+        .iter()
+        .map(|p| {
+            let q = *p - centre;
+            let (sin, cos) = (angle * q.y / height).sin_cos();
+            centre + glam::DVec3::new(cos * q.x + sin * q.z, q.y, -sin * q.x + cos * q.z)
+        })
+        .collect();
+    Ok(TriMesh::new(moved, mesh.triangles().to_vec())?)
 }
 
 /// `out` for a single frame; `out` with `_NNNN` before its extension in a sequence.

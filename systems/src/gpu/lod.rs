@@ -14,6 +14,7 @@
 //! compute it (the same WGSL function): the GPU's visible set, for tests against
 //! [`LodPool::fades_into`] and for counting what a frame shows.
 
+use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{LodPool, PoolChange, SampleSite, Sampler};
 
 use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
@@ -419,6 +420,28 @@ impl LodScene {
             entries: self.pool.len(),
             update,
         })
+    }
+
+    /// Moves the samples onto `mesh`, a deformation of the sampler's mesh (the same
+    /// vertices and triangles, moved): the pool's bounds, the expansion pass's vertex
+    /// table and every entry on the GPU follow it; nothing is resampled or sent but
+    /// the vertices.
+    pub fn deform(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        sampler: &Sampler,
+        mesh: &TriMesh,
+        samples: &GpuSampleBuffer,
+    ) -> Result<(), GpuError> {
+        self.pool
+            .set_geometry(sampler, mesh)
+            .map_err(|e| GpuError::Mismatch {
+                what: "deformed mesh",
+                detail: e.to_string(),
+            })?;
+        self.expander.set_geometry(queue, mesh)?;
+        self.reexpand(device, queue, samples)
     }
 
     /// Expands every entry again from the expander's current mesh.
