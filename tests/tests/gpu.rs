@@ -19,7 +19,7 @@ use strata_systems::scene::Scene;
 
 /// An open device, or `None` (after a skip line) when there is no adapter; panics
 /// instead when `STRATA_REQUIRE_GPU=1`.
-fn gpu(test: &str) -> Option<GpuContext> {
+pub(crate) fn gpu(test: &str) -> Option<GpuContext> {
     match GpuContext::headless(&GpuOptions::default()) {
         Ok(ctx) => Some(ctx),
         Err(e) => {

@@ -1,7 +1,7 @@
 //! View-dependent level of detail on the GPU (issue 19): a resident progressive pool,
 //! the rank cull of the splat pipelines checked against the CPU's visible set, and
 //! samples carried by a deforming mesh. On whatever adapter wgpu finds; without one
-//! these tests print a skip line (see `gpu.rs`).
+//! these tests print a skip line (`gpu::gpu`).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -11,25 +11,11 @@ use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{LodPool, PoolChange};
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::{
-    GpuContext, GpuLodPool, GpuOptions, GpuSampleBuffer, LodFades, OrbitCamera, SiteExpander,
-    SplatLod, SplatStyle,
+    GpuLodPool, GpuSampleBuffer, LodFades, OrbitCamera, SiteExpander, SplatLod, SplatStyle,
 };
 use strata_systems::scene::Scene;
 
-fn gpu(test: &str) -> Option<GpuContext> {
-    match GpuContext::headless(&GpuOptions::default()) {
-        Ok(ctx) => Some(ctx),
-        Err(e) => {
-            assert!(
-                std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
-                "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
-            );
-            use std::io::Write;
-            let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
-            None
-        }
-    }
-}
+use crate::gpu::gpu;
 
 /// A torus (radii 1 and 0.4) with a 3:1 field.
 fn torus() -> Scene {

@@ -5,7 +5,7 @@
 //! After [`LodPool::update`] only the entries it appended are uploaded and expanded
 //! ([`GpuLodPool::sync`]); a pool rebuilt for a far view re-sends its extension. The
 //! splat pipelines then cull and fade by rank against the frame's camera
-//! ([`SplatLod`](super::splat::SplatLod), in the vertex shader), so a frame whose view
+//! ([`SplatLod`], in the vertex shader), so a frame whose view
 //! needs no new ranks uploads nothing but its uniforms. A deforming mesh keeps its
 //! samples: [`SiteExpander::set_geometry`] and [`GpuLodPool::reexpand`] move them onto
 //! the new surface without resampling.

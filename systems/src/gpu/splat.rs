@@ -68,7 +68,7 @@ pub struct SplatStyle {
 /// rank, and a sample of rank `k` is drawn when `k < base x lod(p_k)`, its splat scaled
 /// by its fade weight `clamp(base x lod(p_k) - k, 0, 1)` and its spacings by
 /// `1 / sqrt(lod(p_k))` (the density there is `lod` times the base density), with the
-/// multiplier `lod` of [`ViewLod`](strata_engine::sample::lod::ViewLod) for the frame's
+/// multiplier `lod` of [`ViewLod`] for the frame's
 /// camera, evaluated in `f32` per sample in the vertex shader.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SplatLod {
