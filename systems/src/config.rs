@@ -251,9 +251,11 @@ fn locate_option(text: &str, message: &str) -> Option<(usize, usize)> {
 }
 
 impl SceneConfig {
-    /// Parses a scene from RON text; `path` is used in error messages and to resolve
-    /// relative mesh paths.
+    /// Parses a scene from RON text (after a UTF-8 byte-order mark, if any); `path` is
+    /// used in error messages and to resolve relative mesh paths.
     pub fn from_ron(text: &str, path: &Path) -> Result<Self, ConfigError> {
+        // A UTF-8 byte-order mark (some editors save one) is not RON.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // `Designed(guidance: ..., weight: ...)` rather than `Designed((...))`.
         let options = ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES);

@@ -268,3 +268,36 @@ fn cli_bench_reports_timings_and_memory_as_json() {
     assert!(v["sample_median_s"].as_f64().expect("number") > 0.0);
     assert!(strata(&["bench", config.to_str().expect("utf-8"), "--repeat", "0"]).is_err());
 }
+
+/// Issue 22: sample counts whose output cannot fit are refused before preprocessing,
+/// in one line that says how much they need, instead of a panic or an abort.
+#[test]
+fn counts_beyond_memory_are_refused_before_preprocessing() {
+    let config = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("sphere-anisotropic.ron"))
+        .expect("sphere-anisotropic.ron is bundled");
+    let config = config.to_str().expect("utf-8 path");
+    let e = strata(&["sample", config, "-n", "18446744073709551615"]).expect_err("overflow");
+    let line = one_line(&e);
+    assert!(line.contains("more than 2^64 bytes"), "{line}");
+    // 2^32 samples are 275 GB: more than any machine this runs on has available.
+    let e = strata(&["sample", config, "-n", "4294967296"]).expect_err("too large");
+    let line = one_line(&e);
+    assert!(
+        line.contains("274.9 GB of memory needed") && line.contains("--ignore-memory-check"),
+        "{line}"
+    );
+    assert!(!line.contains('\n'));
+}
+
+/// Issue 22: a scene saved with a UTF-8 byte-order mark loads like one without.
+#[test]
+fn scene_files_may_start_with_a_byte_order_mark() {
+    let text = "(mesh: Shape(Sphere(radius: 1.0, resolution: 3)), \
+         field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 2.0, density: 1.0))";
+    let plain = SceneConfig::from_ron(text, std::path::Path::new("a.ron")).expect("plain");
+    let marked = SceneConfig::from_ron(&format!("\u{feff}{text}"), std::path::Path::new("b.ron"))
+        .expect("with a byte-order mark");
+    assert_eq!(format!("{plain:?}"), format!("{marked:?}"));
+}

@@ -117,9 +117,54 @@ fn output_kind(path: &Path) -> anyhow::Result<OutputKind> {
     }
 }
 
+/// The memory this machine can still give, in bytes (`MemAvailable` of
+/// `/proc/meminfo`); `None` where it cannot be read (another system).
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// Refuses a request of `bytes` (for `what`) that exceeds `available` memory, before
+/// any work: the error says how much it needs and names `--ignore-memory-check`.
+fn check_memory(what: &str, bytes: Option<u64>, available: Option<u64>) -> anyhow::Result<()> {
+    let gb = |b: u64| b as f64 / 1e9;
+    match (bytes, available) {
+        (None, _) => bail!(
+            "{what}: more than 2^64 bytes of memory needed; ask for fewer (--ignore-memory-check does not help)"
+        ),
+        (Some(b), Some(a)) if b > a => bail!(
+            "{what}: {:.1} GB of memory needed and {:.1} GB available; ask for fewer, or pass --ignore-memory-check to try anyway",
+            gb(b),
+            gb(a)
+        ),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn memory_checks_name_the_need_and_the_override() {
+        assert!(check_memory("x", Some(10), Some(11)).is_ok());
+        assert!(check_memory("x", Some(10), None).is_ok());
+        let e = check_memory(
+            "1000000000 samples",
+            Some(64_000_000_000),
+            Some(8_000_000_000),
+        )
+        .expect_err("too much");
+        assert_eq!(
+            e.to_string(),
+            "1000000000 samples: 64.0 GB of memory needed and 8.0 GB available; ask for fewer, or pass --ignore-memory-check to try anyway"
+        );
+        let e = check_memory("n samples", None, Some(1)).expect_err("overflow");
+        assert!(e.to_string().contains("more than 2^64 bytes"), "{e}");
+        assert!(available_memory().is_none_or(|a| a > 0));
+    }
 
     #[test]
     fn output_kind_follows_the_extension_in_any_case() {

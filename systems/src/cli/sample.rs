@@ -33,6 +33,10 @@ pub struct SampleArgs {
     /// a count are among those of any larger count).
     #[arg(long, value_enum, default_value_t = Order::Stratified)]
     pub order: Order,
+    /// Draw even when the samples (64 bytes each) need more memory than the machine
+    /// has available (by default such a request is refused before preprocessing).
+    #[arg(long)]
+    pub ignore_memory_check: bool,
 }
 
 /// How samples are drawn (`--order`).
@@ -57,10 +61,7 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
         Some(path) => Some(output_kind(path)?),
         None => None,
     };
-    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
-    for w in scene.mesh.warnings() {
-        eprintln!("warning: {}: mesh: {w}", args.config.display());
-    }
+    // Every check of the request before the preprocessing.
     let count = args.count.unwrap_or(config.sampling.count);
     if args.order == Order::Progressive && count > 1 << 32 {
         anyhow::bail!(
@@ -68,9 +69,25 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
             args.config.display()
         );
     }
+    let bytes = count.checked_mul(std::mem::size_of::<Sample>() as u64);
+    let available = if args.ignore_memory_check && bytes.is_some() {
+        None
+    } else {
+        super::available_memory()
+    };
+    super::check_memory(&format!("{count} samples"), bytes, available)
+        .with_context(|| args.config.display().to_string())?;
     let count = usize::try_from(count).context("sample count does not fit in memory")?;
+    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
+    for w in scene.mesh.warnings() {
+        eprintln!("warning: {}: mesh: {w}", args.config.display());
+    }
     let seed = args.seed.unwrap_or(config.sampling.seed);
-    let mut samples = vec![Sample::default(); count];
+    let mut samples = Vec::new();
+    samples
+        .try_reserve_exact(count)
+        .with_context(|| format!("{}: allocating {count} samples", args.config.display()))?;
+    samples.resize(count, Sample::default());
     let t = Instant::now();
     match args.order {
         Order::Stratified => scene.sampler.sample_into(seed, &mut samples),
