@@ -301,3 +301,24 @@ fn scene_files_may_start_with_a_byte_order_mark() {
         .expect("with a byte-order mark");
     assert_eq!(format!("{plain:?}"), format!("{marked:?}"));
 }
+
+/// Issue 22: `strata segment --out x.obj` wrote PLY bytes under an OBJ name; it is
+/// refused before any work, and nothing is written.
+#[test]
+fn segment_refuses_an_output_that_is_not_ply() {
+    let config = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("sphere-anisotropic.ron"))
+        .expect("sphere-anisotropic.ron is bundled");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("segments.obj");
+    let e = strata(&[
+        "segment",
+        config.to_str().expect("utf-8"),
+        "--out",
+        out.to_str().expect("utf-8"),
+    ])
+    .expect_err("not a PLY name");
+    assert!(one_line(&e).ends_with("--out writes a binary PLY mesh; name it .ply"));
+    assert!(!out.exists());
+}

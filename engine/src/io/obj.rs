@@ -23,6 +23,17 @@ use glam::DVec3;
 
 use crate::mesh::{MeshError, TriMesh};
 
+/// What is wrong with an index that does not parse: an integer too large for any
+/// file, or not an integer at all.
+pub(super) fn bad_index(part: &str) -> &'static str {
+    let digits = part.strip_prefix('-').unwrap_or(part);
+    if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+        "an index out of range"
+    } else {
+        "a non-integer index"
+    }
+}
+
 /// Parses OBJ `bytes` into a mesh; `path` only names the file in errors.
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
     // Large files on every thread; the sequential pass for small ones and to find and
@@ -198,7 +209,8 @@ impl Reader<'_> {
             };
             let Some(index) = parse_index(part) else {
                 return Err(format!(
-                    "face {face}: corner `{corner}` has a non-integer index"
+                    "face {face}: corner `{corner}` has {}",
+                    bad_index(part)
                 ));
             };
             let seen = self.seen[kind];

@@ -34,6 +34,18 @@ pub struct SegmentArgs {
 
 /// Runs `strata segment`.
 pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
+    if let Some(out) = &args.out {
+        let ply = out
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+        if !ply {
+            anyhow::bail!(
+                "{}: --out writes a binary PLY mesh; name it .ply",
+                out.display()
+            );
+        }
+    }
     let config = SceneConfig::load(&args.config)?;
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();

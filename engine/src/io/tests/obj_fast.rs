@@ -220,3 +220,28 @@ proptest! {
         }
     }
 }
+
+/// Issue 22: an integer index too large for any file is "out of range", not
+/// "non-integer"; a word that is no integer keeps its message. Both readers agree.
+#[test]
+fn indices_out_of_range_are_named_as_such() {
+    let header = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    for (face, expected) in [
+        (
+            "f 1 2 99999999999999999999",
+            "corner `99999999999999999999` has an index out of range",
+        ),
+        ("f 1 2 -99999999999999999999", "has an index out of range"),
+        ("f 1 2 x3", "corner `x3` has a non-integer index"),
+        ("f 1 2 3.5", "has a non-integer index"),
+    ] {
+        let text = format!("{header}{face}\n");
+        match parse_obj(text.as_bytes(), Path::new("t.obj")) {
+            Err(MeshError::Syntax { line: 4, what, .. }) => {
+                assert!(what.contains(expected), "{face}: {what}")
+            }
+            other => panic!("{face}: expected a syntax error on line 4, got {other:?}"),
+        }
+        assert_same(text.as_bytes());
+    }
+}

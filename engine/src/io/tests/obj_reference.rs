@@ -304,9 +304,13 @@ fn check_corner(
             continue;
         }
         let Ok(index) = part.parse::<i64>() else {
-            return Some(format!(
-                "face {face}: corner `{corner}` has a non-integer index"
-            ));
+            let digits = part.strip_prefix('-').unwrap_or(part);
+            let what = if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+                "an index out of range"
+            } else {
+                "a non-integer index"
+            };
+            return Some(format!("face {face}: corner `{corner}` has {what}"));
         };
         let (name, plural) = KINDS[kind];
         if kind > 0 && totals[kind] == 0 {
