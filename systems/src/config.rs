@@ -289,6 +289,19 @@ impl SceneConfig {
         Ok(scene)
     }
 
+    /// The files this scene reads besides itself (its mesh file, its field files),
+    /// absolute.
+    pub fn input_files(&self) -> Vec<PathBuf> {
+        let mesh = match &self.mesh {
+            MeshSource::File(p) => Some(p.clone()),
+            MeshSource::Shape(_) => None,
+        };
+        mesh.into_iter()
+            .chain(self.field.files().into_iter().map(Path::to_path_buf))
+            .filter_map(|p| std::path::absolute(&p).ok())
+            .collect()
+    }
+
     /// Reads and parses a scene file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {

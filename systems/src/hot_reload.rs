@@ -262,17 +262,9 @@ fn watch_dir(
 
 /// The files a scene names (mesh file, field files), absolute.
 fn dependencies(scene: &Result<SceneConfig, ConfigError>) -> Vec<PathBuf> {
-    let Ok(scene) = scene else {
-        return Vec::new();
-    };
-    let mut out = Vec::new();
-    if let MeshSource::File(p) = &scene.mesh {
-        out.extend(std::path::absolute(p).ok());
-    }
-    for path in scene.field.files() {
-        out.extend(std::path::absolute(path).ok());
-    }
-    out
+    scene
+        .as_ref()
+        .map_or_else(|_| Vec::new(), SceneConfig::input_files)
 }
 
 /// Applies the newest good scene from the inbox (see the module docs).

@@ -322,3 +322,42 @@ fn segment_refuses_an_output_that_is_not_ply() {
     assert!(one_line(&e).ends_with("--out writes a binary PLY mesh; name it .ply"));
     assert!(!out.exists());
 }
+
+/// Issue 22: an output path that is one of the scene's inputs (its mesh, the scene
+/// file itself) is refused, and the input is left as it was.
+#[test]
+fn outputs_never_overwrite_the_scene_inputs() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mesh = dir.path().join("tri.obj");
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.2\nf 1 2 3\nf 2 4 3\n";
+    std::fs::write(&mesh, obj).expect("mesh");
+    let scene = dir.path().join("scene.ron");
+    std::fs::write(
+        &scene,
+        "(mesh: File(\"tri.obj\"), field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 2.0, density: 1.0), sampling: (count: 50))",
+    )
+    .expect("scene");
+    let scene_text = std::fs::read_to_string(&scene).expect("read");
+    // The mesh by another spelling of its path, and the scene file itself.
+    let aliased = dir.path().join(".").join("tri.obj");
+    for (command, flag, out) in [
+        ("sample", "--out", aliased.clone()),
+        ("segment", "--report", scene.clone()),
+        ("field", "--out", mesh.clone()),
+    ] {
+        let e = strata(&[
+            command,
+            scene.to_str().expect("utf-8"),
+            flag,
+            out.to_str().expect("utf-8"),
+        ])
+        .expect_err("an input as output");
+        assert!(
+            one_line(&e).contains("is an input of the scene"),
+            "{command}: {}",
+            one_line(&e)
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&mesh).expect("mesh"), obj);
+    assert_eq!(std::fs::read_to_string(&scene).expect("scene"), scene_text);
+}

@@ -28,6 +28,11 @@ pub struct FieldArgs {
 /// Runs `strata field`.
 pub(super) fn run(args: &FieldArgs) -> anyhow::Result<()> {
     let config = SceneConfig::load(&args.config)?;
+    super::refuse_inputs_as_outputs(
+        &args.config,
+        &config,
+        &[args.out.as_deref(), args.report.as_deref()],
+    )?;
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();
     let (mesh, _) = crate::scene::stage(&progress, "mesh", || crate::scene::load_mesh(&config));

@@ -117,6 +117,31 @@ fn output_kind(path: &Path) -> anyhow::Result<OutputKind> {
     }
 }
 
+/// Refuses to write any of `outputs` that is the scene file `scene` or one of the files
+/// it reads (`config`'s mesh and field files): the write would destroy an input.
+fn refuse_inputs_as_outputs(
+    scene: &Path,
+    config: &crate::config::SceneConfig,
+    outputs: &[Option<&Path>],
+) -> anyhow::Result<()> {
+    // Paths that exist, compared canonically (links, `..`, relative paths); an output
+    // that does not exist yet is no input.
+    let inputs: Vec<_> = std::iter::once(scene.to_path_buf())
+        .chain(config.input_files())
+        .filter_map(|p| std::fs::canonicalize(p).ok())
+        .collect();
+    for out in outputs.iter().flatten() {
+        if std::fs::canonicalize(out).is_ok_and(|c| inputs.contains(&c)) {
+            bail!(
+                "{}: is an input of the scene {}; writing there would destroy it, choose another output",
+                out.display(),
+                scene.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// The memory this machine can still give, in bytes (`MemAvailable` of
 /// `/proc/meminfo`); `None` where it cannot be read (another system).
 fn available_memory() -> Option<u64> {

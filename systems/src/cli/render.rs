@@ -80,6 +80,7 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
     }
     let config = SceneConfig::load(&args.config)?;
+    super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.
     let ctx = GpuContext::headless(&args.look.gpu_options()).context("opening a GPU")?;
     let target = HeadlessTarget::new(&ctx.device, args.width, args.height, args.msaa)?;

@@ -57,6 +57,7 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
             .context("could not start the thread pool")?;
     }
     let config = SceneConfig::load(&args.config)?;
+    super::refuse_inputs_as_outputs(&args.config, &config, &[args.out.as_deref()])?;
     let out_kind = match &args.out {
         Some(path) => Some(output_kind(path)?),
         None => None,

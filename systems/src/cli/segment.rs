@@ -47,6 +47,15 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         }
     }
     let config = SceneConfig::load(&args.config)?;
+    super::refuse_inputs_as_outputs(
+        &args.config,
+        &config,
+        &[
+            args.out.as_deref(),
+            args.report.as_deref(),
+            args.atlas.as_deref(),
+        ],
+    )?;
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();
     let (mesh, mesh_time) =

@@ -27,6 +27,11 @@ pub struct WatchArgs {
 
 /// Runs `strata watch`.
 pub(super) fn run(args: &WatchArgs) -> anyhow::Result<()> {
+    // A scene that does not load yet is waited for; one that does must not name the
+    // output among its inputs.
+    if let Ok(config) = crate::config::SceneConfig::load(&args.config) {
+        super::refuse_inputs_as_outputs(&args.config, &config, &[args.out.as_deref()])?;
+    }
     let mut engine = StreamingEngine::watch(&args.config)
         .with_context(|| format!("watching {}", args.config.display()))?;
     eprintln!("watching {} (Ctrl-C to stop)", args.config.display());
