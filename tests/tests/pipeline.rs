@@ -361,3 +361,34 @@ fn outputs_never_overwrite_the_scene_inputs() {
     assert_eq!(std::fs::read_to_string(&mesh).expect("mesh"), obj);
     assert_eq!(std::fs::read_to_string(&scene).expect("scene"), scene_text);
 }
+
+/// Issue 22: `strata analyze` given a mesh PLY says that it is not a sample file.
+#[test]
+fn analyze_names_a_mesh_ply_as_not_a_sample_file() {
+    let config = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("sphere-anisotropic.ron"))
+        .expect("sphere-anisotropic.ron is bundled");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mesh = dir.path().join("segments.ply");
+    strata(&[
+        "segment",
+        config.to_str().expect("utf-8"),
+        "--out",
+        mesh.to_str().expect("utf-8"),
+    ])
+    .expect("segment writes a mesh PLY");
+    let out = dir.path().join("analysis");
+    let e = strata(&[
+        "analyze",
+        mesh.to_str().expect("utf-8"),
+        "--out",
+        out.to_str().expect("utf-8"),
+    ])
+    .expect_err("a mesh is no sample file");
+    assert!(
+        one_line(&e).contains("not a sample file"),
+        "{}",
+        one_line(&e)
+    );
+}

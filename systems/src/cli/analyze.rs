@@ -78,6 +78,13 @@ fn load(args: &AnalyzeArgs) -> anyhow::Result<AnalysisInput> {
             if samples.is_empty() {
                 bail!("{}: no samples", args.input.display());
             }
+            // A mesh PLY reads as points without spacings: say what the file is not.
+            if samples.iter().all(|s| s.spacing == [0.0, 0.0]) {
+                bail!(
+                    "{}: not a sample file: its points have no spacing_major and spacing_minor (a mesh? `strata sample --out` writes sample files)",
+                    args.input.display()
+                );
+            }
             Ok(AnalysisInput::from_samples(samples))
         }
         Some("ron") => {
