@@ -116,6 +116,10 @@ impl GpuLodPool {
             PoolChange::Appended(r) => r.start.min(self.len),
             PoolChange::Rebuilt => (pool.prefix() as usize).min(self.len),
         };
+        if from == n && n == self.len && samples.len() == n {
+            // Nothing new: no upload, no pass, no submit.
+            return Ok(0);
+        }
         let count = u32::try_from(n).map_err(|_| GpuError::Limit {
             what: "progressive pool entries",
             requested: n as u64,
