@@ -177,7 +177,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
             }
         }
     }
-    build_mesh(path, positions, corners, &face_ends)
+    build_mesh(path, positions, corners, &face_ends, Skipped::default())
 }
 
 /// Consecutive ranges `ends[i-1]..ends[i]` (from 0).
@@ -190,11 +190,30 @@ fn face_ranges(ends: &[usize]) -> impl Iterator<Item = std::ops::Range<usize>> +
 }
 
 /// Builds the mesh from checked polygons, wrapping construction errors with the file.
+/// Faces of one or two corners an OBJ reader skipped: how many, and the lines of the
+/// first few.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Skipped {
+    pub(crate) count: usize,
+    pub(crate) lines: Vec<usize>,
+}
+
+impl Skipped {
+    /// Notes a skipped face on `line` (from 1).
+    pub(crate) fn push(&mut self, line: usize) {
+        self.count += 1;
+        if self.lines.len() < 5 {
+            self.lines.push(line);
+        }
+    }
+}
+
 fn build_mesh(
     path: &Path,
     positions: Vec<DVec3>,
     corners: Vec<u32>,
     face_ends: &[usize],
+    skipped: Skipped,
 ) -> Result<TriMesh, MeshError> {
     let all_triangles = face_ranges(face_ends).all(|r| r.len() == 3);
     let built = if all_triangles {
@@ -209,10 +228,20 @@ fn build_mesh(
             .collect();
         TriMesh::from_polygons(positions, &polygons)
     };
-    built.map_err(|source| MeshError::InFile {
+    let mut mesh = built.map_err(|source| MeshError::InFile {
         path: path.to_path_buf(),
         source: Box::new(source),
-    })
+    })?;
+    if skipped.count > 0 {
+        mesh.warnings.insert(
+            0,
+            crate::mesh::MeshWarning::SkippedPointsAndLines {
+                count: skipped.count,
+                first_lines: skipped.lines,
+            },
+        );
+    }
+    Ok(mesh)
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>, MeshError> {

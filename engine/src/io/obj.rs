@@ -46,7 +46,13 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
             what,
         });
     }
-    super::build_mesh(path, scan.positions, scan.corners, &scan.face_ends)
+    super::build_mesh(
+        path,
+        scan.positions,
+        scan.corners,
+        &scan.face_ends,
+        scan.skipped,
+    )
 }
 
 /// What one pass over the text finds.
@@ -60,6 +66,8 @@ pub(crate) struct Scan {
     pub(crate) corners: Vec<u32>,
     /// End (exclusive) of each face in `corners`.
     pub(crate) face_ends: Vec<usize>,
+    /// Faces of one or two corners, skipped.
+    pub(crate) skipped: super::Skipped,
 }
 
 const BOM: &[u8] = b"\xEF\xBB\xBF";
@@ -96,6 +104,7 @@ pub(crate) fn scan(bytes: &[u8]) -> Scan {
         positions: Vec::with_capacity(bytes.len() / 64),
         corners: Vec::with_capacity(bytes.len() / 12),
         face_ends: Vec::with_capacity(bytes.len() / 32),
+        skipped: super::Skipped::default(),
     };
     for (k, line) in body.split('\n').enumerate() {
         if let Some(what) = reader.line(k + 1, line, &mut scan) {
@@ -150,7 +159,7 @@ impl Reader<'_> {
                 self.seen[2] += 1;
                 check_numbers(words, 3, "normal")
             }
-            "f" => self.face(words, scan),
+            "f" => self.face(number, words, scan),
             "usemtl" => {
                 let name = line.split_once(' ').map_or("", |(_, name)| name);
                 if name.trim().is_empty() && self.nameless_usemtl.is_none() {
@@ -164,6 +173,7 @@ impl Reader<'_> {
 
     fn face<'w>(
         &mut self,
+        number: usize,
         words: impl Iterator<Item = &'w str>,
         scan: &mut Scan,
     ) -> Option<String> {
@@ -177,8 +187,12 @@ impl Reader<'_> {
             }
         }
         match count {
-            // One or two corners are a point or a line, which a mesh leaves out.
-            1 | 2 => scan.corners.truncate(start),
+            // One or two corners are a point or a line, which a mesh leaves out (with
+            // a warning: a file cut short in a face line ends with one).
+            1 | 2 => {
+                scan.corners.truncate(start);
+                scan.skipped.push(number);
+            }
             // No corner: an empty polygon, which the mesh rejects (TooFewCorners).
             0 => scan.face_ends.push(start),
             _ => {

@@ -7,8 +7,9 @@
 //! checked after all chunks are read, against the file's totals and the records
 //! before each corner. The fast path only ever returns a scan without problems, equal
 //! to [`scan`](super::obj::scan)'s: on anything unusual (a malformed line, an index out
-//! of range or 0, a nameless `usemtl`, text that is not UTF-8) it returns `None` and
-//! the caller runs the sequential pass, which finds the problem and its line. The
+//! of range or 0, a nameless `usemtl`, text that is not UTF-8, a face of one or two
+//! corners) it returns `None` and the caller runs the sequential pass, which finds the
+//! problem, or the skipped faces, and their lines. The
 //! result does not depend on the thread count (chunks are fixed by the file and merged
 //! in order).
 //!
@@ -172,10 +173,8 @@ fn face<'w>(c: &mut Chunk, words: impl Iterator<Item = &'w str>) -> Option<()> {
         }
     }
     match count {
-        1 | 2 => {
-            c.corners.truncate(start);
-            c.relative.retain(|&(slot, _)| slot < start);
-        }
+        // A point or a line: the sequential pass skips it and names its line.
+        1 | 2 => return None,
         0 => c.face_ends.push(start),
         _ => c.face_ends.push(c.corners.len()),
     }
@@ -218,6 +217,7 @@ fn merge(chunks: Vec<Chunk>) -> Option<Scan> {
         positions: Vec::with_capacity(positions_len),
         corners: Vec::with_capacity(corners_len),
         face_ends: Vec::with_capacity(faces_len),
+        skipped: super::Skipped::default(),
     };
     let mut vertices_before = 0usize;
     for c in chunks {

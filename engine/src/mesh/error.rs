@@ -161,6 +161,14 @@ pub enum MeshWarning {
         /// How many.
         count: usize,
     },
+    /// Faces of one or two corners (points and lines in an OBJ file) were skipped: a
+    /// surface has none, and a file cut short in a face line ends with one.
+    SkippedPointsAndLines {
+        /// How many.
+        count: usize,
+        /// The lines (from 1) of the first few.
+        first_lines: Vec<usize>,
+    },
     /// Polygons with more than three corners were triangulated (fan triangulation).
     TriangulatedPolygons {
         /// How many polygons.
@@ -189,6 +197,20 @@ impl std::fmt::Display for MeshWarning {
             Self::TriangulatedPolygons { count } => {
                 write!(f, "triangulated {count} polygons with more than 3 corners")
             }
+            Self::SkippedPointsAndLines { count, first_lines } => write!(
+                f,
+                "skipped {count} faces of one or two corners (points or lines; a file cut short ends with one) on lines {}",
+                first_lines
+                    .iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+                    + if *count > first_lines.len() {
+                        ", ..."
+                    } else {
+                        ""
+                    }
+            ),
         }
     }
 }

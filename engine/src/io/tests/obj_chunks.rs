@@ -1,6 +1,6 @@
 //! The OBJ reader's parallel fast path against its sequential pass: the same scan
 //! whenever the fast path gives one, and no scan exactly when the sequential pass
-//! finds a problem, whatever the chunk size.
+//! finds a problem or skips a face of one or two corners, whatever the chunk size.
 
 use proptest::prelude::*;
 
@@ -24,7 +24,7 @@ fn assert_agrees(text: &[u8]) {
                 assert_eq!(fast, sequential, "chunks of {size}");
             }
             None => assert!(
-                sequential.problem.is_some(),
+                sequential.problem.is_some() || sequential.skipped.count > 0,
                 "chunks of {size} gave up on a valid file: {:?}",
                 String::from_utf8_lossy(text)
             ),

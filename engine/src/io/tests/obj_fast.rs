@@ -245,3 +245,32 @@ fn indices_out_of_range_are_named_as_such() {
         assert_same(text.as_bytes());
     }
 }
+
+/// Issue 22: faces of one or two corners, and a file cut short in a face line, load
+/// with a warning that counts them and names their lines (they were dropped without a
+/// word). Both readers agree.
+#[test]
+fn points_lines_and_cut_faces_are_warned_about_by_line() {
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 3\nf 2 4\nf 2 4 3\nf 4";
+    let mesh = parse_obj(text.as_bytes(), Path::new("t.obj")).expect("loads");
+    assert_eq!(mesh.face_count(), 2);
+    assert_eq!(
+        mesh.warnings().first(),
+        Some(&crate::mesh::MeshWarning::SkippedPointsAndLines {
+            count: 3,
+            first_lines: vec![6, 7, 9],
+        })
+    );
+    assert!(
+        mesh.warnings()[0]
+            .to_string()
+            .starts_with("skipped 3 faces of one or two corners"),
+        "{}",
+        mesh.warnings()[0]
+    );
+    assert_same(text.as_bytes());
+    // A clean file has no such warning.
+    let clean =
+        parse_obj(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", Path::new("t.obj")).expect("loads");
+    assert!(clean.warnings().is_empty(), "{:?}", clean.warnings());
+}

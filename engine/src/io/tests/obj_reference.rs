@@ -108,7 +108,7 @@ pub(super) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
             });
         }
     }
-    crate::io::build_mesh(path, scan.positions, corners, &face_ends)
+    crate::io::build_mesh(path, scan.positions, corners, &face_ends, scan.skipped)
 }
 
 /// Prepares the text for `tobj`, keeping every byte offset and line number: a UTF-8
@@ -164,6 +164,8 @@ pub(super) struct Prescan {
     pub(super) problem: Option<(usize, String)>,
     /// All `v` positions in file order (divided by their weight `w`, as `tobj` does).
     pub(super) positions: Vec<DVec3>,
+    /// Faces of one or two corners, which `tobj` drops as points and lines.
+    pub(super) skipped: crate::io::Skipped,
 }
 
 /// Scans OBJ text for the first problem `tobj` would stop at (or overflow on), following
@@ -187,6 +189,7 @@ pub(super) fn prescan(text: &[u8]) -> Prescan {
     let mut scan = Prescan {
         problem: None,
         positions: Vec::with_capacity(totals[0]),
+        skipped: crate::io::Skipped::default(),
     };
     let mut seen = [0usize; 3];
     let mut faces = 0usize;
@@ -223,6 +226,8 @@ pub(super) fn prescan(text: &[u8]) -> Prescan {
                 });
                 if corners >= 3 {
                     faces += 1;
+                } else if corners > 0 && problem.is_none() {
+                    scan.skipped.push(k + 1);
                 }
                 problem
             }
