@@ -13,7 +13,8 @@
 //! same: positive indices may point anywhere in the file, negative ones count back
 //! from the records read so far; texture and normal indices are ignored when the file
 //! has no texture coordinates or normals; faces of one or two corners are skipped (as
-//! points and lines), a face with no corner is an empty polygon; `l` records are
+//! points and lines, with a warning that names their lines), a face with no corner is
+//! an empty polygon; `l` records are
 //! ignored. Where `tobj` failed on valid input (a vertex colour on some vertices only,
 //! a positive index to a vertex defined after the next `o`/`g`), this reader loads it.
 
