@@ -120,6 +120,21 @@ fn the_gpu_cull_gives_the_cpu_visible_set() {
         assert!(shown > 5000, "{shown} shown at distance {distance}");
         assert!(differ * 1000 <= shown, "{differ} of {shown} differ");
     }
+    // A view that needs nothing new: nothing is sent.
+    let view = lod().view(&camera(2.6, 0.4), SIZE);
+    let change = pool.update(s, &view, BASE);
+    assert_eq!(change, PoolChange::Unchanged);
+    let bytes = gpu_pool
+        .sync(
+            &ctx.device,
+            &ctx.queue,
+            &pool,
+            &change,
+            &expander,
+            &mut samples,
+        )
+        .expect("sync");
+    assert_eq!(bytes, 0);
 }
 
 /// After a deformation of the mesh, re-expanded pool samples lie on the deformed

@@ -146,9 +146,10 @@ fn run_lod(
     let budget = (f64::from(base) * f64::from(args.lod_max)) as usize;
     let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
     let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
-    if args.look.mesh != MeshMode::None {
-        let segments = crate::gpu::splat::face_segments(&scene.sampler);
-        renderer.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(&segments))?;
+    let segments = (args.look.mesh != MeshMode::None)
+        .then(|| crate::gpu::splat::face_segments(&scene.sampler));
+    if let Some(segments) = &segments {
+        renderer.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(segments))?;
     }
     let fades = LodFades::new(&ctx.device)?;
     if !args.twist.is_finite() {
@@ -183,9 +184,8 @@ fn run_lod(
                 &twisted,
                 renderer.samples(),
             )?;
-            if args.look.mesh != MeshMode::None {
-                let segments = crate::gpu::splat::face_segments(&scene.sampler);
-                renderer.set_mesh(&ctx.device, &ctx.queue, &twisted, Some(&segments))?;
+            if let Some(segments) = &segments {
+                renderer.set_mesh(&ctx.device, &ctx.queue, &twisted, Some(segments))?;
             }
         }
         let step = lod_scene.frame(

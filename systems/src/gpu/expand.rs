@@ -55,6 +55,8 @@ pub struct SiteExpander {
     layout: wgpu::BindGroupLayout,
     ranked_pipeline: wgpu::ComputePipeline,
     ranked_layout: wgpu::BindGroupLayout,
+    /// The ranked pass's parameters, rewritten per pass.
+    ranked_params: wgpu::Buffer,
     params: wgpu::Buffer,
     mesh: wgpu::Buffer,
     offsets: ExpandParams,
@@ -185,12 +187,16 @@ impl SiteExpander {
             };
             let pipeline = compute(&layout, "cs_expand");
             let ranked_pipeline = compute(&ranked_layout, "cs_expand_ranked");
-            let params = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("strata expand params"),
-                size: std::mem::size_of::<ExpandParams>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
+            let uniforms = |label| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: std::mem::size_of::<ExpandParams>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            };
+            let params = uniforms("strata expand params");
+            let ranked_params = uniforms("strata expand ranked params");
             let mesh = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("strata expand mesh"),
                 contents: bytemuck::cast_slice(&words),
@@ -201,6 +207,7 @@ impl SiteExpander {
                 layout,
                 ranked_pipeline,
                 ranked_layout,
+                ranked_params,
                 params,
                 mesh,
                 offsets,
@@ -346,11 +353,13 @@ impl SiteExpander {
     /// `ranks`, one per entry, as [`LodPool`](strata_engine::sample::LodPool) holds
     /// them) into the same entries of `samples`, with the spacings of `base` samples
     /// over the surface and each sample's index its rank. Every buffer must hold at
-    /// least `range.end` entries.
+    /// least `range.end` entries. The parameters go through one uniform buffer written
+    /// with `queue`: submit `encoder` before the next call.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn expand_ranked(
         &self,
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         sites: &wgpu::Buffer,
         ranks: &wgpu::Buffer,
@@ -371,12 +380,8 @@ impl SiteExpander {
             first: range.start,
             ..self.offsets
         };
-        // A parameter buffer per pass: several passes may be recorded before a submit.
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("strata expand ranked params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        queue.write_buffer(&self.ranked_params, 0, bytemuck::bytes_of(&params));
+        let params = &self.ranked_params;
         fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
             wgpu::BindGroupEntry {
                 binding,
@@ -387,7 +392,7 @@ impl SiteExpander {
             label: Some("strata expand ranked"),
             layout: &self.ranked_layout,
             entries: &[
-                entry(0, &params),
+                entry(0, params),
                 entry(1, sites),
                 entry(2, &self.mesh),
                 entry(3, samples),

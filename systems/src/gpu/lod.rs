@@ -159,6 +159,7 @@ impl GpuLodPool {
         scoped(device, "expanding the progressive pool", || {
             expander.expand_ranked(
                 device,
+                queue,
                 &mut encoder,
                 &self.sites,
                 &self.ranks,
@@ -185,6 +186,7 @@ impl GpuLodPool {
             let mut encoder = device.create_command_encoder(&Default::default());
             expander.expand_ranked(
                 device,
+                queue,
                 &mut encoder,
                 &self.sites,
                 &self.ranks,
