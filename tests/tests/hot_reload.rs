@@ -378,3 +378,42 @@ fn strata_watch_writes_the_samples_file() {
         .collect();
     assert_eq!(names.len(), 2, "{names:?}");
 }
+
+/// Issue 22: `strata watch` whose output folder is missing reports the failed write,
+/// keeps running, and writes after the next change (it exited with status 1).
+#[test]
+fn strata_watch_survives_a_missing_output_folder() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = dir.path().join("scene.ron");
+    save_in_place(&scene, &sphere_scene(1000));
+    let folder = dir.path().join("out");
+    let out = folder.join("samples.ply");
+    let argv: Vec<String> = [
+        "strata",
+        "watch",
+        scene.to_str().expect("utf-8 path"),
+        "--out",
+        out.to_str().expect("utf-8 path"),
+        "--updates",
+        "2",
+    ]
+    .map(str::to_owned)
+    .into();
+    // The first update's write fails: the folder does not exist yet.
+    let watch = std::thread::spawn(move || {
+        let cli = <strata_systems::cli::Cli as clap::Parser>::try_parse_from(argv)?;
+        strata_systems::cli::run(cli)
+    });
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(!watch.is_finished(), "watch stopped after a failed write");
+    std::fs::create_dir(&folder).expect("create the output folder");
+    save_in_place(&scene, &sphere_scene(1300));
+    let start = Instant::now();
+    while !watch.is_finished() && start.elapsed() < LIMIT {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(watch.is_finished(), "watch did not apply the edit");
+    watch.join().expect("no panic").expect("strata watch");
+    let samples = strata_engine::io::read_samples_ply(&out).expect("samples file");
+    assert_eq!(samples.len(), 1300);
+}

@@ -36,6 +36,7 @@ pub(super) fn run(args: &WatchArgs) -> anyhow::Result<()> {
         .with_context(|| format!("watching {}", args.config.display()))?;
     eprintln!("watching {} (Ctrl-C to stop)", args.config.display());
     let mut done = 0usize;
+    let mut pending = false;
     loop {
         engine.clear_stats();
         let generation = engine.sample_generation();
@@ -60,19 +61,29 @@ pub(super) fn run(args: &WatchArgs) -> anyhow::Result<()> {
             }
             writeln!(out, "update: {:.2} ms", took.as_secs_f64() * 1e3)?;
         }
-        if engine.sample_generation() != generation
-            && let Some(path) = &args.out
-        {
-            let t = Instant::now();
-            strata_engine::io::write_samples_ply(path, engine.samples())
-                .with_context(|| format!("writing {}", path.display()))?;
-            writeln!(
-                out,
-                "wrote {} samples to {} ({:.2} ms)",
-                engine.samples().len(),
-                path.display(),
-                t.elapsed().as_secs_f64() * 1e3
-            )?;
+        // A failed write (its folder gone, a full disk) is reported and retried after
+        // the next change, whether or not that change moves the samples.
+        if engine.sample_generation() != generation || pending {
+            pending = false;
+            if let Some(path) = &args.out {
+                let t = Instant::now();
+                match strata_engine::io::write_samples_ply(path, engine.samples()) {
+                    Ok(()) => writeln!(
+                        out,
+                        "wrote {} samples to {} ({:.2} ms)",
+                        engine.samples().len(),
+                        path.display(),
+                        t.elapsed().as_secs_f64() * 1e3
+                    )?,
+                    Err(e) => {
+                        pending = true;
+                        eprintln!(
+                            "error: {} (the samples are kept; writing again after the next change)",
+                            super::one_line(&anyhow::Error::new(e))
+                        );
+                    }
+                }
+            }
         }
         out.flush()?;
         drop(out);
