@@ -16,6 +16,8 @@
 //! together are the engine's [`SurfaceOptions`], every field of it, mapped in one place:
 //! [`SceneConfig::surface_options`].
 
+mod messages;
+
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -263,7 +265,7 @@ impl SceneConfig {
             path: path.to_path_buf(),
             line: e.span.start.line,
             column: e.span.start.col,
-            message: e.code.to_string(),
+            message: messages::parse_message(text, &e, |t| options.from_str::<Self>(t).err()),
         })?;
         scene
             .validate()
@@ -518,5 +520,38 @@ mod tests {
         assert!(e.to_string().starts_with("cut.ron:1:"), "{e}");
         let e = SceneConfig::load(Path::new("/nonexistent/scene.ron")).expect_err("missing");
         assert!(e.to_string().contains("/nonexistent/scene.ron"), "{e}");
+    }
+
+    /// Issue 22: ron's "Expected comma" and raw-identifier hints become what the
+    /// option expects and what was found.
+    #[test]
+    fn syntax_errors_say_what_was_expected_and_found() {
+        let cases = [
+            (
+                "(mesh: Shape(Plane()), sampling: (count: 2000.5, seed: 1))",
+                "x.ron:1:46: `count`: expected an integer, found `2000.5`",
+            ),
+            (
+                "(mesh: Shape(Plane()), sampling: (count: -4))",
+                "`count`: expected a non-negative integer, found `-4`",
+            ),
+            (
+                "(mesh: Shape(Plane()), sampling: (count: many))",
+                "`count`: expected an integer, found `many`",
+            ),
+            (
+                "(mesh: Shape(Plane()),\n field: 3.0)",
+                "x.ron:2:9: `field`: expected one of `Constant`, `Planar`, `Warp`, `File`, \
+                 `Curvature`, `Designed` (a `FieldSpec`), found `3.0`",
+            ),
+            (
+                "(mesh: Shape(Plane(size: x)))",
+                "`size`: expected a number, found `x`",
+            ),
+        ];
+        for (text, expected) in cases {
+            let e = SceneConfig::from_ron(text, Path::new("x.ron")).expect_err(text);
+            assert!(e.to_string().contains(expected), "{text}: {e}");
+        }
     }
 }
