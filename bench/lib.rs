@@ -1,5 +1,7 @@
 //! Shared helpers for strata benchmarks.
 
+pub mod soak;
+
 use std::path::{Path, PathBuf};
 
 use strata_systems::config::SceneConfig;

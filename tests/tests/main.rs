@@ -12,4 +12,5 @@ mod lod;
 mod param;
 mod pipeline;
 mod segment;
+mod soak;
 mod surface;
