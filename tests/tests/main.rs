@@ -4,6 +4,7 @@ mod chains;
 mod discrepancy;
 mod ecs;
 mod field;
+mod fuzz;
 mod gpu;
 mod hot_reload;
 mod io;
