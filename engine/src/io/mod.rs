@@ -19,7 +19,8 @@
 //!   through [`write_atomically`] (a temporary file beside the target, synced, then
 //!   renamed over it), so a reader never sees half a file; the `_to` variants write to
 //!   any [`Write`](std::io::Write). Applications write their own files (reports,
-//!   images) with [`write_atomically`] too.
+//!   images) with [`write_atomically`] too. [`write_samples_in_blocks`] writes any
+//!   number of samples in the memory of one block.
 //! - The shared mesh corpus ([`shared_mesh_dir`]): `$STRATA_MESH_DIR`, else
 //!   `<workspace>/../shared/meshes`, for tests and benchmarks.
 //!
@@ -52,8 +53,8 @@ pub use samples::{SAMPLE_COLUMNS, parse_samples_ply, read_samples_ply};
 pub(crate) use shared::shared_mesh;
 pub use shared::{MESH_DIR_VAR, default_shared_mesh_dir, shared_mesh_dir, shared_mesh_location};
 pub use write::{
-    write_mesh_ply, write_mesh_ply_to, write_samples_csv, write_samples_csv_to, write_samples_ply,
-    write_samples_ply_to,
+    SampleFormat, write_mesh_ply, write_mesh_ply_to, write_samples_csv, write_samples_csv_to,
+    write_samples_in_blocks, write_samples_ply, write_samples_ply_to,
 };
 
 /// Loads a triangle mesh from an `.obj` or `.ply` file, chosen by the extension (any

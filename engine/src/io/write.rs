@@ -120,9 +120,15 @@ pub fn write_samples_ply(path: &Path, samples: &[Sample]) -> Result<(), MeshErro
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn write_samples_ply_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Result<()> {
+    write_ply_header(&mut w, samples.len() as u64)?;
+    write_ply_rows(&mut w, samples)?;
+    w.flush()
+}
+
+/// The header of a samples PLY of `count` samples.
+fn write_ply_header<W: Write>(w: &mut W, count: u64) -> io::Result<()> {
     let mut header = format!(
-        "ply\nformat binary_little_endian 1.0\ncomment written by strata: samples\nelement vertex {}\n",
-        samples.len()
+        "ply\nformat binary_little_endian 1.0\ncomment written by strata: samples\nelement vertex {count}\n"
     );
     for name in SAMPLE_COLUMNS {
         let ty = if matches!(name, "face" | "segment" | "index") {
@@ -133,7 +139,11 @@ pub fn write_samples_ply_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Resul
         header.push_str(&format!("property {ty} {name}\n"));
     }
     header.push_str("end_header\n");
-    w.write_all(header.as_bytes())?;
+    w.write_all(header.as_bytes())
+}
+
+/// The 64-byte records of `samples`.
+fn write_ply_rows<W: Write>(w: &mut W, samples: &[Sample]) -> io::Result<()> {
     for s in samples {
         let mut record = [0u8; 64];
         for (chunk, word) in record.chunks_exact_mut(4).zip(sample_row(s)) {
@@ -141,7 +151,7 @@ pub fn write_samples_ply_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Resul
         }
         w.write_all(&record)?;
     }
-    w.flush()
+    Ok(())
 }
 
 /// Writes samples as CSV, atomically (see [`write_samples_csv_to`]).
@@ -158,6 +168,12 @@ pub fn write_samples_csv(path: &Path, samples: &[Sample]) -> Result<(), MeshErro
 /// then one row per sample; floats in Rust's shortest round-trip notation.
 pub fn write_samples_csv_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Result<()> {
     writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?;
+    write_csv_rows(&mut w, samples)?;
+    w.flush()
+}
+
+/// The CSV rows of `samples`.
+fn write_csv_rows<W: Write>(w: &mut W, samples: &[Sample]) -> io::Result<()> {
     for s in samples {
         let [x, y, z] = s.position;
         let [nx, ny, nz] = s.normal;
@@ -170,7 +186,79 @@ pub fn write_samples_csv_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Resul
             s.face, s.segment, s.index
         )?;
     }
-    w.flush()
+    Ok(())
+}
+
+/// The sample file formats: what [`write_samples_ply`] and [`write_samples_csv`] write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleFormat {
+    /// Binary little-endian PLY, 64 bytes per sample.
+    Ply,
+    /// CSV with a header row.
+    Csv,
+}
+
+/// Writes `count` samples to `path` atomically, drawing them a block at a time:
+/// `fill(start, block)` fills `block` with samples `start..start + block.len()`. The
+/// file is the same, byte for byte, as [`write_samples_ply`] or [`write_samples_csv`]
+/// of all of them, while memory holds one block of at most `block` samples whatever
+/// the count. `fill` may also report progress; an error it returns (or one writing)
+/// leaves `path` as it was.
+///
+/// ```
+/// use strata_engine::io::{self, SampleFormat};
+/// use strata_engine::sample::Sample;
+/// let all: Vec<Sample> = (0..10).map(|i| Sample { index: i, ..Default::default() }).collect();
+/// let dir = tempfile::tempdir()?;
+/// let (a, b) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
+/// io::write_samples_ply(&a, &all)?;
+/// io::write_samples_in_blocks(&b, SampleFormat::Ply, 10, 3, |start, block| {
+///     block.copy_from_slice(&all[start as usize..start as usize + block.len()]);
+///     Ok(())
+/// })?;
+/// assert_eq!(std::fs::read(&a)?, std::fs::read(&b)?);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// Errors: [`MeshError::Io`] naming `path`, for a write error or one from `fill`; a
+/// `block` of 0 is taken as 1.
+pub fn write_samples_in_blocks(
+    path: &Path,
+    format: SampleFormat,
+    count: u64,
+    block: usize,
+    mut fill: impl FnMut(u64, &mut [Sample]) -> io::Result<()>,
+) -> Result<(), MeshError> {
+    let block = block
+        .max(1)
+        .min(usize::try_from(count).unwrap_or(usize::MAX));
+    write_atomically(path, |w| {
+        let mut buffer = Vec::new();
+        buffer
+            .try_reserve_exact(block)
+            .map_err(|e| io::Error::new(io::ErrorKind::OutOfMemory, e))?;
+        buffer.resize(block, Sample::default());
+        match format {
+            SampleFormat::Ply => write_ply_header(w, count)?,
+            SampleFormat::Csv => writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?,
+        }
+        let mut start = 0u64;
+        while start < count {
+            let len = block.min(usize::try_from(count - start).unwrap_or(usize::MAX));
+            let samples = &mut buffer[..len];
+            fill(start, samples)?;
+            match format {
+                SampleFormat::Ply => write_ply_rows(w, samples)?,
+                SampleFormat::Csv => write_csv_rows(w, samples)?,
+            }
+            start += len as u64;
+        }
+        w.flush()
+    })
+    .map_err(|source| MeshError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// The 16 values of a sample row as 32-bit words (float bits or uint), in

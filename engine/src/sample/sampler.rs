@@ -314,6 +314,43 @@ impl Sampler {
         self.fill(seed, out, linked);
     }
 
+    /// Fills `out` with the samples `start..start + out.len()` of an `n`-sample
+    /// stratified request for `seed`: the same bits as those entries of
+    /// [`sample_into`](Self::sample_into) on `n` outputs, so that a large request can be
+    /// drawn (and written) a block at a time in bounded memory. Sample `k` depends only
+    /// on `(n, seed, k)`, never on the blocks or the thread count.
+    ///
+    /// ```
+    /// use std::sync::Arc;
+    /// use strata_engine::{field::FieldSpec, mesh::shapes, surface};
+    /// let spec = FieldSpec::Constant { direction: [1.0, 0.0, 0.0], anisotropy: 2.0, density: 1.0 };
+    /// let torus = Arc::new(shapes::torus(1.0, 0.4, 12)?);
+    /// let field = Arc::new(spec.build(&torus)?);
+    /// let pre = surface::Preprocessed::build(torus, field, &Default::default())?;
+    /// let whole = pre.sampler.sample(1000, 7);
+    /// let mut block = vec![Default::default(); 300];
+    /// pre.sampler.sample_range_into(7, 1000, 600, &mut block);
+    /// assert_eq!(block[..], whole[600..900]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// Panics if `start + out.len()` exceeds `n`.
+    pub fn sample_range_into(&self, seed: u64, n: u64, start: u64, out: &mut [Sample]) {
+        let end = start.checked_add(out.len() as u64);
+        assert!(
+            end.is_some_and(|end| end <= n),
+            "samples {start}..+{} of a {n}-sample request",
+            out.len()
+        );
+        if out.is_empty() {
+            return;
+        }
+        let req = self.request(seed, n, self.uses_chains_for(n));
+        out.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(chunk, dst)| self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst));
+    }
+
     /// Fills `out` with the records of an `out.len()`-sample request.
     fn fill<T: Record>(&self, seed: u64, out: &mut [T], linked: bool) {
         let n = out.len() as u64;
@@ -484,7 +521,12 @@ impl Sampler {
 
     /// Whether a request for `n` samples links segments into chains (t / N >= 1/3).
     pub fn uses_chains(&self, n: usize) -> bool {
-        3 * self.segments.len() >= n && self.chains.len() < self.segments.len()
+        self.uses_chains_for(n as u64)
+    }
+
+    /// [`uses_chains`](Self::uses_chains) for a count of any size.
+    fn uses_chains_for(&self, n: u64) -> bool {
+        3 * self.segments.len() as u64 >= n && self.chains.len() < self.segments.len()
     }
 
     /// The chains of segment indices used when segments are many relative to samples.
@@ -692,6 +734,36 @@ mod tests {
         let (mesh, field) = crate::surface::tests::torus_case();
         crate::surface::Preprocessed::build(mesh, field, &crate::surface::SurfaceOptions::default())
             .expect("preprocessed")
+    }
+
+    /// Issue 22: a request drawn in blocks of any size (here not multiples of the
+    /// parallel chunk, and crossing segment and chain boundaries) is the whole request,
+    /// bit for bit, with chains (few samples) and without.
+    #[test]
+    fn blocks_of_a_request_are_the_whole_request() {
+        let pre = torus();
+        let sampler = &pre.sampler;
+        for n in [5u64, 5000, 20011] {
+            let whole = sampler.sample(n as usize, 11);
+            for block in [1usize, 7, 4095, 4097, 9000] {
+                let mut out = vec![super::Sample::default(); block];
+                let mut start = 0u64;
+                while start < n {
+                    let len = block.min((n - start) as usize);
+                    sampler.sample_range_into(11, n, start, &mut out[..len]);
+                    let s = start as usize;
+                    assert!(
+                        out[..len] == whole[s..s + len],
+                        "n {n}, block {block}, start {start}"
+                    );
+                    start += len as u64;
+                }
+            }
+        }
+        let past = std::panic::catch_unwind(|| {
+            sampler.sample_range_into(11, 10, 5, &mut [super::Sample::default(); 6]);
+        });
+        assert!(past.is_err(), "a range past the request is refused");
     }
 
     /// Sites are the samples' face, segment and barycentric coordinates, bit for bit,

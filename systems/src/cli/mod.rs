@@ -16,6 +16,7 @@ mod view;
 mod watch;
 
 use std::path::Path;
+use strata_engine::io::SampleFormat;
 
 use anyhow::bail;
 use clap::{Parser, Subcommand};
@@ -94,25 +95,16 @@ fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     strata_engine::io::write_atomically(path, |w| std::io::Write::write_all(w, bytes))
 }
 
-/// The format of a samples file, chosen by its extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum OutputKind {
-    /// Binary little-endian PLY.
-    Ply,
-    /// CSV with a header row.
-    Csv,
-}
-
-/// The format `path` asks for: `.ply` or `.csv` (any case).
-fn output_kind(path: &Path) -> anyhow::Result<OutputKind> {
+/// The samples format `path` asks for: `.ply` or `.csv` (any case).
+fn output_kind(path: &Path) -> anyhow::Result<SampleFormat> {
     match path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("ply") => Ok(OutputKind::Ply),
-        Some("csv") => Ok(OutputKind::Csv),
+        Some("ply") => Ok(SampleFormat::Ply),
+        Some("csv") => Ok(SampleFormat::Csv),
         _ => bail!("{}: output must end in .ply or .csv", path.display()),
     }
 }
@@ -142,25 +134,26 @@ fn refuse_inputs_as_outputs(
     Ok(())
 }
 
-/// The memory this machine can still give, in bytes (`MemAvailable` of
-/// `/proc/meminfo`); `None` where it cannot be read (another system).
-fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    kib.checked_mul(1024)
+/// The space the file system of `path`'s folder can still give to this user, in
+/// bytes; `None` where it cannot be read.
+fn available_space(path: &Path) -> Option<u64> {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let stat = rustix::fs::statvfs(folder).ok()?;
+    stat.f_bavail.checked_mul(stat.f_frsize)
 }
 
-/// Refuses a request of `bytes` (for `what`) that exceeds `available` memory, before
-/// any work: the error says how much it needs and names `--ignore-memory-check`.
-fn check_memory(what: &str, bytes: Option<u64>, available: Option<u64>) -> anyhow::Result<()> {
+/// Refuses an output of at least `bytes` (for `what`) that exceeds the `available`
+/// space of its file system, before any work: the error says how much it needs and
+/// names `--ignore-space-check`.
+fn check_space(what: &str, bytes: Option<u64>, available: Option<u64>) -> anyhow::Result<()> {
     let gb = |b: u64| b as f64 / 1e9;
     match (bytes, available) {
-        (None, _) => bail!(
-            "{what}: more than 2^64 bytes of memory needed; ask for fewer (--ignore-memory-check does not help)"
-        ),
+        (None, _) => bail!("{what}: more than 2^64 bytes needed; ask for fewer"),
         (Some(b), Some(a)) if b > a => bail!(
-            "{what}: {:.1} GB of memory needed and {:.1} GB available; ask for fewer, or pass --ignore-memory-check to try anyway",
+            "{what}: at least {:.1} GB needed and {:.1} GB free there; ask for fewer, free some space, or pass --ignore-space-check to try anyway",
             gb(b),
             gb(a)
         ),
@@ -173,31 +166,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn memory_checks_name_the_need_and_the_override() {
-        assert!(check_memory("x", Some(10), Some(11)).is_ok());
-        assert!(check_memory("x", Some(10), None).is_ok());
-        let e = check_memory(
-            "1000000000 samples",
-            Some(64_000_000_000),
-            Some(8_000_000_000),
-        )
-        .expect_err("too much");
+    fn outputs_larger_than_the_free_space_are_refused() {
+        assert!(check_space("x", Some(10), Some(11)).is_ok());
+        assert!(check_space("x", Some(10), None).is_ok());
+        let e = check_space("x.ply: 3 samples", Some(5_000_000_000), Some(2_000_000_000))
+            .expect_err("too large");
         assert_eq!(
             e.to_string(),
-            "1000000000 samples: 64.0 GB of memory needed and 8.0 GB available; ask for fewer, or pass --ignore-memory-check to try anyway"
+            "x.ply: 3 samples: at least 5.0 GB needed and 2.0 GB free there; ask for fewer, free some space, or pass --ignore-space-check to try anyway"
         );
-        let e = check_memory("n samples", None, Some(1)).expect_err("overflow");
+        let e = check_space("n samples", None, Some(1)).expect_err("overflow");
         assert!(e.to_string().contains("more than 2^64 bytes"), "{e}");
-        assert!(available_memory().is_none_or(|a| a > 0));
+        let here = available_space(Path::new("out.ply"));
+        assert!(here.is_some_and(|a| a > 0), "{here:?}");
+        assert_eq!(
+            available_space(Path::new("/nonexistent/folder/out.ply")),
+            None
+        );
     }
 
     #[test]
     fn output_kind_follows_the_extension_in_any_case() {
         assert_eq!(
             output_kind(Path::new("a/s.ply")).ok(),
-            Some(OutputKind::Ply)
+            Some(SampleFormat::Ply)
         );
-        assert_eq!(output_kind(Path::new("S.CSV")).ok(), Some(OutputKind::Csv));
+        assert_eq!(
+            output_kind(Path::new("S.CSV")).ok(),
+            Some(SampleFormat::Csv)
+        );
         let e = output_kind(Path::new("s.txt")).expect_err("not a samples format");
         assert_eq!(e.to_string(), "s.txt: output must end in .ply or .csv");
         assert!(output_kind(Path::new("ply")).is_err());

@@ -2,14 +2,22 @@
 //! optionally write the samples (PLY or CSV).
 
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::Context;
-use strata_engine::sample::Sample;
+use strata_engine::io::SampleFormat;
+use strata_engine::sample::{Sample, Sampler};
 
-use super::{OutputKind, output_kind};
+use super::output_kind;
 use crate::config::SceneConfig;
 use crate::scene::Scene;
+
+/// Samples drawn and written at a time (4 MiB): any count runs in this much memory
+/// beyond the preprocessed scene.
+const BLOCK: usize = 1 << 16;
+
+/// The most samples one request draws: sample indices are 32-bit.
+const MAX_COUNT: u64 = 1 << 32;
 
 /// Arguments of `strata sample`.
 #[derive(Debug, clap::Args)]
@@ -33,10 +41,12 @@ pub struct SampleArgs {
     /// a count are among those of any larger count).
     #[arg(long, value_enum, default_value_t = Order::Stratified)]
     pub order: Order,
-    /// Draw even when the samples (64 bytes each) need more memory than the machine
-    /// has available (by default such a request is refused before preprocessing).
+    /// Write even when the output (64 bytes per sample in PLY, at least 32 in CSV)
+    /// needs more space than its file system has free (by default such a request is
+    /// refused before preprocessing). Samples are drawn and written a block of 65,536
+    /// at a time, so memory never limits the count.
     #[arg(long)]
-    pub ignore_memory_check: bool,
+    pub ignore_space_check: bool,
 }
 
 /// How samples are drawn (`--order`).
@@ -64,37 +74,57 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
     };
     // Every check of the request before the preprocessing.
     let count = args.count.unwrap_or(config.sampling.count);
-    if args.order == Order::Progressive && count > 1 << 32 {
+    if count > MAX_COUNT {
         anyhow::bail!(
-            "{}: --order progressive draws at most 2^32 = 4294967296 samples, asked for {count}",
+            "{}: at most 2^32 = {MAX_COUNT} samples per request (sample indices are 32-bit), asked for {count}",
             args.config.display()
         );
     }
-    let bytes = count.checked_mul(std::mem::size_of::<Sample>() as u64);
-    let available = if args.ignore_memory_check && bytes.is_some() {
-        None
-    } else {
-        super::available_memory()
-    };
-    super::check_memory(&format!("{count} samples"), bytes, available)
-        .with_context(|| args.config.display().to_string())?;
-    let count = usize::try_from(count).context("sample count does not fit in memory")?;
+    if let (Some(path), Some(format)) = (&args.out, out_kind)
+        && !args.ignore_space_check
+    {
+        let per_sample = match format {
+            SampleFormat::Ply => 64,
+            SampleFormat::Csv => 32,
+        };
+        super::check_space(
+            &format!("{}: {count} samples", path.display()),
+            count.checked_mul(per_sample),
+            super::available_space(path),
+        )?;
+    }
     let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
     for w in scene.mesh.warnings() {
         eprintln!("warning: {}: mesh: {w}", args.config.display());
     }
     let seed = args.seed.unwrap_or(config.sampling.seed);
-    let mut samples = Vec::new();
-    samples
-        .try_reserve_exact(count)
-        .with_context(|| format!("{}: allocating {count} samples", args.config.display()))?;
-    samples.resize(count, Sample::default());
-    let t = Instant::now();
-    match args.order {
-        Order::Stratified => scene.sampler.sample_into(seed, &mut samples),
-        Order::Progressive => scene.sampler.progressive_into(seed, 0, &mut samples),
+    let mut draw = Draw::new(&scene.sampler, args.order, seed, count);
+    match (&args.out, out_kind) {
+        (Some(path), Some(format)) => {
+            strata_engine::io::write_samples_in_blocks(
+                path,
+                format,
+                count,
+                BLOCK,
+                |start, block| {
+                    draw.fill(start, block);
+                    Ok(())
+                },
+            )
+            .with_context(|| format!("writing {}", path.display()))?;
+        }
+        _ => {
+            let mut block = vec![Sample::default(); BLOCK.min(count as usize)];
+            let mut start = 0;
+            while start < count {
+                let len = block.len().min((count - start) as usize);
+                draw.fill(start, &mut block[..len]);
+                start += len as u64;
+            }
+        }
     }
-    let sample_time = t.elapsed();
+    draw.bar.finish_and_clear();
+    let sample_time = draw.took;
     let preprocess: f64 = scene.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
     let cells: usize = scene
         .sampler
@@ -124,13 +154,55 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
             s.singularities, s.segments_before_split, s.segments, s.splits, s.isotropic_segments
         );
     }
-    if let (Some(path), Some(kind)) = (&args.out, out_kind) {
-        match kind {
-            OutputKind::Ply => strata_engine::io::write_samples_ply(path, &samples),
-            OutputKind::Csv => strata_engine::io::write_samples_csv(path, &samples),
-        }
-        .with_context(|| format!("writing {}", path.display()))?;
+    if let Some(path) = &args.out {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// Draws one request a block at a time, timing the drawing alone and showing progress
+/// on a terminal for large counts.
+struct Draw<'a> {
+    sampler: &'a Sampler,
+    order: Order,
+    seed: u64,
+    count: u64,
+    /// Time spent drawing (not writing).
+    took: Duration,
+    /// Progress over the samples (hidden for small counts and off a terminal).
+    bar: indicatif::ProgressBar,
+}
+
+impl<'a> Draw<'a> {
+    fn new(sampler: &'a Sampler, order: Order, seed: u64, count: u64) -> Self {
+        let bar = if count >= 10 * BLOCK as u64 {
+            indicatif::ProgressBar::new(count).with_message("sampling")
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        Self {
+            sampler,
+            order,
+            seed,
+            count,
+            took: Duration::ZERO,
+            bar,
+        }
+    }
+
+    /// Fills `block` with the samples `start..start + block.len()` of the request.
+    fn fill(&mut self, start: u64, block: &mut [Sample]) {
+        let t = Instant::now();
+        match self.order {
+            Order::Stratified => self
+                .sampler
+                .sample_range_into(self.seed, self.count, start, block),
+            // Ranks fit in u32: the count is at most 2^32 (checked before).
+            Order::Progressive => self
+                .sampler
+                .progressive_into(self.seed, start as u32, block),
+        }
+        self.took += t.elapsed();
+        self.bar.inc(block.len() as u64);
+    }
 }
