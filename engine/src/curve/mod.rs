@@ -107,7 +107,24 @@ impl Default for CurveOptions {
 }
 
 impl CurveOptions {
-    /// Checks every field's range.
+    /// Smallest `max_cell_share` accepted: 2^-24, about 34 million cells and 0.8 GB of
+    /// cell data for a surface. Smaller shares grow memory without bound (1e-9 would
+    /// need about 50 GB), so they are refused up front instead of failing mid-build.
+    pub const MIN_CELL_SHARE: f64 = 1.0 / (1u64 << 24) as f64;
+
+    /// Cells a surface gets for `max_cell_share`, for budget checks: about twice
+    /// `1 / max_cell_share` once boundary refinement and per-segment rounding are
+    /// counted (measured: 2.0x on the plane, 2.2x on the fandisk).
+    pub fn predicted_cells(&self) -> f64 {
+        2.0 / self.max_cell_share
+    }
+
+    /// Bytes of cell data per cell (key, cumulative measure, candidate lists; 24-25
+    /// measured on the plane and the fandisk), for budget checks.
+    pub const CELL_BYTES: f64 = 25.0;
+
+    /// Checks every field's range, and that the cell budget is bounded
+    /// ([`MIN_CELL_SHARE`](Self::MIN_CELL_SHARE)).
     pub fn validate(&self) -> Result<(), CurveError> {
         let bad = |option: &'static str, value: f64, expected: &'static str| {
             Err(CurveError::InvalidOption {
@@ -118,6 +135,14 @@ impl CurveOptions {
         };
         if !(self.max_cell_share > 0.0 && self.max_cell_share <= 1.0) {
             return bad("max_cell_share", self.max_cell_share, "in (0, 1]");
+        }
+        if self.max_cell_share < Self::MIN_CELL_SHARE {
+            let cells = self.predicted_cells();
+            return Err(CurveError::CellBudget {
+                share: self.max_cell_share,
+                cells,
+                bytes: cells * Self::CELL_BYTES,
+            });
         }
         if !(1..=30).contains(&self.max_level) {
             return bad("max_level", self.max_level as f64, "in 1..=30");
@@ -149,6 +174,20 @@ pub enum CurveError {
         value: f64,
         /// Valid range.
         expected: &'static str,
+    },
+    /// `max_cell_share` is so small that the cells would not fit in memory.
+    #[error(
+        "curve option `max_cell_share` = {share:e} asks for about {cells:.1e} cells ({:.1} GB); \
+         the smallest allowed is 2^-24 = 5.96e-8 (about 34 million cells, 0.8 GB)",
+        bytes / 1e9
+    )]
+    CellBudget {
+        /// Value given.
+        share: f64,
+        /// Cells predicted for it.
+        cells: f64,
+        /// Bytes predicted for them.
+        bytes: f64,
     },
     /// The domain has no triangles or zero total measure.
     #[error("the parameter domain has zero measure (no triangles, or zero density everywhere)")]

@@ -290,6 +290,27 @@ fn bad_domains_are_rejected() {
     ));
 }
 
+#[test]
+fn cell_budgets_beyond_memory_are_refused_naming_the_option() {
+    let at = |max_cell_share| CurveOptions {
+        max_cell_share,
+        ..Default::default()
+    };
+    assert!(at(CurveOptions::MIN_CELL_SHARE).validate().is_ok());
+    let e = at(1e-9).validate().expect_err("1e-9 needs about 50 GB");
+    assert!(
+        matches!(e, CurveError::CellBudget { cells, bytes, .. } if (cells - 2e9).abs() < 1.0 && (bytes - 5e10).abs() < 100.0),
+        "{e:?}"
+    );
+    assert_eq!(
+        e.to_string(),
+        "curve option `max_cell_share` = 1e-9 asks for about 2.0e9 cells (50.0 GB); \
+         the smallest allowed is 2^-24 = 5.96e-8 (about 34 million cells, 0.8 GB)"
+    );
+    // Just under the limit is refused too: the check is the budget, not a round number.
+    assert!(at(CurveOptions::MIN_CELL_SHARE * 0.99).validate().is_err());
+}
+
 /// An annulus of `k` quads (two triangles each) around (0.5, 0.5), radii 0.12 and 0.45,
 /// with density `1 + 2 u + v`: boundary leaves on both circles, several triangles each.
 fn annulus(k: usize) -> (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>) {
