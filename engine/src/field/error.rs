@@ -40,6 +40,20 @@ pub enum FieldError {
         /// Smallest eigenvalue in the plane.
         l2: f64,
     },
+    /// A tensor's eigenvalues lie outside [`EIGENVALUE_RANGE`](super::EIGENVALUE_RANGE).
+    #[error(
+        "tensor at vertex {vertex} has eigenvalues {l1:.3e} and {l2:.3e}, outside the supported \
+         range [1e-100, 1e100]; densities are relative, so scale every density of the field \
+         by one factor into it"
+    )]
+    OutOfRange {
+        /// Vertex index.
+        vertex: usize,
+        /// Largest eigenvalue in the plane.
+        l1: f64,
+        /// Smallest eigenvalue in the plane.
+        l2: f64,
+    },
     /// A field parameter is out of its valid range.
     #[error("field parameter `{parameter}` = {value} is invalid: {expected}")]
     InvalidParameter {

@@ -140,8 +140,19 @@ pub fn parse_field_file(
         let target = map.get(vertex).copied().unwrap_or(NONE);
         if target != NONE && tensors[target as usize].is_none() {
             let n = normals[target as usize];
+            let range = |l1: f64, l2: f64| {
+                if super::out_of_range(l1, l2) {
+                    return Err(bad(format!(
+                        "eigenvalues {l1:.3e} and {l2:.3e} are outside the supported range \
+                         [1e-100, 1e100]; densities are relative, so scale every density \
+                         of the file by one factor into it"
+                    )));
+                }
+                Ok(())
+            };
             let tensor = match entry {
                 Entry::Frame { l1, l2, direction } => {
+                    range(l1.max(l2), l1.min(l2))?;
                     let m1 = project_direction(direction, n);
                     let m2 = n.cross(m1);
                     outer(m1, m1) * l1 + outer(m2, m2) * l2
@@ -157,6 +168,7 @@ pub fn parse_field_file(
                             e.l1, e.l2
                         )));
                     }
+                    range(e.l1, e.l2)?;
                     restricted
                 }
             };

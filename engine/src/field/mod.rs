@@ -60,6 +60,27 @@ use crate::mesh::TriMesh;
 /// Relative tolerance for the symmetry check of input tensors.
 const SYMMETRY_TOLERANCE: f64 = 1e-9;
 
+/// Eigenvalues a field may have: [1e-100, 1e100]. Products of two eigenvalues (the
+/// squared density) and their scaling by element areas must stay normal `f64`s through
+/// preprocessing (a density of 1e300 overflowed the cells' measure, 1e-300 vanished).
+/// Only relative densities matter to the samples, so any field scales into it.
+pub const EIGENVALUE_RANGE: [f64; 2] = [1e-100, 1e100];
+
+/// Whether eigenvalues `l1 >= l2` leave [`EIGENVALUE_RANGE`].
+fn out_of_range(l1: f64, l2: f64) -> bool {
+    let [lo, hi] = EIGENVALUE_RANGE;
+    l1 > hi || l2 < lo
+}
+
+/// Checks a vertex's in-plane eigenvalues against [`EIGENVALUE_RANGE`] (`l2 > 0`
+/// already holds).
+fn check_range(vertex: usize, l1: f64, l2: f64) -> Result<(), FieldError> {
+    if out_of_range(l1, l2) {
+        return Err(FieldError::OutOfRange { vertex, l1, l2 });
+    }
+    Ok(())
+}
+
 /// Per-vertex symmetric tensors in each vertex's tangent plane, validated: finite,
 /// symmetric and positive definite in the plane.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,8 +93,9 @@ impl TensorField {
     /// (`P T P` with `P = I - n n^T`).
     ///
     /// Errors name the first offending vertex: a count that differs from the mesh's
-    /// vertex count, a non-finite entry, a non-symmetric tensor, or one that is not
-    /// positive definite in the tangent plane.
+    /// vertex count, a non-finite entry, a non-symmetric tensor, one that is not
+    /// positive definite in the tangent plane, or eigenvalues outside
+    /// [`EIGENVALUE_RANGE`].
     pub fn new(mesh: &TriMesh, tensors: Vec<DMat3>) -> Result<Self, FieldError> {
         if tensors.len() != mesh.vertex_count() {
             return Err(FieldError::CountMismatch {
@@ -108,6 +130,7 @@ impl TensorField {
                     l2: e.l2,
                 });
             }
+            check_range(vertex, e.l1, e.l2)?;
             out.push(restricted);
         }
         Ok(Self { tensors: out })
@@ -143,6 +166,7 @@ impl TensorField {
                     l2: *l2,
                 });
             }
+            check_range(vertex, l1.max(*l2), l1.min(*l2))?;
             let m1 = project_direction(*d, *n);
             let m2 = n.cross(m1);
             tensors.push(outer(m1, m1) * *l1 + outer(m2, m2) * *l2);

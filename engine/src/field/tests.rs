@@ -76,6 +76,52 @@ fn validation_names_the_vertex() {
 }
 
 #[test]
+fn eigenvalues_outside_the_supported_range_are_refused() {
+    let mesh = shapes::plane(1.0, 2).expect("plane");
+    let n = mesh.vertex_count();
+    let [lo, hi] = super::EIGENVALUE_RANGE;
+    let x = vec![DVec3::X; n];
+    // The ends of the range are accepted, by both constructors.
+    assert!(TensorField::from_frames(&mesh, &x, &vec![[hi, lo]; n]).is_ok());
+    assert!(TensorField::new(&mesh, vec![DMat3::IDENTITY * hi; n]).is_ok());
+    // Beyond them, the vertex and both eigenvalues are named (1e300 once overflowed the
+    // cells' measure, 1e-300 vanished from it).
+    let mut l = vec![[1.0, 1.0]; n];
+    l[3] = [1e300, 1.0];
+    let e = TensorField::from_frames(&mesh, &x, &l).expect_err("too large");
+    assert!(
+        matches!(e, FieldError::OutOfRange { vertex: 3, l1, l2 } if l1 == 1e300 && l2 == 1.0),
+        "{e:?}"
+    );
+    assert_eq!(
+        e.to_string(),
+        "tensor at vertex 3 has eigenvalues 1.000e300 and 1.000e0, outside the supported range \
+         [1e-100, 1e100]; densities are relative, so scale every density of the field by \
+         one factor into it"
+    );
+    let mut t = vec![DMat3::IDENTITY; n];
+    t[1] = DMat3::IDENTITY * 1e-300;
+    assert!(matches!(
+        TensorField::new(&mesh, t),
+        Err(FieldError::OutOfRange { vertex: 1, .. })
+    ));
+    for density in [1e300, 1e-300] {
+        let spec = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density,
+        };
+        assert!(
+            matches!(
+                spec.build(&mesh),
+                Err(FieldError::OutOfRange { vertex: 0, .. })
+            ),
+            "{density}"
+        );
+    }
+}
+
+#[test]
 fn constant_spec_on_sphere_is_tangent_with_right_eigenvalues() {
     let mesh = shapes::plane(2.0, 3).expect("plane");
     let spec = FieldSpec::Constant {
@@ -536,6 +582,14 @@ fn field_file_errors_name_line_and_vertex() {
         ("t 1 0 0 nan 0 1\n", "non-finite"),
         ("t 1 0 0 -1 0 1\n", "not positive definite"),
         ("t 0 0 0 0 0 1\n", "not positive definite"),
+        (
+            "1e200 1 1 0 0\n",
+            "outside the supported range [1e-100, 1e100]",
+        ),
+        (
+            "t 1e-200 0 0 1e-200 0 1e-200\n",
+            "outside the supported range",
+        ),
     ];
     for (bad, fragment) in value_cases {
         let err = parse(&body(bad), &mesh).expect_err(bad);
