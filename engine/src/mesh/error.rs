@@ -39,6 +39,30 @@ pub enum MeshError {
         /// z coordinate.
         z: f64,
     },
+    /// A vertex coordinate is beyond [`MAX_COORDINATE`](super::MAX_COORDINATE).
+    #[error(
+        "vertex {vertex} at ({x:.3e}, {y:.3e}, {z:.3e}) is beyond the supported coordinate \
+         range of +-1e50; scale the mesh down"
+    )]
+    CoordinateOutOfRange {
+        /// Vertex index (in input order).
+        vertex: usize,
+        /// x coordinate.
+        x: f64,
+        /// y coordinate.
+        y: f64,
+        /// z coordinate.
+        z: f64,
+    },
+    /// The mesh's bounding box is smaller than [`MIN_EXTENT`](super::MIN_EXTENT).
+    #[error(
+        "the mesh spans only {extent:.3e} (its bounding-box diagonal); the smallest \
+         supported is 1e-50, so scale the mesh up"
+    )]
+    TooSmall {
+        /// The bounding-box diagonal.
+        extent: f64,
+    },
     /// A polygon with fewer than three corners.
     #[error("face {face} has {corners} corners; at least 3 are needed")]
     TooFewCorners {

@@ -20,6 +20,7 @@ pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};
 pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label};
 pub use subdivide::loop_subdivide;
+pub use topology::{MAX_COORDINATE, MIN_EXTENT};
 
 use glam::DVec3;
 

@@ -95,6 +95,43 @@ fn rejects_bad_input() {
 }
 
 #[test]
+fn meshes_beyond_the_supported_scale_are_refused_with_the_limit() {
+    let tri = |k: f64, at: DVec3| {
+        TriMesh::new(
+            vec![at, at + DVec3::X * k, at + DVec3::Y * k],
+            vec![[0, 1, 2]],
+        )
+    };
+    // The ends of the range work.
+    assert!(tri(1e-50, DVec3::ZERO).is_ok());
+    assert!(tri(5e49, DVec3::splat(5e49)).is_ok());
+    // Beyond them: the vertex, its position and the limit (1e300 once failed in a
+    // Cholesky factorization, 1e-100 as an empty mesh).
+    let e = tri(1.0, DVec3::new(0.0, 0.0, 1e300)).expect_err("too far");
+    assert!(
+        matches!(e, MeshError::CoordinateOutOfRange { vertex: 0, z, .. } if z == 1e300),
+        "{e:?}"
+    );
+    assert_eq!(
+        e.to_string(),
+        "vertex 0 at (0.000e0, 0.000e0, 1.000e300) is beyond the supported coordinate \
+         range of +-1e50; scale the mesh down"
+    );
+    assert!(matches!(
+        tri(1e51, DVec3::ZERO),
+        Err(MeshError::CoordinateOutOfRange { vertex: 1, .. })
+    ));
+    let e = tri(1e-100, DVec3::ZERO).expect_err("too small");
+    assert!(matches!(e, MeshError::TooSmall { .. }), "{e:?}");
+    assert!(
+        e.to_string().contains("the smallest supported is 1e-50"),
+        "{e}"
+    );
+    // A point (no extent at all) is reported as empty, as before.
+    assert!(matches!(tri(0.0, DVec3::ONE), Err(MeshError::Empty { .. })));
+}
+
+#[test]
 fn non_manifold_edge_is_reported_and_not_crossed() {
     // Three triangles sharing edge (0, 1).
     let p = vec![

@@ -14,6 +14,43 @@ const LIST_FIRST: usize = 8;
 /// topology: below it, handing work to the thread pool costs more than it saves.
 const SIDE_BY_SIDE_FACES: usize = 1 << 17;
 
+/// Largest coordinate magnitude a mesh may have: 1e50. Preprocessing squares lengths
+/// (areas, normals, field solves) and multiplies them by densities, and beyond about
+/// 1e100 that overflows `f64` (1e100 failed as a zero fallback field, 1e200 inside a
+/// Cholesky factorization); 1e50 leaves room for densities up to 1e100.
+pub const MAX_COORDINATE: f64 = 1e50;
+
+/// Smallest bounding-box diagonal a mesh with any extent may have: 1e-50, for the same
+/// reason at the other end (at 1e-100 every face's area underflows to zero).
+pub const MIN_EXTENT: f64 = 1e-50;
+
+/// Checks [`MAX_COORDINATE`] and [`MIN_EXTENT`]. A mesh of one point (extent zero) is
+/// left to the emptiness check, which says so.
+fn check_scale(positions: &[DVec3]) -> Result<(), MeshError> {
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for (vertex, &p) in positions.iter().enumerate() {
+        if p.abs().max_element() > MAX_COORDINATE {
+            return Err(MeshError::CoordinateOutOfRange {
+                vertex,
+                x: p.x,
+                y: p.y,
+                z: p.z,
+            });
+        }
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let extent = if positions.is_empty() {
+        0.0
+    } else {
+        (hi - lo).length()
+    };
+    if extent > 0.0 && extent < MIN_EXTENT {
+        return Err(MeshError::TooSmall { extent });
+    }
+    Ok(())
+}
+
 pub(super) fn build(
     positions: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
@@ -30,6 +67,7 @@ pub(super) fn build(
             });
         }
     }
+    check_scale(&positions)?;
     for (face, t) in triangles.iter().enumerate() {
         for &index in t {
             if index as usize >= input_vertices {
