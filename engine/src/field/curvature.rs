@@ -318,11 +318,11 @@ fn voronoi_areas(mesh: &TriMesh) -> (Vec<[f64; 3]>, Vec<f64>) {
         let e = [p[2] - p[1], p[0] - p[2], p[1] - p[0]];
         let l2 = e.map(|v| v.length_squared());
         // Barycentric weights of the circumcentre; <= 0 means that corner is obtuse.
-        let bcw = [
-            l2[0] * (l2[1] + l2[2] - l2[0]),
-            l2[1] * (l2[2] + l2[0] - l2[1]),
-            l2[2] * (l2[0] + l2[1] - l2[2]),
-        ];
+        // `l2[j+1] + l2[j+2] - l2[j]` is `-2 e[j+1].e[j+2]` (law of cosines); the dot
+        // product keeps a needle's tiny terms that the sum of squares loses to
+        // cancellation (1000 x 1e-6 made a right angle obtuse and divided by zero).
+        let bcw: [f64; 3] =
+            std::array::from_fn(|j| -2.0 * l2[j] * e[(j + 1) % 3].dot(e[(j + 2) % 3]));
         let mut c = [0.0; 3];
         if let Some(obtuse) = (0..3).find(|&j| bcw[j] <= 0.0) {
             // The two acute corners get the right triangles cut off by the
@@ -336,6 +336,10 @@ fn voronoi_areas(mesh: &TriMesh) -> (Vec<[f64; 3]>, Vec<f64>) {
             for j in 0..3 {
                 c[j] = scale * (bcw[(j + 1) % 3] + bcw[(j + 2) % 3]);
             }
+        }
+        if !c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            // Round-off on a degenerate triangle: share its area equally.
+            c = [area / 3.0; 3];
         }
         for j in 0..3 {
             points[tri[j] as usize] += c[j];

@@ -493,3 +493,43 @@ fn rotation_between_takes_from_to_to() {
     }
     assert_eq!(rotation_between(DVec3::Z, -DVec3::Z), DMat3::IDENTITY);
 }
+
+/// A strip `length` long and `width` wide along x, bent into an arc of `radius` in the
+/// x-z plane (flat when `radius` is infinite), `n` quads of two triangles.
+fn needle(length: f64, width: f64, radius: f64, n: u32) -> TriMesh {
+    let mut p = Vec::new();
+    for i in 0..=n {
+        let s = length * f64::from(i) / f64::from(n);
+        let (x, z) = if radius.is_finite() {
+            let a = s / radius;
+            (radius * a.sin(), radius * (1.0 - a.cos()))
+        } else {
+            (s, 0.0)
+        };
+        p.push(DVec3::new(x, 0.0, z));
+        p.push(DVec3::new(x, width, z));
+    }
+    let t = (0..n)
+        .flat_map(|i| [[2 * i, 2 * i + 2, 2 * i + 3], [2 * i, 2 * i + 3, 2 * i + 1]])
+        .collect();
+    TriMesh::new(p, t).expect("needle")
+}
+
+#[test]
+fn needle_thin_strips_have_finite_curvature() {
+    // 1000 x 1e-6: the Voronoi areas' obtuse test once cancelled a right angle into an
+    // obtuse one and divided by zero, and the curvature field had a non-finite tensor.
+    let flat = needle(1000.0, 1e-6, f64::INFINITY, 1);
+    let k = principal_curvatures(&flat, 2);
+    assert!(k.k1.iter().chain(&k.k2).all(|&x| x == 0.0), "{k:?}");
+    assert!(FieldSpec::default_curvature().build(&flat).is_ok());
+    // Bent along its length into an arc of radius 300: |k1| near 1/300 inside.
+    let bent = needle(300.0, 1e-6, 300.0, 50);
+    let k = principal_curvatures(&bent, 2);
+    assert!(k.k1.iter().chain(&k.k2).all(|x| x.is_finite()), "{k:?}");
+    for v in 20..80 {
+        let ratio = k.k1[v].abs() * 300.0;
+        assert!((0.5..1.5).contains(&ratio), "vertex {v}: k1 = {}", k.k1[v]);
+    }
+    assert!(FieldSpec::default_curvature().build(&bent).is_ok());
+}
