@@ -52,6 +52,16 @@ fn check(mesh: TriMesh, spec: &FieldSpec, name: &str) -> Preprocessed {
         owner.iter().all(|&o| o != usize::MAX),
         "{name}: a face has no segment"
     );
+    // One count of fallback segments: the report's is the segments' flags (`strata
+    // sample` printed the one, `strata segment` the other: 72 and 111 on the fandisk).
+    assert_eq!(
+        pre.report.isotropic_segments,
+        pre.params
+            .iter()
+            .filter(|p| p.report.isotropic_fallback)
+            .count(),
+        "{name}"
+    );
     let n = 20_000;
     let samples = pre.sampler.sample(n, 7);
     assert_eq!(samples.len(), n);

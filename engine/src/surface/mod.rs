@@ -191,7 +191,11 @@ pub struct SurfaceReport {
     pub segments: usize,
     /// Segments split because their parameterization was invalid.
     pub splits: usize,
-    /// Final segments parameterized with the isotropic fallback.
+    /// Final segments parameterized with the isotropic fallback frame: those whose
+    /// field is isotropic (mean spacing ratio under `isotropy_threshold`), those no
+    /// split made valid with the field's frame, and single faces (also counted in
+    /// `single_face_segments`). Equals the segments whose parameterization report has
+    /// `isotropic_fallback` set.
     pub isotropic_segments: usize,
     /// Faces that ended as single-triangle segments (last resort).
     pub single_face_segments: usize,

@@ -53,12 +53,17 @@ pub fn parameterize_with_splitting(
     for result in results {
         let (params, r) = result?;
         report.splits += r.splits;
-        report.isotropic_segments += r.isotropic_segments;
         report.single_face_segments += r.single_face_segments;
         accepted.extend(params);
     }
     // Deterministic order: by lowest mesh face.
     accepted.sort_by_key(lowest_face);
+    // One definition, the one each segment's report carries (and `strata segment`
+    // counts): isotropic by its own field, by fallback after splitting, or one face.
+    report.isotropic_segments = accepted
+        .iter()
+        .filter(|p| p.report.isotropic_fallback)
+        .count();
     Ok((accepted, report))
 }
 
@@ -178,8 +183,6 @@ pub fn parameterize_segment_with_splitting(
                     p.report.isotropic_fallback = true;
                     if faces.len() == 1 {
                         report.single_face_segments += 1;
-                    } else {
-                        report.isotropic_segments += 1;
                     }
                     accepted.push(p);
                 }
