@@ -331,6 +331,8 @@ impl SceneConfig {
 
     /// Checks value ranges that the types cannot express.
     pub fn validate(&self) -> Result<(), String> {
+        crate::budget::check_count(self.sampling.count)
+            .map_err(|e| format!("sampling option `count`: {e}"))?;
         self.field.validate().map_err(|e| e.to_string())?;
         // The parts one by one first, for messages that name the option alone.
         self.curve.validate().map_err(|e| e.to_string())?;
@@ -490,6 +492,13 @@ mod tests {
         let e = SceneConfig::from_ron(text, Path::new("bad.ron")).expect_err("negative count");
         let msg = e.to_string();
         assert!(msg.starts_with("bad.ron:3:"), "{msg}");
+        // More samples than a request can index: refused at load, at the option.
+        let text = "(\n  mesh: Shape(Plane(size: 1.0)),\n  sampling: (count: 4294967297),\n)";
+        let e = SceneConfig::from_ron(text, Path::new("big.ron")).expect_err("2^32 + 1");
+        assert_eq!(
+            e.to_string(),
+            "big.ron:3:14: sampling option `count`: at most 2^32 = 4294967296 samples per request (sample indices are 32-bit), asked for 4294967297"
+        );
         let e = SceneConfig::from_ron("(mesh: Shape(Plane()), colour: 3)", Path::new("typo.ron"))
             .expect_err("unknown field");
         assert!(

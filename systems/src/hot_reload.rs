@@ -309,6 +309,14 @@ fn apply_scene(
     let state = world.get_resource_or_init::<SceneState>();
     let old = state.config.clone();
     let entity = state.entity.filter(|e| world.get_entity(*e).is_ok());
+    // The engine holds every sample: a count memory cannot hold is refused before
+    // anything changes (an unchanged count already has its buffer).
+    if old
+        .as_ref()
+        .is_none_or(|o| o.sampling.count != config.sampling.count)
+    {
+        crate::budget::check_memory(config.sampling.count)?;
+    }
     let mesh_file_changed = matches!(&config.mesh, MeshSource::File(p) if on_disk(p));
     let field_file_changed = config.field.files().into_iter().any(on_disk);
     let reload_mesh =

@@ -12,8 +12,10 @@
 //! - [`gpu`]: wgpu streaming, splat rendering, offscreen pictures.
 //! - [`viewer`]: the interactive window over the streaming engine.
 //! - [`report`]: report writers (SVG atlas, PNG plots, JSON reports, the analysis).
+//! - [`budget`]: whether a request's samples fit (indices, memory, disk space).
 //! - [`cli`]: the `strata` command line, one file per command.
 
+pub mod budget;
 pub mod cli;
 pub mod config;
 pub mod ecs;

@@ -117,6 +117,45 @@ fn malformed_save_keeps_the_samples_and_reports_line_and_column() {
     assert!(engine.take_errors().is_empty());
 }
 
+/// Issue 22: a save asking for more samples than memory holds, or than a request can
+/// index, is reported and changes nothing (it aborted the process).
+#[test]
+fn counts_beyond_memory_are_refused_keeping_the_samples() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scene = dir.path().join("scene.ron");
+    save_in_place(&scene, &sphere_scene(1000));
+    let mut engine = StreamingEngine::watch(&scene).expect("watch");
+    assert!(wait_until(&mut engine, count_is(1000)), "first scene");
+    let good = engine.samples().to_vec();
+    let mut cases = vec![(1u64 << 32) + 1];
+    // 2^32 samples need 275 GB: refused by memory wherever there is less.
+    let memory = strata_systems::budget::available_memory();
+    if memory.is_some_and(|m| m < 64 << 32) {
+        cases.push(1 << 32);
+    }
+    for count in cases {
+        save_by_rename(&scene, &sphere_scene(count));
+        let mut errors = Vec::new();
+        assert!(
+            wait_until(&mut engine, |e| {
+                errors.extend(e.take_errors());
+                !errors.is_empty()
+            }),
+            "{count}: reported"
+        );
+        let message = errors[0].to_string();
+        let why = if count > 1 << 32 {
+            "sample indices are 32-bit"
+        } else {
+            "of memory available"
+        };
+        assert!(message.contains(why), "{count}: {message}");
+        assert_eq!(engine.samples(), good.as_slice(), "last good samples kept");
+    }
+    save_by_rename(&scene, &sphere_scene(1200));
+    assert!(wait_until(&mut engine, count_is(1200)), "good save applied");
+}
+
 #[test]
 fn a_scene_bad_at_startup_is_picked_up_when_fixed() {
     let dir = tempfile::tempdir().expect("tempdir");

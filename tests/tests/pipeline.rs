@@ -289,6 +289,28 @@ fn counts_beyond_a_request_are_refused_before_preprocessing() {
         );
         assert!(!line.contains('\n'));
     }
+    // Commands that hold every sample in memory refuse what it cannot hold, before
+    // preprocessing; bench names its override. 2^32 samples need 275 GB.
+    if strata_systems::budget::available_memory().is_some_and(|m| m < 64 << 32) {
+        let n = "4294967296";
+        let e = strata(&["bench", config, "-n", n]).expect_err("bench");
+        let line = one_line(&e);
+        assert!(
+            line.contains("of memory available") && line.contains("--ignore-memory-check"),
+            "{line}"
+        );
+        let e = strata(&["analyze", config, "-n", n]).expect_err("analyze");
+        assert!(one_line(&e).contains("of memory available"), "{e}");
+    }
+    let e = strata(&[
+        "bench",
+        config,
+        "-n",
+        "18446744073709551615",
+        "--ignore-memory-check",
+    ])
+    .expect_err("beyond indices, whatever the override");
+    assert!(one_line(&e).contains("sample indices are 32-bit"), "{e}");
 }
 
 /// Issue 22: a scene saved with a UTF-8 byte-order mark loads like one without.

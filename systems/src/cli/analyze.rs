@@ -89,12 +89,14 @@ fn load(args: &AnalyzeArgs) -> anyhow::Result<AnalysisInput> {
         }
         Some("ron") => {
             let config = SceneConfig::load(&args.input)?;
-            let scene = Scene::build(&config).with_context(|| args.input.display().to_string())?;
             let count = args.count.unwrap_or(config.sampling.count);
-            let count = usize::try_from(count).context("sample count does not fit in memory")?;
             if count == 0 {
                 bail!("sample count must be at least 1");
             }
+            let name = args.input.display().to_string();
+            super::check_budget(&name, crate::budget::check_memory(count), None)?;
+            let count = usize::try_from(count).context("sample count does not fit in memory")?;
+            let scene = Scene::build(&config).with_context(|| name.clone())?;
             let seed = args.seed.unwrap_or(config.sampling.seed);
             Ok(AnalysisInput::from_scene(
                 scene, config, count, seed, args.runs,

@@ -29,6 +29,10 @@ pub struct BenchArgs {
     /// coordinates; no record) instead of full samples.
     #[arg(long)]
     pub sites: bool,
+    /// Run even when the samples (held in memory at once, to time one call) need more
+    /// memory than is available (by default refused before preprocessing).
+    #[arg(long)]
+    pub ignore_memory_check: bool,
 }
 
 /// The JSON written by `strata bench --json`.
@@ -64,13 +68,22 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         bail!("--repeat must be at least 1");
     }
     let config = SceneConfig::load(&args.config)?;
-    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
-    let count = usize::try_from(args.count.unwrap_or(config.sampling.count))
-        .context("sample count does not fit in memory")?;
-    let (mut samples, mut sites) = if args.sites {
-        (Vec::new(), vec![SampleSite::default(); count])
+    let count = args.count.unwrap_or(config.sampling.count);
+    let fits = if args.ignore_memory_check {
+        crate::budget::check_count(count)
     } else {
-        (vec![Sample::default(); count], Vec::new())
+        crate::budget::check_memory(count)
+    };
+    let name = args.config.display().to_string();
+    super::check_budget(&name, fits, Some("--ignore-memory-check"))?;
+    let count = usize::try_from(count).context("sample count does not fit in memory")?;
+    let scene = Scene::build(&config).with_context(|| name.clone())?;
+    // Reserved fallibly: past --ignore-memory-check an impossible size is an error,
+    // not an abort.
+    let (mut samples, mut sites) = if args.sites {
+        (Vec::new(), filled(count, SampleSite::default(), &name)?)
+    } else {
+        (filled(count, Sample::default(), &name)?, Vec::new())
     };
     let mut times = Vec::with_capacity(args.repeat);
     for run in 0..args.repeat {
@@ -126,4 +139,18 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `count` copies of `value`, or an error naming the scene where they cannot be
+/// allocated.
+fn filled<T: Clone>(count: usize, value: T, name: &str) -> anyhow::Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(count).map_err(|_| {
+        anyhow::anyhow!(
+            "{name}: {count} samples: could not allocate {:.1} GB",
+            (count as f64) * size_of::<T>() as f64 / 1e9
+        )
+    })?;
+    v.resize(count, value);
+    Ok(v)
 }

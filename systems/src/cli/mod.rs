@@ -134,30 +134,19 @@ fn refuse_inputs_as_outputs(
     Ok(())
 }
 
-/// The space the file system of `path`'s folder can still give to this user, in
-/// bytes; `None` where it cannot be read.
-fn available_space(path: &Path) -> Option<u64> {
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let stat = rustix::fs::statvfs(folder).ok()?;
-    stat.f_bavail.checked_mul(stat.f_frsize)
-}
-
-/// Refuses an output of at least `bytes` (for `what`) that exceeds the `available`
-/// space of its file system, before any work: the error says how much it needs and
-/// names `--ignore-space-check`.
-fn check_space(what: &str, bytes: Option<u64>, available: Option<u64>) -> anyhow::Result<()> {
-    let gb = |b: u64| b as f64 / 1e9;
-    match (bytes, available) {
-        (None, _) => bail!("{what}: more than 2^64 bytes needed; ask for fewer"),
-        (Some(b), Some(a)) if b > a => bail!(
-            "{what}: at least {:.1} GB needed and {:.1} GB free there; ask for fewer, free some space, or pass --ignore-space-check to try anyway",
-            gb(b),
-            gb(a)
-        ),
-        _ => Ok(()),
+/// Refuses a request that does not fit (see [`crate::budget`]), in one line that
+/// starts with `what` and ends naming the override `flag`, if there is one.
+fn check_budget(
+    what: &str,
+    fits: Result<(), crate::budget::BudgetError>,
+    flag: Option<&str>,
+) -> anyhow::Result<()> {
+    match (fits, flag) {
+        (Ok(()), _) => Ok(()),
+        (Err(e @ crate::budget::BudgetError::TooLarge { .. }), Some(flag)) => {
+            bail!("{what}: {e}; ask for fewer, or pass {flag} to try anyway")
+        }
+        (Err(e), _) => bail!("{what}: {e}"),
     }
 }
 
@@ -166,23 +155,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn outputs_larger_than_the_free_space_are_refused() {
-        assert!(check_space("x", Some(10), Some(11)).is_ok());
-        assert!(check_space("x", Some(10), None).is_ok());
-        let e = check_space("x.ply: 3 samples", Some(5_000_000_000), Some(2_000_000_000))
-            .expect_err("too large");
+    fn requests_that_do_not_fit_name_their_override() {
+        use crate::budget::{Resource, check_fits};
+        assert!(check_budget("x", check_fits(1, 64, None, Resource::Memory), None).is_ok());
+        let big = || check_fits(100_000_000, 64, Some(2_000_000_000), Resource::Space);
+        let e = check_budget("x.ply", big(), Some("--ignore-space-check")).expect_err("6.4 GB");
         assert_eq!(
             e.to_string(),
-            "x.ply: 3 samples: at least 5.0 GB needed and 2.0 GB free there; ask for fewer, free some space, or pass --ignore-space-check to try anyway"
+            "x.ply: 100000000 samples: 6.4 GB needed and 2.0 GB free there; ask for fewer, or pass --ignore-space-check to try anyway"
         );
-        let e = check_space("n samples", None, Some(1)).expect_err("overflow");
-        assert!(e.to_string().contains("more than 2^64 bytes"), "{e}");
-        let here = available_space(Path::new("out.ply"));
-        assert!(here.is_some_and(|a| a > 0), "{here:?}");
-        assert_eq!(
-            available_space(Path::new("/nonexistent/folder/out.ply")),
-            None
-        );
+        // No override for the index limit.
+        let e = check_budget(
+            "s.ron",
+            check_fits(u64::MAX, 1, None, Resource::Space),
+            Some("--f"),
+        )
+        .expect_err("2^64 - 1");
+        assert!(!e.to_string().contains("--f"), "{e}");
     }
 
     #[test]

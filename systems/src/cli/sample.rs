@@ -16,9 +16,6 @@ use crate::scene::Scene;
 /// beyond the preprocessed scene.
 const BLOCK: usize = 1 << 16;
 
-/// The most samples one request draws: sample indices are 32-bit.
-const MAX_COUNT: u64 = 1 << 32;
-
 /// Arguments of `strata sample`.
 #[derive(Debug, clap::Args)]
 pub struct SampleArgs {
@@ -74,23 +71,21 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
     };
     // Every check of the request before the preprocessing.
     let count = args.count.unwrap_or(config.sampling.count);
-    if count > MAX_COUNT {
-        anyhow::bail!(
-            "{}: at most 2^32 = {MAX_COUNT} samples per request (sample indices are 32-bit), asked for {count}",
-            args.config.display()
-        );
-    }
+    let config_name = args.config.display().to_string();
+    super::check_budget(&config_name, crate::budget::check_count(count), None)?;
+    // Drawn a block at a time, so memory does not limit the count; a file's size does.
     if let (Some(path), Some(format)) = (&args.out, out_kind)
         && !args.ignore_space_check
     {
         let per_sample = match format {
-            SampleFormat::Ply => 64,
+            SampleFormat::Ply => crate::budget::SAMPLE_BYTES,
             SampleFormat::Csv => 32,
         };
-        super::check_space(
-            &format!("{}: {count} samples", path.display()),
-            count.checked_mul(per_sample),
-            super::available_space(path),
+        let free = crate::budget::available_space(path);
+        super::check_budget(
+            &path.display().to_string(),
+            crate::budget::check_fits(count, per_sample, free, crate::budget::Resource::Space),
+            Some("--ignore-space-check"),
         )?;
     }
     let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;

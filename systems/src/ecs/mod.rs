@@ -94,6 +94,9 @@ pub enum EngineError {
     /// The sampler could not be assembled.
     #[error("sampler: {0}")]
     Sample(#[from] strata_engine::sample::SampleError),
+    /// The scene asks for more samples than memory holds.
+    #[error("sampling: {0}")]
+    Budget(#[from] crate::budget::BudgetError),
 }
 
 /// Adds the engine's resources to `world` and its systems to `schedule`, ordered by
