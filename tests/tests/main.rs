@@ -6,6 +6,7 @@ mod ecs;
 mod field;
 mod fuzz;
 mod gpu;
+mod hostile;
 mod hot_reload;
 mod io;
 mod layout;
