@@ -93,6 +93,21 @@ pub fn check_memory(count: u64) -> Result<(), BudgetError> {
     check_fits(count, SAMPLE_BYTES, available_memory(), Resource::Memory)
 }
 
+/// Whether `samples` in-memory samples in all (several requests of at most
+/// [`MAX_COUNT`] each, checked apart) fit in the memory available now.
+pub fn check_memory_total(samples: u64) -> Result<(), BudgetError> {
+    let needed = samples.saturating_mul(SAMPLE_BYTES);
+    match available_memory() {
+        Some(available) if needed > available => Err(BudgetError::TooLarge {
+            count: samples,
+            needed,
+            available,
+            resource: Resource::Memory,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Memory available to new allocations (Linux `MemAvailable`), in bytes; `None` where
 /// it cannot be read.
 pub fn available_memory() -> Option<u64> {
@@ -146,6 +161,12 @@ mod tests {
             Err(BudgetError::TooMany { .. })
         ));
         assert!(available_memory().is_some_and(|m| m > 0));
+        // Totals over several requests saturate instead of overflowing.
+        assert!(matches!(
+            check_memory_total(u64::MAX),
+            Err(BudgetError::TooLarge { needed: u64::MAX, .. })
+        ));
+        assert!(check_memory_total(1).is_ok());
         assert!(available_space(Path::new("out.ply")).is_some_and(|a| a > 0));
         assert_eq!(
             available_space(Path::new("/nonexistent/folder/out.ply")),

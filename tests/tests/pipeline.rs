@@ -300,7 +300,11 @@ fn counts_beyond_a_request_are_refused_before_preprocessing() {
             "{line}"
         );
         let e = strata(&["analyze", config, "-n", n]).expect_err("analyze");
-        assert!(one_line(&e).contains("of memory available"), "{e}");
+        let line = one_line(&e);
+        assert!(
+            line.contains("of memory available") && line.contains("--ignore-memory-check"),
+            "{line}"
+        );
     }
     let e = strata(&[
         "bench",

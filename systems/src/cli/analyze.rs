@@ -36,6 +36,10 @@ pub struct AnalyzeArgs {
     /// Also map the angle between the field and the parameter axes (flat scenes).
     #[arg(long)]
     pub alignment: bool,
+    /// Run even when the realizations (held in memory together, 64 bytes a sample)
+    /// need more memory than is available (by default refused before preprocessing).
+    #[arg(long)]
+    pub ignore_memory_check: bool,
 }
 
 /// Runs `strata analyze`.
@@ -94,7 +98,11 @@ fn load(args: &AnalyzeArgs) -> anyhow::Result<AnalysisInput> {
                 bail!("sample count must be at least 1");
             }
             let name = args.input.display().to_string();
-            super::check_budget(&name, crate::budget::check_memory(count), None)?;
+            super::check_budget(&name, crate::budget::check_count(count), None)?;
+            if !args.ignore_memory_check {
+                let total = crate::budget::check_memory_total(count.saturating_mul(args.runs));
+                super::check_budget(&name, total, Some("--ignore-memory-check"))?;
+            }
             let count = usize::try_from(count).context("sample count does not fit in memory")?;
             let scene = Scene::build(&config).with_context(|| name.clone())?;
             let seed = args.seed.unwrap_or(config.sampling.seed);
