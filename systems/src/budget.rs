@@ -164,7 +164,10 @@ mod tests {
         // Totals over several requests saturate instead of overflowing.
         assert!(matches!(
             check_memory_total(u64::MAX),
-            Err(BudgetError::TooLarge { needed: u64::MAX, .. })
+            Err(BudgetError::TooLarge {
+                needed: u64::MAX,
+                ..
+            })
         ));
         assert!(check_memory_total(1).is_ok());
         assert!(available_space(Path::new("out.ply")).is_some_and(|a| a > 0));
