@@ -76,7 +76,16 @@ pub fn check_fits(
 ) -> Result<(), BudgetError> {
     check_count(count)?;
     // At most 2^32 x a few hundred bytes: no overflow.
-    let needed = count * bytes_per_sample;
+    within(count, count * bytes_per_sample, available, resource)
+}
+
+/// `TooLarge` where `needed` bytes for `count` samples exceed a known `available`.
+fn within(
+    count: u64,
+    needed: u64,
+    available: Option<u64>,
+    resource: Resource,
+) -> Result<(), BudgetError> {
     match available {
         Some(available) if needed > available => Err(BudgetError::TooLarge {
             count,
@@ -97,15 +106,7 @@ pub fn check_memory(count: u64) -> Result<(), BudgetError> {
 /// [`MAX_COUNT`] each, checked apart) fit in the memory available now.
 pub fn check_memory_total(samples: u64) -> Result<(), BudgetError> {
     let needed = samples.saturating_mul(SAMPLE_BYTES);
-    match available_memory() {
-        Some(available) if needed > available => Err(BudgetError::TooLarge {
-            count: samples,
-            needed,
-            available,
-            resource: Resource::Memory,
-        }),
-        _ => Ok(()),
-    }
+    within(samples, needed, available_memory(), Resource::Memory)
 }
 
 /// Memory available to new allocations (Linux `MemAvailable`), in bytes; `None` where
