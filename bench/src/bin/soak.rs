@@ -5,7 +5,9 @@
 //!
 //! `cargo run --release -p strata-bench --bin soak [-- --quick]`: prints a Markdown
 //! table and the resident-set trend, and exits non-zero if either run's resident set
-//! grew by more than [`LIMIT_PERCENT`] after its warm-up. `--quick`: 208 saves and
+//! grew by more than [`LIMIT_PERCENT`] after its warm-up: the peak of the last quarter
+//! of the run against the peak of the first quarter after the warm-up, each over
+//! several cycles (`SoakReport::trend_growth_percent`). `--quick`: 208 saves and
 //! 2 000 frames. Linux only (`/proc/self/status`).
 //!
 //! Both runs repeat their states (the watch soak's scene every 36 saves, the ECS
@@ -71,22 +73,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for r in &reports {
         print_trend(r);
     }
+    // The criterion is the trend (last quarter's peak against the first's): a
+    // point-to-point comparison catches glibc's allocator in one of its states at
+    // either end (the watch soak moves between about 21.5 and 24.8 MiB throughout).
     let failed: Vec<String> = reports
         .iter()
-        .filter(|r| r.growth_percent() > LIMIT_PERCENT)
-        .map(|r| format!("{}: {:+.2}%", r.name, r.growth_percent()))
+        .filter(|r| r.trend_growth_percent() > LIMIT_PERCENT)
+        .map(|r| format!("{}: {:+.2}%", r.name, r.trend_growth_percent()))
         .collect();
     if !failed.is_empty() {
         return Err(format!(
-            "resident set grew more than {LIMIT_PERCENT}% after the warm-up: {} (glibc's \
-             defaults move it in steps of up to 2 MiB with a flat heap; to see the heap's \
-             trend, run with MALLOC_MMAP_THRESHOLD_=131072 MALLOC_ARENA_MAX=1, see the \
-             bench README, \"Soak\")",
+            "resident set grew more than {LIMIT_PERCENT}% from the first quarter after the \
+             warm-up to the last (peaks): {}; to see the heap's trend alone, run with \
+             MALLOC_MMAP_THRESHOLD_=131072 MALLOC_ARENA_MAX=1 (bench README, \"Soak\")",
             failed.join(", ")
         )
         .into());
     }
-    println!("growth under {LIMIT_PERCENT}% after the warm-up: ok");
+    println!(
+        "growth under {LIMIT_PERCENT}% after the warm-up (last quarter's peak against the first's): ok"
+    );
     Ok(())
 }
 
