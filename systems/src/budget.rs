@@ -52,6 +52,12 @@ pub enum BudgetError {
         /// Of what.
         resource: Resource,
     },
+    /// The system refused the allocation.
+    #[error("{count} samples: could not allocate {}", gb(count.saturating_mul(SAMPLE_BYTES)))]
+    OutOfMemory {
+        /// The count asked for.
+        count: u64,
+    },
 }
 
 fn gb(bytes: u64) -> String {

@@ -374,3 +374,34 @@ fn registers_into_a_labelled_schedule_stored_in_the_world() {
         1
     );
 }
+
+/// Issue 22: a count set by host code beyond what one request can index is an engine
+/// error that keeps the last samples (it was an abort in the buffer's resize), and a
+/// count that fits again samples as before.
+#[test]
+fn counts_beyond_a_request_are_errors_that_keep_the_samples() {
+    let mesh = Arc::new(strata_engine::mesh::shapes::sphere(1.0, 4).expect("sphere"));
+    let field = projected(&mesh);
+    let mut engine = Engine::new(mesh, field, 500, 3);
+    let good = engine.samples();
+    assert_eq!(good.len(), 500);
+    let set_count = |engine: &mut Engine, count: usize| {
+        engine
+            .world
+            .get_mut::<SamplingSettings>(engine.mesh)
+            .expect("settings")
+            .count = count;
+        engine.schedule.run(&mut engine.world);
+        std::mem::take(&mut engine.world.resource_mut::<ecs::EngineErrors>().0)
+    };
+    let errors = set_count(&mut engine, (1 << 32) + 1);
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    let message = errors[0].to_string();
+    assert!(
+        message.starts_with("sampling: at most 2^32") && message.contains("32-bit"),
+        "{message}"
+    );
+    assert_eq!(engine.samples(), good, "last samples kept");
+    assert!(set_count(&mut engine, 600).is_empty());
+    assert_eq!(engine.samples().len(), 600);
+}

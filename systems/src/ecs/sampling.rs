@@ -7,9 +7,10 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use strata_engine::sample::Sample;
 
-use super::EngineSettings;
 use super::components::*;
-use super::stats::{Stage, StageStats};
+use super::stats::{EngineErrors, Stage, StageStats};
+use super::{EngineError, EngineSettings};
+use crate::budget::{BudgetError, check_count};
 
 /// Set `0` to true to resample every mesh in the next update (cleared by sampling).
 #[derive(Resource, Clone, Copy, Debug, Default)]
@@ -21,6 +22,7 @@ pub fn sample_meshes(
     settings: Res<EngineSettings>,
     mut request: ResMut<SampleRequest>,
     mut stats: ResMut<StageStats>,
+    mut errors: ResMut<EngineErrors>,
     mut meshes: Query<(
         Entity,
         Ref<MeshSampler>,
@@ -40,6 +42,12 @@ pub fn sample_meshes(
         }
         let t = Instant::now();
         let buffer = &mut *buffer;
+        // A count set by host code is checked here: too many, or more than memory
+        // gives, is an error that keeps the last samples, never an abort.
+        if let Err(e) = reserve(&mut buffer.samples, sampling.count) {
+            errors.0.push(EngineError::Budget(e));
+            continue;
+        }
         buffer.samples.resize(sampling.count, Sample::default());
         s.sample_into(sampling.seed, &mut buffer.samples);
         if transform.0 != glam::DAffine3::IDENTITY {
@@ -57,6 +65,17 @@ pub fn sample_meshes(
     if request.0 {
         request.0 = false;
     }
+}
+
+/// Makes room for `count` samples in `samples` without aborting: counts above the
+/// index limit and allocations the system refuses are errors.
+fn reserve(samples: &mut Vec<Sample>, count: usize) -> Result<(), BudgetError> {
+    check_count(count as u64)?;
+    samples
+        .try_reserve_exact(count.saturating_sub(samples.len()))
+        .map_err(|_| BudgetError::OutOfMemory {
+            count: count as u64,
+        })
 }
 
 /// Applies a similarity transform to samples: positions mapped, normals and major axes
