@@ -167,9 +167,14 @@ pub fn write_samples_csv(path: &Path, samples: &[Sample]) -> Result<(), MeshErro
 /// Writes samples as CSV to `w`: a header row of the [`SAMPLE_COLUMNS`] (`x,y,z` first),
 /// then one row per sample; floats in Rust's shortest round-trip notation.
 pub fn write_samples_csv_to<W: Write>(mut w: W, samples: &[Sample]) -> io::Result<()> {
-    writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?;
+    write_csv_header(&mut w)?;
     write_csv_rows(&mut w, samples)?;
     w.flush()
+}
+
+/// The header row of a samples CSV.
+fn write_csv_header<W: Write>(w: &mut W) -> io::Result<()> {
+    writeln!(w, "{}", SAMPLE_COLUMNS.join(","))
 }
 
 /// The CSV rows of `samples`.
@@ -240,7 +245,7 @@ pub fn write_samples_in_blocks(
         buffer.resize(block, Sample::default());
         match format {
             SampleFormat::Ply => write_ply_header(w, count)?,
-            SampleFormat::Csv => writeln!(w, "{}", SAMPLE_COLUMNS.join(","))?,
+            SampleFormat::Csv => write_csv_header(w)?,
         }
         let mut start = 0u64;
         while start < count {

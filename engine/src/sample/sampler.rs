@@ -300,7 +300,7 @@ impl Sampler {
     /// As [`sample_into`](Self::sample_into), choosing explicitly whether segments are
     /// linked into chains (for experiments such as the paper's section 7.3.3).
     pub fn sample_into_linked(&self, seed: u64, out: &mut [Sample], linked: bool) {
-        self.fill(seed, out, linked);
+        self.fill(seed, out.len() as u64, 0, out, linked);
     }
 
     /// As [`sample_into`](Self::sample_into), writing only where each sample lies
@@ -311,7 +311,7 @@ impl Sampler {
     /// location without the record.
     pub fn sample_sites_into(&self, seed: u64, out: &mut [SampleSite]) {
         let linked = self.uses_chains(out.len());
-        self.fill(seed, out, linked);
+        self.fill(seed, out.len() as u64, 0, out, linked);
     }
 
     /// Fills `out` with the samples `start..start + out.len()` of an `n`-sample
@@ -342,25 +342,19 @@ impl Sampler {
             "samples {start}..+{} of a {n}-sample request",
             out.len()
         );
-        if out.is_empty() {
-            return;
-        }
-        let req = self.request(seed, n, self.uses_chains_for(n));
-        out.par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(chunk, dst)| self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst));
+        self.fill(seed, n, start, out, self.uses_chains_for(n));
     }
 
-    /// Fills `out` with the records of an `out.len()`-sample request.
-    fn fill<T: Record>(&self, seed: u64, out: &mut [T], linked: bool) {
-        let n = out.len() as u64;
-        if n == 0 {
+    /// Fills `out` with the records `start..start + out.len()` of an `n`-sample
+    /// request (`start + out.len() <= n`).
+    fn fill<T: Record>(&self, seed: u64, n: u64, start: u64, out: &mut [T], linked: bool) {
+        if out.is_empty() {
             return;
         }
         let req = self.request(seed, n, linked);
         out.par_chunks_mut(CHUNK)
             .enumerate()
-            .for_each(|(chunk, dst)| self.fill_chunk(&req, (chunk * CHUNK) as u64, dst));
+            .for_each(|(chunk, dst)| self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst));
     }
 
     /// What every chunk of an `n`-sample request for `seed` shares.
