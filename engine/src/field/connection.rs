@@ -6,24 +6,26 @@
 //! tangent frame and lumped mass, and Cholesky factors of `A + diag(extra)` restricted
 //! to any subset of vertices. Complex Hermitian `V x V` systems (faer's sparse
 //! Cholesky over `c64`, sequential); the symbolic factorization of the whole mesh's
-//! pattern is computed once and shared by the normal smoothing and the field solves.
+//! pattern is computed once and shared by the normal smoothing and the field solves,
+//! and the buffers of a finished factor are kept for the next ([`Connection::recycle`]).
 //! Cost: O(V + E) assembly, one AMD ordering, one numeric factorization per solve.
 
-use std::cell::OnceCell;
+use std::cell::{OnceCell, RefCell};
 
-use faer::Side;
 use faer::c64;
-use faer::prelude::*;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Mat, traits::ComplexField};
+use faer::{Mat, MatMut, traits::ComplexField};
 use glam::DVec3;
+use rayon::prelude::*;
+
+use super::cholesky::{self, Cholesky, Storage, Symbolic};
+use super::pattern::VertexPattern;
 
 use super::line_field::{
     LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
     SOLVE_TOLERANCE,
 };
-use super::{frame_angle, tangent_frame, vertex_frames};
+use super::{tangent_frame, vertex_frames};
 use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
 use crate::mesh::TriMesh;
 
@@ -38,13 +40,13 @@ pub(crate) struct EdgeTerm {
 
 /// A factored (direct) or preconditioned (multigrid) system, ready to solve.
 pub(crate) enum Factor {
-    Direct(Llt<usize, c64>),
+    Direct(Cholesky<c64>),
     Multigrid(Amg<c64>),
 }
 
 impl Factor {
     /// Solves in place, checking the result is finite.
-    pub(crate) fn solve(&self, z: &mut [c64]) -> Result<(), LineFieldError> {
+    pub(crate) fn solve(&mut self, z: &mut [c64]) -> Result<(), LineFieldError> {
         match self {
             Self::Direct(llt) => solve(llt, z),
             Self::Multigrid(amg) => {
@@ -65,9 +67,13 @@ pub(crate) struct Connection {
     pub(crate) diagonal: Vec<f64>,
     /// Per vertex, the lumped mass.
     pub(crate) mass: Vec<f64>,
-    /// The symbolic Cholesky of the whole mesh's pattern, made on first use (an energy
-    /// evaluation never needs it).
-    symbolic: OnceCell<SymbolicLlt<usize>>,
+    /// The lower-triangle pattern of the whole mesh (direct solves only).
+    pattern: Option<VertexPattern>,
+    /// The symbolic Cholesky of the whole mesh's pattern, made by `build` when asked to
+    /// prepare, else on first use (an energy evaluation never needs it).
+    symbolic: OnceCell<Symbolic>,
+    /// The buffers of the last direct factor handed back, for the next.
+    spare: RefCell<Option<Storage<c64>>>,
     /// Whether solves use multigrid (else sparse Cholesky).
     multigrid: bool,
 }
@@ -79,6 +85,20 @@ const MAX_CG_ITERATIONS: usize = 500;
 /// Relative residual of the multigrid solves of the normal smoothing: the smoothed
 /// normals only steer the connection, so 1e-5 (about 1e-5 rad) is ample.
 const NORMALS_TOLERANCE: f64 = 1e-5;
+
+/// `e^(i psi)` for the angle `psi` of `d` in the frame `(e1, e2)`
+/// ([`frame_angle`](super::frame_angle) without trigonometry); 1 where `d` has no
+/// tangent part, as `atan2(0, 0) = 0` gives.
+fn unit_direction(d: DVec3, (e1, e2): (DVec3, DVec3)) -> c64 {
+    let (c, s) = (d.dot(e1), d.dot(e2));
+    let r2 = c * c + s * s;
+    if r2 > 0.0 {
+        let r = r2.sqrt();
+        c64::new(c / r, s / r)
+    } else {
+        c64::new(1.0, 0.0)
+    }
+}
 
 /// Assembles the full Hermitian matrix from lower-triangle triplets.
 fn hermitian_csr<T: Scalar>(n: usize, lower: &[Triplet<usize, usize, T>]) -> Csr<T> {
@@ -154,36 +174,17 @@ fn triplets<T>(
     out
 }
 
-fn symbolic(
-    matrix_pattern: faer::sparse::SymbolicSparseColMatRef<'_, usize>,
-) -> Result<SymbolicLlt<usize>, LineFieldError> {
-    SymbolicLlt::try_new(matrix_pattern, Side::Lower).map_err(|_| LineFieldError::Factorization {
-        stage: "symbolic factorization",
-    })
-}
-
-/// The symbolic factorization in `cell`, made from `matrix`'s pattern (the whole mesh's)
-/// on first use.
-fn shared_symbolic<T: ComplexField>(
-    cell: &OnceCell<SymbolicLlt<usize>>,
-    matrix: &SparseColMat<usize, T>,
-) -> Result<SymbolicLlt<usize>, LineFieldError> {
+/// The symbolic factorization in `cell`, made from the whole mesh's `pattern` on first
+/// use.
+fn shared_symbolic(
+    cell: &OnceCell<Symbolic>,
+    pattern: &VertexPattern,
+) -> Result<Symbolic, LineFieldError> {
     if let Some(s) = cell.get() {
         return Ok(s.clone());
     }
-    let s = symbolic(matrix.symbolic())?;
+    let s = cholesky::symbolic(pattern.symbolic())?;
     Ok(cell.get_or_init(|| s).clone())
-}
-
-fn numeric<T: ComplexField>(
-    symbolic: SymbolicLlt<usize>,
-    matrix: &SparseColMat<usize, T>,
-) -> Result<Llt<usize, T>, LineFieldError> {
-    Llt::try_new_with_symbolic(symbolic, matrix.as_ref(), Side::Lower).map_err(|_| {
-        LineFieldError::Factorization {
-            stage: "numeric factorization (matrix not positive definite)",
-        }
-    })
 }
 
 fn assemble<T: ComplexField>(
@@ -197,10 +198,15 @@ fn assemble<T: ComplexField>(
 impl Connection {
     /// The system of `mesh`, with its connection measured in the tangent planes of the
     /// normals smoothed over `smoothing` (a length; 0 keeps the mesh's own normals).
+    /// With `prepare` (the caller will factor the system) a direct solver's symbolic
+    /// factorization is made on a second thread while the weights are summed, and the
+    /// buffers of the complex factors are allocated there while the normals are
+    /// smoothed; the results do not depend on it.
     pub(crate) fn build(
         mesh: &TriMesh,
         smoothing: f64,
         solver: LinearSolver,
+        prepare: bool,
     ) -> Result<Self, LineFieldError> {
         let n = mesh.vertex_count();
         if n == 0 {
@@ -211,46 +217,77 @@ impl Connection {
             LinearSolver::Direct => false,
             LinearSolver::Multigrid => true,
         };
-        let (weights, mass) = weights_and_mass(mesh);
+        let pattern = if multigrid {
+            None
+        } else {
+            Some(VertexPattern::new(mesh)?)
+        };
+        let eager = pattern.as_ref().filter(|_| prepare || smoothing > 0.0);
+        let (symbolic, (weights, mass)) = match eager {
+            Some(pattern) => {
+                let (made, weights_and_mass) = rayon::join(
+                    || cholesky::symbolic(pattern.symbolic()),
+                    || weights_and_mass(mesh),
+                );
+                (Some(made?), weights_and_mass)
+            }
+            None => (None, weights_and_mass(mesh)),
+        };
         if !(mass.iter().sum::<f64>() > 0.0) {
             return Err(LineFieldError::EmptyMesh);
         }
-        let symbolic = OnceCell::new();
-        let frames: Vec<(DVec3, DVec3)> = if smoothing > 0.0 {
-            smoothed_normals(mesh, &weights, &mass, smoothing, &symbolic, multigrid)?
-                .into_iter()
-                .map(tangent_frame)
-                .collect()
-        } else {
-            vertex_frames(mesh)
-        };
+        let (frames, spare) = rayon::join(
+            || -> Result<Vec<(DVec3, DVec3)>, LineFieldError> {
+                Ok(if smoothing > 0.0 {
+                    let direct = pattern.as_ref().zip(symbolic.as_ref());
+                    smoothed_normals(mesh, &weights, &mass, smoothing, direct)?
+                        .into_iter()
+                        .map(tangent_frame)
+                        .collect()
+                } else {
+                    vertex_frames(mesh)
+                })
+            },
+            || {
+                symbolic
+                    .as_ref()
+                    .filter(|_| prepare)
+                    .and_then(Storage::<c64>::allocate)
+            },
+        );
+        let frames = frames?;
+        // Per edge e^(i psi) at both ends, by arithmetic rather than angles: the
+        // rotation is (u_b conj(u_a))^2 (the doubled angle difference).
         let pos = mesh.positions();
-        let mut diagonal = vec![0.0; n];
         let edges: Vec<EdgeTerm> = mesh
             .edges()
-            .iter()
+            .par_iter()
             .zip(&weights)
             .map(|(&[a, b], &weight)| {
                 let (a, b) = (a as usize, b as usize);
                 let d = pos[b] - pos[a];
-                let psi = |v: usize| frame_angle(d, frames[v]);
-                let (s, c) = (2.0 * (psi(b) - psi(a))).sin_cos();
-                diagonal[a] += weight;
-                diagonal[b] += weight;
+                let r = unit_direction(d, frames[b]) * unit_direction(d, frames[a]).conj();
                 EdgeTerm {
                     a,
                     b,
                     weight,
-                    rotation: c64::new(c, s),
+                    rotation: r * r,
                 }
             })
             .collect();
+        let mut diagonal = vec![0.0; n];
+        for e in &edges {
+            diagonal[e.a] += e.weight;
+            diagonal[e.b] += e.weight;
+        }
         Ok(Self {
             frames,
             edges,
             diagonal,
             mass,
-            symbolic,
+            pattern,
+            symbolic: symbolic.map_or_else(OnceCell::new, OnceCell::from),
+            spare: RefCell::new(spare),
             multigrid,
         })
     }
@@ -275,29 +312,43 @@ impl Connection {
         free: usize,
     ) -> Result<Factor, LineFieldError> {
         // Entry (b, a) of A is -w r_ab; entry (a, b) is its conjugate.
-        let t = triplets(
-            mesh,
-            slots,
-            free,
-            |v| c64::new(self.diagonal[v] + extra[v], 0.0),
-            |e, b_below| {
+        let diagonal = |v: usize| c64::new(self.diagonal[v] + extra[v], 0.0);
+        if let Some(pattern) = self.pattern.as_ref().filter(|_| free == self.len()) {
+            // The whole mesh: edges are sorted pairs, so `b > a` is the lower entry.
+            let values = pattern.values(diagonal, |e| {
                 let term = &self.edges[e];
-                let c = -term.rotation * term.weight;
-                if b_below { c } else { c.conj() }
-            },
-        );
+                -term.rotation * term.weight
+            });
+            let symbolic = shared_symbolic(&self.symbolic, pattern)?;
+            let spare = self.spare.borrow_mut().take();
+            let llt = Cholesky::new(symbolic, pattern.matrix(&values), spare)?;
+            return Ok(Factor::Direct(llt));
+        }
+        let t = triplets(mesh, slots, free, diagonal, |e, b_below| {
+            let term = &self.edges[e];
+            let c = -term.rotation * term.weight;
+            if b_below { c } else { c.conj() }
+        });
         if self.multigrid {
             let matrix = hermitian_csr(free, &t);
             let amg = Amg::new(matrix, None, &AmgOptions::default())?;
             return Ok(Factor::Multigrid(amg));
         }
         let matrix = assemble(free, &t)?;
-        let symbolic = if free == self.len() {
-            shared_symbolic(&self.symbolic, &matrix)?
-        } else {
-            symbolic(matrix.symbolic())?
-        };
-        Ok(Factor::Direct(numeric(symbolic, &matrix)?))
+        let symbolic = cholesky::symbolic(matrix.symbolic())?;
+        let spare = self.spare.borrow_mut().take();
+        Ok(Factor::Direct(Cholesky::new(
+            symbolic,
+            matrix.as_ref(),
+            spare,
+        )?))
+    }
+
+    /// Keeps `factor`'s buffers for the next [`factor`](Self::factor).
+    pub(crate) fn recycle(&self, factor: Factor) {
+        if let Factor::Direct(llt) = factor {
+            *self.spare.borrow_mut() = Some(llt.into_storage());
+        }
     }
 
     /// `E(z) = sum_edges w |z_b - r z_a|^2`.
@@ -347,12 +398,9 @@ impl Connection {
 }
 
 /// Solves in place with `llt`, checking the result is finite.
-pub(crate) fn solve(llt: &Llt<usize, c64>, z: &mut [c64]) -> Result<(), LineFieldError> {
-    let mut rhs = Mat::from_fn(z.len(), 1, |r, _| z[r]);
-    llt.solve_in_place(rhs.as_mut());
-    for (r, out) in z.iter_mut().enumerate() {
-        *out = rhs[(r, 0)];
-    }
+fn solve(llt: &mut Cholesky<c64>, z: &mut [c64]) -> Result<(), LineFieldError> {
+    let n = z.len();
+    llt.solve(MatMut::from_column_major_slice_mut(z, n, 1))?;
     if z.iter().all(|v| v.re.is_finite() && v.im.is_finite()) {
         Ok(())
     } else {
@@ -373,8 +421,7 @@ fn smoothed_normals(
     weights: &[f64],
     mass: &[f64],
     length: f64,
-    symbolic: &OnceCell<SymbolicLlt<usize>>,
-    multigrid: bool,
+    direct: Option<(&VertexPattern, &Symbolic)>,
 ) -> Result<Vec<DVec3>, LineFieldError> {
     let t = length * length;
     let n = mesh.vertex_count();
@@ -383,11 +430,15 @@ fn smoothed_normals(
         diagonal[a as usize] += t * w;
         diagonal[b as usize] += t * w;
     }
-    let all: Vec<usize> = (0..n).collect();
-    let lower = triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]);
     let normals = mesh.vertex_normals();
     let mut rhs = Mat::from_fn(n, 3, |v, k| mass[v] * normals[v][k]);
-    if multigrid {
+    if let Some((pattern, symbolic)) = direct {
+        let values = pattern.values(|v| diagonal[v], |e| -t * weights[e]);
+        let mut llt = Cholesky::new(symbolic.clone(), pattern.matrix(&values), None)?;
+        llt.solve(rhs.as_mut())?;
+    } else {
+        let all: Vec<usize> = (0..n).collect();
+        let lower = triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]);
         let amg = Amg::new(hermitian_csr(n, &lower), None, &AmgOptions::default())?;
         for k in 0..3 {
             let b: Vec<f64> = (0..n).map(|v| rhs[(v, k)]).collect();
@@ -397,10 +448,6 @@ fn smoothed_normals(
                 rhs[(v, k)] = x;
             }
         }
-    } else {
-        let matrix = assemble(n, &lower)?;
-        let llt = numeric(shared_symbolic(symbolic, &matrix)?, &matrix)?;
-        llt.solve_in_place(rhs.as_mut());
     }
     Ok((0..n)
         .map(|v| {

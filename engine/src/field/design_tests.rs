@@ -445,3 +445,32 @@ fn multigrid_meets_constraints_exactly() {
     let spread = largest_spread(&field.directions, diagonal);
     assert!(spread < 1e-6, "{spread} rad");
 }
+
+#[test]
+fn the_lambda_1_estimate_is_from_above_and_close() {
+    // Against the converged smallest eigenvalue (the smoothest field's Rayleigh quotient
+    // at tolerance 1e-10) on a sphere (known answer 2) and a torus.
+    for (name, mesh) in [
+        ("sphere", shapes::sphere(1.0, 8).expect("sphere")),
+        ("torus", shapes::torus(1.0, 0.4, 8).expect("torus")),
+    ] {
+        let options = LineFieldOptions {
+            tolerance: 1e-10,
+            ..LineFieldOptions::default()
+        };
+        let converged = smoothest_line_field(&mesh, &options)
+            .expect("field")
+            .rayleigh;
+        let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, true).expect("system");
+        let estimate = smallest_eigenvalue(&mesh, &system, system.shift()).expect("estimate");
+        println!("{name}: lambda_1 {converged}, estimate {estimate}");
+        assert!(
+            estimate >= converged * (1.0 - 1e-9),
+            "{name}: {estimate} below {converged}"
+        );
+        assert!(
+            estimate <= converged * 1.02,
+            "{name}: {estimate} vs {converged}"
+        );
+    }
+}

@@ -17,6 +17,7 @@
 //! Field design ([`smoothest_line_field`], [`guided_line_field`]): smooth line fields
 //! with few singularities (Knöppel et al. 2013).
 
+mod cholesky;
 mod connection;
 mod curvature;
 pub mod design;
@@ -26,8 +27,10 @@ mod error;
 mod file;
 mod guidance;
 mod isotropic;
+mod lanczos;
 mod line_field;
 mod params;
+mod pattern;
 mod spec;
 mod warp;
 
