@@ -336,3 +336,90 @@ fn ecs_lod_pools_follow_the_camera() {
         entries(&world).0
     );
 }
+
+/// The ECS engine on a mesh placed by a similarity: the pool follows the world camera
+/// taken into the mesh's frame (so it holds what a renderer of the placed mesh shows),
+/// and a transform that is not a similarity is an engine error that keeps the pool.
+/// CPU only.
+#[test]
+fn ecs_lod_pools_follow_a_placed_mesh() {
+    use bevy_ecs::prelude::{Schedule, World};
+    use glam::{DAffine3, DMat3, DQuat};
+    use strata_engine::surface::SurfaceOptions;
+    use strata_systems::ecs::{
+        self, EngineError, EngineErrors, Lod, LodState, MeshBundle, MeshSampler, MeshTransform,
+    };
+    let scene = torus();
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    ecs::register(&mut world, &mut schedule);
+    let placed = DAffine3::from_scale_rotation_translation(
+        DVec3::splat(2.0),
+        DQuat::from_euler(glam::EulerRot::XYZ, 0.4, 0.0, -0.7),
+        DVec3::new(3.0, 0.0, 0.0),
+    );
+    let view = lod().view(
+        &OrbitCamera {
+            target: Vec3::new(3.0, 0.0, 0.0),
+            ..camera(5.0, 0.3)
+        },
+        SIZE,
+    );
+    let mut bundle = MeshBundle::new(
+        scene.mesh.clone(),
+        scene.field.clone(),
+        SurfaceOptions::default(),
+        100,
+        5,
+    );
+    bundle.transform = MeshTransform(placed);
+    let e = world
+        .spawn((
+            bundle,
+            Lod {
+                view,
+                base: BASE as u32,
+                budget: 1_000_000,
+            },
+            LodState::default(),
+        ))
+        .id();
+    schedule.run(&mut world);
+    let sampler = world
+        .get::<MeshSampler>(e)
+        .and_then(|s| s.0.clone())
+        .expect("sampler");
+    let held = |world: &World| {
+        let state = world.get::<LodState>(e).expect("state");
+        state.pool.as_ref().expect("pool").ranks().to_vec()
+    };
+    let ranks = held(&world);
+    // The same pool as one updated directly with the camera in the mesh's frame...
+    let local = view.in_local_frame(&placed).expect("similarity");
+    let mut direct = LodPool::new(&sampler, 5, BASE as u32, 1_000_000);
+    direct.update(&sampler, &local, BASE);
+    assert!(direct.complete(&local, BASE));
+    assert_eq!(ranks, direct.ranks());
+    // ... and not the one the untransformed camera asks for (the bug this fixes).
+    let mut ignored = LodPool::new(&sampler, 5, BASE as u32, 1_000_000);
+    ignored.update(&sampler, &view, BASE);
+    assert_ne!(ranks, ignored.ranks());
+    // A shear: an engine error, and the pool is kept.
+    world.get_mut::<MeshTransform>(e).expect("transform").0 = DAffine3::from_mat3(
+        DMat3::from_cols(DVec3::X, DVec3::new(0.5, 1.0, 0.0), DVec3::Z),
+    );
+    world.resource_mut::<EngineErrors>().0.clear();
+    schedule.run(&mut world);
+    let errors = &world.resource::<EngineErrors>().0;
+    assert!(
+        errors.iter().any(|e| matches!(e, EngineError::Lod(_))),
+        "{errors:?}"
+    );
+    let message = errors
+        .iter()
+        .find(|e| matches!(e, EngineError::Lod(_)))
+        .map(ToString::to_string)
+        .unwrap_or_default();
+    assert!(message.contains("similarity"), "{message}");
+    assert_eq!(held(&world), ranks);
+}

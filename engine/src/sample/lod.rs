@@ -27,7 +27,7 @@
 //! restricted there, so their density is `m` times the base density and stays
 //! stratified, and a larger multiplier only adds samples: none moves.
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DAffine3, DMat4, DVec3, DVec4};
 
 /// A camera's level-of-detail request, in plain numbers.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -76,7 +76,25 @@ pub enum LodError {
         /// Its faces.
         expected_faces: usize,
     },
+    /// A mesh placed by a transform that is not a similarity (uniform positive scale,
+    /// rotation, translation): its multiplier would vary per point in a way the pool's
+    /// bounds do not follow.
+    #[error(
+        "level of detail: the mesh's transform must be a similarity (uniform positive \
+         scale, rotation, translation); its linear part is {deviation:.3e} away from one \
+         (relative), determinant {determinant}"
+    )]
+    NotSimilarity {
+        /// `max |L^T L - s^2 I| / s^2`, `s^3 = det L`.
+        deviation: f64,
+        /// `det L`.
+        determinant: f64,
+    },
 }
+
+/// Largest relative deviation of a transform's linear part from a similarity that
+/// [`ViewLod::in_local_frame`] accepts (round-off of composed rotations).
+pub const SIMILARITY_TOLERANCE: f64 = 1e-9;
 
 impl ViewLod {
     /// Checks every setting: a finite matrix and eye, a positive finite focal length
@@ -111,6 +129,43 @@ impl ViewLod {
             return bad("max", self.max, "> 0 (infinity for no clamp)");
         }
         Ok(())
+    }
+
+    /// The same view for a mesh placed in the world by the similarity `transform`
+    /// (local to world): the settings whose [`multiplier`](Self::multiplier) at a local
+    /// point and normal equals this view's at their images, so a pool of the local
+    /// mesh's samples selects what a renderer of the placed mesh shows. The clip matrix
+    /// takes `transform` in, the eye is taken back to local space, and the reference
+    /// area is divided by the scale `s` (distances to the eye shrink by `s`; angles and
+    /// view depths do not change).
+    ///
+    /// Errors: a transform that is not a similarity with positive scale
+    /// ([`SIMILARITY_TOLERANCE`]).
+    pub fn in_local_frame(&self, transform: &DAffine3) -> Result<Self, LodError> {
+        let linear = transform.matrix3;
+        let determinant = linear.determinant();
+        let s2 = determinant.cbrt().powi(2);
+        let gram = linear.transpose() * linear;
+        let deviation = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let identity = if i == j { s2 } else { 0.0 };
+                (gram.col(j)[i] - identity).abs()
+            })
+            .fold(0.0, f64::max)
+            / s2;
+        if !(determinant > 0.0 && determinant.is_finite() && deviation <= SIMILARITY_TOLERANCE) {
+            return Err(LodError::NotSimilarity {
+                deviation,
+                determinant,
+            });
+        }
+        Ok(Self {
+            clip_from_world: self.clip_from_world * DMat4::from(*transform),
+            eye: transform.inverse().transform_point3(self.eye),
+            reference: self.reference / determinant.cbrt(),
+            ..*self
+        })
     }
 
     /// The density multiplier at point `p` with unit normal `normal` (module docs), for
@@ -178,6 +233,46 @@ mod tests {
         let [a, b, c, d] = [p, p + s * u, p + s * (u + v), p + s * v].map(pixel);
         // Shoelace formula.
         0.5 * ((a.perp_dot(b) + b.perp_dot(c) + c.perp_dot(d) + d.perp_dot(a)).abs())
+    }
+
+    #[test]
+    fn a_placed_mesh_gets_the_world_multiplier_in_local_space() {
+        let world = view(DVec3::new(0.5, 1.0, 4.0), true);
+        let transform = DAffine3::from_scale_rotation_translation(
+            DVec3::splat(0.7),
+            glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 0.4),
+            DVec3::new(0.2, -0.3, 0.5),
+        );
+        let local = world.in_local_frame(&transform).expect("a similarity");
+        local.validate().expect("valid settings");
+        let rotation = transform.matrix3 / 0.7;
+        let mut shown = 0;
+        for k in 0..200 {
+            let t = k as f64 * 0.37;
+            let p = DVec3::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin()) * 1.5;
+            let n = DVec3::new((2.1 * t).cos(), t.cos(), (0.3 * t).sin()).normalize();
+            let expected = world.multiplier(transform.transform_point3(p), rotation * n);
+            let found = local.multiplier(p, n);
+            assert!(
+                (found - expected).abs() <= 1e-9 * expected.max(1e-12),
+                "{k}: {found} vs {expected}"
+            );
+            shown += usize::from(expected > 0.0);
+        }
+        // The check covered points in view and out of it, facing and turned away.
+        assert!(shown > 20 && shown < 180, "{shown} of 200 in view");
+        // Shear, non-uniform scale and reflection are refused.
+        for linear in [
+            glam::DMat3::from_cols(DVec3::X, DVec3::new(0.3, 1.0, 0.0), DVec3::Z),
+            glam::DMat3::from_diagonal(DVec3::new(1.0, 2.0, 1.0)),
+            glam::DMat3::from_diagonal(DVec3::new(-1.0, 1.0, 1.0)),
+        ] {
+            let t = DAffine3::from_mat3(linear);
+            assert!(matches!(
+                world.in_local_frame(&t),
+                Err(LodError::NotSimilarity { .. })
+            ));
+        }
     }
 
     #[test]

@@ -5,6 +5,11 @@
 //! camera's threshold) is then picked per sample on the GPU
 //! ([`SplatLod`](crate::gpu::SplatLod)); [`crate::gpu::upload`] streams the new entries.
 //!
+//! The camera is in world space; a mesh placed by a [`MeshTransform`] (a similarity) is
+//! sampled in its own frame, so the pool is updated with the camera taken into that frame
+//! ([`ViewLod::in_local_frame`]): the ranks it holds are those a renderer of the placed
+//! mesh shows. Another transform is an [`EngineError::Lod`] and leaves the pool as it was.
+//!
 //! The pool is rebuilt (ranks `0..base` drawn again) when the sampler, the seed, the
 //! base count or the budget changes: that is preprocessing-sized work and, like the
 //! other preprocessing systems, still runs inside the update (issue 20).
@@ -15,8 +20,9 @@ use bevy_ecs::prelude::*;
 use strata_engine::sample::lod::ViewLod;
 use strata_engine::sample::{LodPool, PoolChange};
 
-use super::components::{MeshSampler, SamplingSettings};
-use super::stats::{Stage, StageStats};
+use super::EngineError;
+use super::components::{MeshSampler, MeshTransform, SamplingSettings};
+use super::stats::{EngineErrors, Stage, StageStats};
 
 /// Level of detail of a mesh entity: the camera (plain data, updated by the
 /// application every frame), the base count and the pool's budget.
@@ -45,19 +51,30 @@ pub struct LodState {
 }
 
 /// Brings every [`Lod`] entity's pool up to its camera (see the module docs).
+#[allow(clippy::type_complexity)]
 pub fn update_lod_pools(
     mut stats: ResMut<StageStats>,
+    mut errors: ResMut<EngineErrors>,
     mut meshes: Query<(
         Entity,
         Ref<MeshSampler>,
         &SamplingSettings,
         &Lod,
+        Option<&MeshTransform>,
         &mut LodState,
     )>,
 ) {
-    for (entity, sampler, sampling, lod, mut state) in &mut meshes {
+    for (entity, sampler, sampling, lod, transform, mut state) in &mut meshes {
         let Some(s) = sampler.0.as_ref() else {
             continue;
+        };
+        let view = match transform.map(|t| lod.view.in_local_frame(&t.0)) {
+            None => lod.view,
+            Some(Ok(view)) => view,
+            Some(Err(e)) => {
+                errors.0.push(EngineError::Lod(e));
+                continue;
+            }
         };
         let key = (lod.base, lod.budget, sampling.seed);
         let state = &mut *state;
@@ -70,7 +87,7 @@ pub fn update_lod_pools(
         let Some(pool) = state.pool.as_mut() else {
             continue;
         };
-        let change = pool.update(s, &lod.view, f64::from(lod.base));
+        let change = pool.update(s, &view, f64::from(lod.base));
         if change != PoolChange::Unchanged {
             stats.record(
                 Stage::Sampling,

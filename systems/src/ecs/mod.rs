@@ -97,6 +97,10 @@ pub enum EngineError {
     /// The scene asks for more samples than memory holds.
     #[error("sampling: {0}")]
     Budget(#[from] crate::budget::BudgetError),
+    /// A level of detail that cannot apply (a mesh placed by a transform that is not a
+    /// similarity).
+    #[error("{0}")]
+    Lod(#[from] strata_engine::sample::lod::LodError),
 }
 
 /// Adds the engine's resources to `world` and its systems to `schedule`, ordered by
