@@ -129,7 +129,8 @@ pub struct LineField {
     /// The Rayleigh quotient `E(z) / (z^H M z)` (0 for a zero field); for the smoothest
     /// field, the estimate of the smallest eigenvalue.
     pub rayleigh: f64,
-    /// Inverse power iterations done (0 for a guided field).
+    /// Solves (direct) or preconditioned inverse iterations (multigrid) done for the
+    /// smoothest field (0 for a guided field).
     pub iterations: usize,
 }
 

@@ -23,6 +23,7 @@ mod curvature;
 pub mod design;
 mod designed;
 mod eigen;
+mod eigenpair;
 mod error;
 mod file;
 mod guidance;
