@@ -13,7 +13,7 @@
 //!   [`design`](super::design)), which keeps each density and changes each tensor by
 //!   at most its small anisotropy (or [`ISOTROPIC_DIRECTION_RATIO`]): the segmentation then
 //!   sees only the singularities the surface's topology and the anisotropic field
-//!   force. Cost: one sparse solve (the smoothest field's inverse iteration on a fully
+//!   force. Cost: one sparse solve (the smoothest field's eigen-solve on a fully
 //!   isotropic field), nothing when no vertex is isotropic.
 
 use glam::DVec3;
