@@ -18,6 +18,7 @@
 //! cells.
 
 mod cells;
+mod key;
 pub mod refine;
 mod segmentation;
 
@@ -34,6 +35,7 @@ use crate::segment::{SegmentError, SegmentOptions, Segmentation};
 
 use cells::build_cells;
 pub use cells::segment_cells;
+pub use key::KeyBuilder;
 pub use refine::{
     SplitContext, lowest_face, parameterize_segment_with_splitting, parameterize_with_splitting,
 };

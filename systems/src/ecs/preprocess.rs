@@ -63,11 +63,7 @@ pub fn segment_hash(
         }
     }
     // Everything else a segment's parameterization depends on.
-    format!(
-        "{:?}{:?}{:?}{}",
-        options.param, options.min_segment_faces, options.angle_criterion, options.segment.sigma
-    )
-    .hash(&mut h);
+    options.parameterization_key().hash(&mut h);
     h.finish()
 }
 
