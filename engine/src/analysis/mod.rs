@@ -24,6 +24,8 @@
 //!   error over the seeds (7.3.2).
 //! - [`radial_band`]: a radial profile over a frequency band against a reference
 //!   (7.5).
+//! - [`strokes`]: coverage of the square by brush strokes made from samples: covered
+//!   fraction, mean overlap and largest hole on a raster (7.1, Fig. 3).
 //!
 //! Points outside the unit square (or NaN) are a caller error: the `try_` functions
 //! return [`AnalysisError`], their twins panic with the same message.
@@ -37,12 +39,14 @@ pub mod radial_band;
 pub mod seed_ratio;
 pub mod spectrum;
 pub mod strata;
+pub mod strokes;
 
 pub use baseline::{jittered_grid, planar_samples, poisson_disk, uniform_random};
 pub use discrepancy::{
     Discrepancy, DiscrepancyCurve, ShapeFamily, loglog_slope, star_discrepancy_l2,
     star_discrepancy_sup, try_star_discrepancy_l2, try_star_discrepancy_sup,
 };
+pub use strokes::{Coverage, Stroke, StrokeError, StrokeStyle};
 
 use glam::DVec2;
 

@@ -8,7 +8,7 @@
 //! `strata_systems::report::plot`); without one the numbers are still written.
 //!
 //! One module per section of the paper, each returning a [`table::Section`]:
-//! [`discrepancy`] (7.2), [`alignment`] (7.3.1), [`boundary`] (7.3.2),
+//! [`strokes`] (7.1), [`discrepancy`] (7.2), [`alignment`] (7.3.1), [`boundary`] (7.3.2),
 //! [`quantization`] (7.3.3), [`spectrum`] (7.4), [`dda`] (7.5); the samplers and
 //! domains they share are in [`samplers`], the output folder in [`output`], and the
 //! markdown writer in [`table`]. The measures themselves are in
@@ -23,6 +23,7 @@ mod progressive;
 mod quantization;
 mod samplers;
 mod spectrum;
+mod strokes;
 mod table;
 
 use std::path::PathBuf;
@@ -38,7 +39,8 @@ type BoxError = Box<dyn std::error::Error + Send + Sync>;
 type Experiment = (&'static str, fn(&mut Ctx) -> Result<Section, BoxError>);
 
 /// Every experiment, in the order of the paper (and of `RESULTS.md`).
-const EXPERIMENTS: [Experiment; 7] = [
+const EXPERIMENTS: [Experiment; 8] = [
+    ("7.1", strokes::section_7_1),
     ("7.2", discrepancy::section_7_2),
     ("7.3.1", alignment::section_7_3_1),
     ("7.3.2", boundary::section_7_3_2),
