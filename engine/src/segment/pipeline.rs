@@ -3,7 +3,7 @@
 use rayon::prelude::*;
 
 use super::paths::{field_edge_costs_with, singularity_tree};
-use super::seeds::{face_frames, place_seeds};
+use super::seeds::{face_frames, place_seeds_sized};
 use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, is_disc, patch_topology};
 use super::walk::{random_walk, walk_weights};
@@ -42,6 +42,17 @@ pub fn segment(
     field: &TensorField,
     options: &SegmentOptions,
 ) -> Result<Segmentation, SegmentError> {
+    segment_sized(mesh, field, options, mesh.area())
+}
+
+/// [`segment`] of a mesh cut out of a surface of area `surface_area`, whose seeding
+/// rule ([`MIN_REGION_SHARE`](super::seeds::MIN_REGION_SHARE)) it keeps.
+pub(crate) fn segment_sized(
+    mesh: &TriMesh,
+    field: &TensorField,
+    options: &SegmentOptions,
+    surface_area: f64,
+) -> Result<Segmentation, SegmentError> {
     options.validate()?;
     let f_count = mesh.face_count();
     let frames = face_frames(mesh, field);
@@ -53,13 +64,14 @@ pub fn segment(
     // 1. The whole mesh.
     let all = FaceSet::all(mesh);
     let weights = walk_weights(mesh, &frames, options.sigma, &cut);
-    let seeds = place_seeds(
+    let seeds = place_seeds_sized(
         mesh,
         &frames,
         &weights,
         all.mask(),
         options.beta,
         options.seed,
+        surface_area,
     );
     let walked = random_walk(mesh, &weights, all.mask(), &seeds)?;
     let mut labels = connected_parts(mesh, &walked, &cut);
@@ -102,8 +114,15 @@ pub fn segment(
                 .map(|(round, &i)| {
                     let mask = FaceSet::new(mesh, &groups[i]);
                     let seed = options.seed.wrapping_add(1 + round as u64);
-                    let seeds =
-                        place_seeds(mesh, &frames, &weights, mask.mask(), options.beta, seed);
+                    let seeds = place_seeds_sized(
+                        mesh,
+                        &frames,
+                        &weights,
+                        mask.mask(),
+                        options.beta,
+                        seed,
+                        surface_area,
+                    );
                     let local = random_walk(mesh, &weights, mask.mask(), &seeds)?;
                     let faces = groups[i].iter().map(|&f| local[f as usize]).collect();
                     Ok((faces, seeds.len() as u32))

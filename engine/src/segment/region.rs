@@ -13,7 +13,8 @@
 //! region boundary (their normals see fewer faces). Cost: that of [`segment`] on the
 //! region, plus O(region) to extract it.
 
-use super::{Segment, SegmentError, SegmentOptions, Segmentation, Singularity, segment};
+use super::pipeline::segment_sized;
+use super::{Segment, SegmentError, SegmentOptions, Segmentation, Singularity};
 use crate::field::{FieldError, TensorField};
 use crate::mesh::{MeshError, NONE, TriMesh};
 
@@ -121,7 +122,8 @@ pub fn segment_region(
         .map(|&v| field.tensors()[v as usize])
         .collect();
     let sub_field = TensorField::new(&sub, tensors)?;
-    let local = segment(&sub, &sub_field, options)?;
+    // Seeding regions are measured against the whole surface, as in a whole build.
+    let local = segment_sized(&sub, &sub_field, options, mesh.area())?;
 
     let edge_of = |local_edge: u32| -> u32 {
         // Find the corner of a face holding this edge and read the mesh's edge there.
@@ -173,6 +175,7 @@ mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::shapes;
+    use crate::segment::segment;
 
     #[test]
     fn whole_mesh_region_equals_segment() {

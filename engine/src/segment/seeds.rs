@@ -211,7 +211,22 @@ pub fn place_seeds(
     beta: f64,
     seed: u64,
 ) -> Vec<u32> {
-    grow_regions(mesh, faces, weights, mask, beta, seed).seeds
+    place_seeds_sized(mesh, faces, weights, mask, beta, seed, mesh.area())
+}
+
+/// [`place_seeds`] with [`MIN_REGION_SHARE`] taken of `surface_area` instead of the
+/// mesh's area: a region cut out of a larger surface
+/// ([`segment_region`](super::segment_region)) keeps the whole surface's rule.
+pub(crate) fn place_seeds_sized(
+    mesh: &TriMesh,
+    faces: &FaceField,
+    weights: &[f64],
+    mask: &[bool],
+    beta: f64,
+    seed: u64,
+    surface_area: f64,
+) -> Vec<u32> {
+    grow_regions(mesh, faces, weights, mask, beta, seed, surface_area).seeds
 }
 
 /// The seeding regions behind [`place_seeds`] (the tests check the bound on them).
@@ -234,6 +249,7 @@ pub(crate) fn grow_regions(
     mask: &[bool],
     beta: f64,
     seed: u64,
+    surface_area: f64,
 ) -> Regions {
     let n = mesh.face_count();
     assert_eq!(faces.major.len(), n, "one major direction per face");
@@ -269,7 +285,7 @@ pub(crate) fn grow_regions(
     let mut candidates = VecDeque::new();
     let mut grown = Vec::new();
     let mut component_count = 0u64;
-    let min_area = MIN_REGION_SHARE * mesh.area();
+    let min_area = MIN_REGION_SHARE * surface_area;
     let areas = mesh.face_areas();
     for (i, &start) in members_of_mask.iter().enumerate() {
         if component[i] != NONE {
@@ -567,7 +583,7 @@ pub(crate) mod tests {
         let mask = vec![true; mesh.face_count()];
         for beta in [FRAC_PI_4, PI / 8.0] {
             for seed in 0..4 {
-                let regions = grow_regions(&mesh, &faces, &w, &mask, beta, seed);
+                let regions = grow_regions(&mesh, &faces, &w, &mask, beta, seed, mesh.area());
                 let Regions {
                     seeds,
                     origins,
@@ -650,7 +666,7 @@ pub(crate) mod tests {
             let wt = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
             let mask = vec![true; mesh.face_count()];
             // Seed 0 starts outside the patch.
-            let regions = grow_regions(&mesh, &faces, &wt, &mask, FRAC_PI_4, 0);
+            let regions = grow_regions(&mesh, &faces, &wt, &mask, FRAC_PI_4, 0, mesh.area());
             assert!(!turned.contains(&regions.origins[0]));
             assert_eq!(regions.seeds.len(), expected, "{n}: patch {w} x {h}");
             if expected == 1 {
@@ -662,6 +678,20 @@ pub(crate) mod tests {
                 place_seeds(&mesh, &faces, &wt, &mask, FRAC_PI_4, 0),
                 regions.seeds
             );
+            if expected == 2 {
+                // Cut out of a surface 1000 times larger (`segment_region`), the same
+                // patch is below the share of that surface and withdrawn.
+                let within = place_seeds_sized(
+                    &mesh,
+                    &faces,
+                    &wt,
+                    &mask,
+                    FRAC_PI_4,
+                    0,
+                    1000.0 * mesh.area(),
+                );
+                assert_eq!(within.len(), 1, "{n}: patch {w} x {h}");
+            }
         }
     }
 
@@ -684,7 +714,7 @@ pub(crate) mod tests {
         let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
         let mask = vec![true; mesh.face_count()];
         for seed in 0..4 {
-            let regions = grow_regions(&mesh, &faces, &w, &mask, FRAC_PI_4, seed);
+            let regions = grow_regions(&mesh, &faces, &w, &mask, FRAC_PI_4, seed, mesh.area());
             for (f, &r) in regions.region.iter().enumerate() {
                 if r == NONE {
                     continue;
