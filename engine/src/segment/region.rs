@@ -3,14 +3,15 @@
 //! Input: a mesh, a field, a set of faces (the region) and [`SegmentOptions`]. Output: a
 //! [`Segmentation`] of the region alone, in the mesh's face, vertex and edge ids (faces
 //! outside the region have segment `NONE`). The region is extracted as a mesh of its
-//! own and segmented with [`segment`], so its segments satisfy everything `segment`
+//! own and segmented with [`segment`](super::segment()) (seeding regions measured
+//! against the whole mesh's area), so its segments satisfy everything `segment`
 //! guarantees (connected, singularity-free, discs) and together cover exactly the
 //! region. A caller that keeps the segments outside the region and replaces those
 //! inside it still has a covering of the whole mesh by disc segments.
 //!
 //! The field on the extracted mesh is the mesh's tensors re-projected into the
 //! extracted mesh's tangent planes, which differ from the mesh's only at vertices on the
-//! region boundary (their normals see fewer faces). Cost: that of [`segment`] on the
+//! region boundary (their normals see fewer faces). Cost: that of [`segment`](super::segment()) on the
 //! region, plus O(region) to extract it.
 
 use super::pipeline::segment_sized;
