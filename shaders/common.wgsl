@@ -82,3 +82,36 @@ fn shade(normal: vec3<f32>, position: vec3<f32>) -> f32 {
     let head = max(dot(n, to_eye), 0.0);
     return 0.22 + 0.58 * key + 0.3 * head;
 }
+
+// A Sample read at instance rate from vertex buffer 0 (layout: SAMPLE_ATTRIBUTES in
+// systems/src/gpu/layout.rs), by the splat and the stroke pipelines.
+struct SampleInput {
+    @location(0) position: vec3<f32>,
+    @location(1) face: u32,
+    @location(2) normal: vec3<f32>,
+    @location(3) segment: u32,
+    @location(4) major_axis: vec3<f32>,
+    @location(5) index: u32,
+    @location(6) bary: vec2<f32>,
+    @location(7) spacing: vec2<f32>,
+}
+
+fn to_sample(i: SampleInput) -> Sample {
+    return Sample(i.position, i.face, i.normal, i.segment, i.major_axis, i.index, i.bary, i.spacing);
+}
+
+// The field's major axis made a unit tangent of the plane with unit normal n (any
+// tangent where the axis is missing or normal to the plane).
+fn tangent_major(axis: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var major = axis - dot(axis, n) * n;
+    if dot(major, major) < 1e-12 {
+        major = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(n.x) > 0.9);
+        major = major - dot(major, n) * n;
+    }
+    return normalize(major);
+}
+
+// Whether a sample faces away from the camera (dropped: a closed surface hides it).
+fn faces_away(s: Sample, n: vec3<f32>) -> bool {
+    return dot(n, frame.eye.xyz - s.position) <= 0.0;
+}

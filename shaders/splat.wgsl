@@ -3,26 +3,11 @@
 // (layout: SAMPLE_ATTRIBUTES in systems/src/gpu/layout.rs); the four vertices of a
 // triangle strip are the quad's corners.
 
-struct SampleInput {
-    @location(0) position: vec3<f32>,
-    @location(1) face: u32,
-    @location(2) normal: vec3<f32>,
-    @location(3) segment: u32,
-    @location(4) major_axis: vec3<f32>,
-    @location(5) index: u32,
-    @location(6) bary: vec2<f32>,
-    @location(7) spacing: vec2<f32>,
-}
-
 struct SplatVarying {
     @builtin(position) clip: vec4<f32>,
     // Position in the ellipse's own frame, in semi-axes: |q| = 1 on the rim.
     @location(0) q: vec2<f32>,
     @location(1) @interpolate(flat) color: vec3<f32>,
-}
-
-fn to_sample(i: SampleInput) -> Sample {
-    return Sample(i.position, i.face, i.normal, i.segment, i.major_axis, i.index, i.bary, i.spacing);
 }
 
 fn splat_color(s: Sample) -> vec3<f32> {
@@ -36,17 +21,6 @@ fn splat_color(s: Sample) -> vec3<f32> {
         case 1u: { return segment_color(s.segment); }
         default: { return frame.base_color.rgb; }
     }
-}
-
-// The field's major axis made a unit tangent of the plane with unit normal n (any
-// tangent where the axis is missing or normal to the plane).
-fn tangent_major(axis: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    var major = axis - dot(axis, n) * n;
-    if dot(major, major) < 1e-12 {
-        major = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(n.x) > 0.9);
-        major = major - dot(major, n) * n;
-    }
-    return normalize(major);
 }
 
 // Level of detail (systems/src/gpu/splat.rs, SplatLod; engine/src/sample/lod.rs for
@@ -80,11 +54,6 @@ fn lod_fade(s: Sample, n: vec3<f32>) -> vec2<f32> {
     }
     let m = lod_multiplier(s.position, n);
     return vec2<f32>(clamp(frame.lod.x * m - f32(s.index), 0.0, 1.0), m);
-}
-
-// Whether a sample faces away from the camera (dropped: a closed surface hides it).
-fn faces_away(s: Sample, n: vec3<f32>) -> bool {
-    return dot(n, frame.eye.xyz - s.position) <= 0.0;
 }
 
 @vertex

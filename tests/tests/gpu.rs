@@ -12,8 +12,9 @@ use strata_systems::gpu::buffers::{MIN_CAPACITY, next_capacity};
 use strata_systems::gpu::context::scoped;
 use strata_systems::gpu::wgpu;
 use strata_systems::gpu::{
-    ColorMode, Footprint, GpuContext, GpuError, GpuOptions, HeadlessTarget, MeshMode, OrbitCamera,
-    RgbaImage, SiteExpander, SplatRenderer, SplatStyle,
+    Brush, ColorMode, Footprint, GpuContext, GpuError, GpuOptions, HeadlessTarget, MeshMode,
+    NprKind, NprRenderer, NprStyle, OrbitCamera, RgbaImage, SiteExpander, SplatRenderer,
+    SplatStyle,
 };
 use strata_systems::scene::Scene;
 
@@ -730,4 +731,236 @@ fn ecs_upload_system_streams_the_engine_samples() {
     schedule.run(&mut world);
     world.clear_trackers();
     check(&mut world, 10, 3);
+}
+
+/// A sphere lit from the side under a 2.5:1 field: tone varies across it, strokes have a
+/// clear direction.
+const SPHERE: &str = "(mesh: Shape(Sphere(radius: 1.0, resolution: 8)), \
+     field: Constant(direction: (0.0, 1.0, 0.2), anisotropy: 2.5, density: 1.0))";
+
+/// Every stroke and stipple look: stipple, then strokes with each brush.
+fn npr_kinds() -> Vec<NprKind> {
+    std::iter::once(NprKind::Stipple)
+        .chain(Brush::ALL.into_iter().map(NprKind::Strokes))
+        .collect()
+}
+
+fn npr_name(kind: NprKind) -> String {
+    match kind {
+        NprKind::Stipple => "stipple".into(),
+        NprKind::Strokes(b) => format!("strokes/{}", b.name()),
+    }
+}
+
+/// `samples` of `scene` drawn as `kind` at 256 x 256 (one sample per pixel).
+fn render_npr(ctx: &GpuContext, scene: &Scene, samples: &[Sample], kind: NprKind) -> RgbaImage {
+    let target = HeadlessTarget::new(&ctx.device, 256, 256, 1).expect("target");
+    let mut splats = SplatRenderer::new(&ctx.device, target.format()).expect("pipelines");
+    splats
+        .upload(&ctx.device, &ctx.queue, samples)
+        .expect("upload");
+    splats
+        .set_mesh(&ctx.device, &ctx.queue, &scene.mesh, None)
+        .expect("mesh");
+    let npr = NprRenderer::new(&ctx.device, target.format()).expect("stroke pipelines");
+    let camera = OrbitCamera::default().fitted_to_mesh(&scene.mesh, 1.0, 1.0);
+    target
+        .render_npr(
+            ctx,
+            &splats,
+            &npr,
+            &camera,
+            &SplatStyle::default(),
+            &NprStyle::new(kind, 7),
+        )
+        .expect("render")
+}
+
+/// The luminance (0 to 1) of an sRGB pixel's bytes, weighted on the encoded values.
+fn luminance(p: &[u8]) -> f64 {
+    (0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])) / 255.0
+}
+
+/// Mean and standard deviation of the luminance of the middle half (each way) of
+/// `image`, where the test sphere is, and the mean absolute difference of luminance
+/// between horizontal neighbours there (how fine the texture is).
+fn luminance_stats(image: &RgbaImage) -> [f64; 3] {
+    let (w, h) = (image.width, image.height);
+    let (xs, ys) = (w / 4..3 * w / 4, h / 4..3 * h / 4);
+    let lum = |x, y| luminance(&image.pixel(x, y));
+    let all: Vec<f64> = ys
+        .clone()
+        .flat_map(|y| xs.clone().map(move |x| (x, y)))
+        .map(|(x, y)| lum(x, y))
+        .collect();
+    let n = all.len() as f64;
+    let mean = all.iter().sum::<f64>() / n;
+    let var = all.iter().map(|l| (l - mean) * (l - mean)).sum::<f64>() / n;
+    let steps: Vec<f64> = ys
+        .flat_map(|y| xs.clone().skip(1).map(move |x| (x, y)))
+        .map(|(x, y)| (lum(x, y) - lum(x - 1, y)).abs())
+        .collect();
+    let gradient = steps.iter().sum::<f64>() / steps.len() as f64;
+    [mean, var.sqrt(), gradient]
+}
+
+/// Stipple and every brush draw a picture (paper plus marks that are clearly darker
+/// than the paper), and splats, stipple and the five brushes all differ from each
+/// other in mean or spread of luminance.
+#[test]
+fn every_style_and_brush_renders_a_distinct_picture() {
+    let Some(ctx) = gpu("every_style_and_brush_renders_a_distinct_picture") else {
+        return;
+    };
+    let scene = scene(SPHERE);
+    let samples = scene.sampler.sample(4000, 3);
+    let camera = OrbitCamera::default().fitted_to_mesh(&scene.mesh, 1.0, 1.0);
+    let splat_style = SplatStyle {
+        mesh_mode: MeshMode::None,
+        ..SplatStyle::default()
+    };
+    let mut stats = vec![(
+        "splats".to_string(),
+        luminance_stats(&render(
+            &ctx,
+            &scene,
+            &samples,
+            &camera,
+            &splat_style,
+            (256, 256),
+        )),
+    )];
+    for kind in npr_kinds() {
+        let image = render_npr(&ctx, &scene, &samples, kind);
+        let name = npr_name(kind);
+        // The paper is the lightest thing there; marks are at least 0.15 darker.
+        let stats_here = luminance_stats(&image);
+        let [mean, spread, gradient] = stats_here;
+        let corner = luminance(&image.pixel(0, 0));
+        let marked = image
+            .pixels
+            .chunks_exact(4)
+            .filter(|p| luminance(p) < corner - 0.15)
+            .count();
+        let share = marked as f64 / f64::from(image.width * image.height);
+        println!(
+            "{name}: luminance mean {mean:.3}, sd {spread:.3}, gradient {gradient:.3}, paper {corner:.3}, {:.1}% marked",
+            100.0 * share
+        );
+        assert!(corner > 0.8, "{name}: paper luminance {corner}");
+        assert!(
+            share > 0.01,
+            "{name}: only {share} of the pixels are marked"
+        );
+        stats.push((name, stats_here));
+    }
+    // Any two differ by more than 0.01 in the mean, the spread or the texture.
+    for (i, (a, sa)) in stats.iter().enumerate() {
+        for (b, sb) in &stats[i + 1..] {
+            let d = (0..3).map(|k| (sa[k] - sb[k]).abs()).fold(0.0, f64::max);
+            assert!(d > 0.01, "{a} and {b} look alike: {sa:.4?} and {sb:.4?}");
+        }
+    }
+}
+
+/// A stroke or stipple picture is a function of the samples and the seed: the same
+/// image twice, and the same image, bit for bit, with the samples drawn in reverse
+/// order (min blending and depth-tested-not-written strokes make the order irrelevant).
+#[test]
+fn npr_pictures_are_deterministic_and_independent_of_draw_order() {
+    let Some(ctx) = gpu("npr_pictures_are_deterministic_and_independent_of_draw_order") else {
+        return;
+    };
+    let scene = scene(SPHERE);
+    let samples = scene.sampler.sample(3000, 5);
+    let reversed: Vec<Sample> = samples.iter().rev().copied().collect();
+    let hash = |image: &RgbaImage| {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        image.pixels.hash(&mut h);
+        h.finish()
+    };
+    for kind in npr_kinds() {
+        let name = npr_name(kind);
+        let first = render_npr(&ctx, &scene, &samples, kind);
+        let again = render_npr(&ctx, &scene, &samples, kind);
+        assert_eq!(hash(&first), hash(&again), "{name}: two renders differ");
+        let backwards = render_npr(&ctx, &scene, &reversed, kind);
+        let differing = first
+            .pixels
+            .chunks_exact(4)
+            .zip(backwards.pixels.chunks_exact(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(
+            differing, 0,
+            "{name}: {differing} pixels change with the draw order"
+        );
+    }
+}
+
+/// `strata render --style strokes --brush crayon` writes a PNG whose pixels are mostly
+/// paper-light, unlike the dark splat background.
+#[test]
+fn render_command_draws_strokes() {
+    use clap::Parser;
+    let Some(_ctx) = gpu("render_command_draws_strokes") else {
+        return;
+    };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = dir.path().join("sphere.ron");
+    std::fs::write(&scene, SPHERE).expect("scene written");
+    for (style, brush) in [("strokes", Some("crayon")), ("stipple", None)] {
+        let out = dir.path().join(format!("{style}.png"));
+        let mut args: Vec<std::ffi::OsString> = vec!["strata".into(), "render".into()];
+        args.extend([scene.clone().into(), "--out".into(), out.clone().into()]);
+        let size = [
+            "--width", "160", "--height", "120", "-n", "800", "--style", style,
+        ];
+        args.extend(size.iter().map(Into::into));
+        if let Some(b) = brush {
+            args.extend(["--brush".into(), b.into()]);
+        }
+        let cli = strata_systems::cli::Cli::try_parse_from(args).expect("arguments parse");
+        strata_systems::cli::run(cli).expect("render succeeds");
+        let bytes = std::fs::read(&out).expect("PNG written");
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{style}");
+    }
+}
+
+/// Unknown styles and brushes, and a brush without `--style strokes`, fail before any
+/// GPU work with one line naming the valid choices (no GPU needed).
+#[test]
+fn bad_style_or_brush_fails_in_one_line() {
+    use clap::Parser;
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/default.ron");
+    for (extra, expected) in [
+        (
+            &["--style", "oil"][..],
+            "--style must be one of splats, stipple, strokes, not 'oil'",
+        ),
+        (
+            &["--style", "strokes", "--brush", "sponge"][..],
+            "--brush must be one of acrylic, crayon, watercolor, pencil, ink, not 'sponge'",
+        ),
+        (
+            &["--brush", "ink"][..],
+            "--brush needs --style strokes (not --style splats)",
+        ),
+        (
+            &["--style", "stipple", "--brush", "ink"][..],
+            "--brush needs --style strokes (not --style stipple)",
+        ),
+    ] {
+        let mut args: Vec<std::ffi::OsString> = vec!["strata".into(), "render".into()];
+        args.push(config.clone().into());
+        args.push("--out".into());
+        args.push("never-written.png".into());
+        args.extend(extra.iter().map(Into::into));
+        let cli = strata_systems::cli::Cli::try_parse_from(args).expect("arguments parse");
+        let error = strata_systems::cli::run(cli).expect_err("bad choice");
+        let line = strata_systems::cli::one_line(&error);
+        assert_eq!(line, expected);
+    }
+    assert!(!Path::new("never-written.png").exists());
 }

@@ -2,7 +2,8 @@
 //! ([`HeadlessTarget::render_samples`](crate::gpu::HeadlessTarget::render_samples));
 //! with `--lod`, draw progressive samples with view-dependent level of detail
 //! ([`LodScene`](crate::gpu::LodScene)), for one still or, with `--frames`, a PNG
-//! sequence of a moving camera.
+//! sequence of a moving camera; with `--style stipple|strokes`, draw the samples as
+//! stipple dots or brush strokes on paper ([`NprRenderer`](crate::gpu::NprRenderer)).
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +15,8 @@ use strata_engine::mesh::TriMesh;
 use strata_engine::sample::PoolChange;
 
 use crate::gpu::{
-    GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, SplatLod, SplatRenderer,
+    Brush, GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer,
+    NprStyle, RenderStyle, SplatLod, SplatRenderer,
 };
 use crate::scene::Scene;
 
@@ -71,6 +73,49 @@ pub struct RenderArgs {
         requires = "lod"
     )]
     pub twist: f32,
+    /// How samples are drawn: `splats` (field-aligned ellipses or glyphs), `stipple`
+    /// (ink dots sized by tone) or `strokes` (brush strokes along the field, see
+    /// `--brush`); stipple and strokes are drawn on paper (docs/styles.md).
+    #[arg(long, default_value = "splats")]
+    pub style: String,
+    /// With `--style strokes`: the brush, `acrylic`, `crayon`, `watercolor`, `pencil`
+    /// or `ink` (default acrylic).
+    #[arg(long)]
+    pub brush: Option<String>,
+}
+
+impl RenderArgs {
+    /// The stroke or stipple look `--style` and `--brush` ask for (`None` for splats),
+    /// or a one-line error naming the valid choices.
+    pub fn npr_kind(&self) -> anyhow::Result<Option<NprKind>> {
+        let Some(style) = RenderStyle::from_name(&self.style) else {
+            anyhow::bail!(
+                "--style must be one of {}, not '{}'",
+                RenderStyle::NAMES.join(", "),
+                self.style
+            );
+        };
+        let brush = match self.brush.as_deref() {
+            None => None,
+            Some(_) if style != RenderStyle::Strokes => {
+                anyhow::bail!(
+                    "--brush needs --style strokes (not --style {})",
+                    style.name()
+                )
+            }
+            Some(name) => Some(Brush::from_name(name).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--brush must be one of {}, not '{name}'",
+                    Brush::NAMES.join(", ")
+                )
+            })?),
+        };
+        Ok(match style {
+            RenderStyle::Splats => None,
+            RenderStyle::Stipple => Some(NprKind::Stipple),
+            RenderStyle::Strokes => Some(NprKind::Strokes(brush.unwrap_or_default())),
+        })
+    }
 }
 
 /// Runs `strata render`.
@@ -78,6 +123,10 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     args.look.validate()?;
     if !matches!(args.msaa, 1 | 4) {
         anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
+    }
+    let npr = args.npr_kind()?;
+    if npr.is_some() && args.lod {
+        anyhow::bail!("--style {} does not support --lod yet", args.style);
     }
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
@@ -98,6 +147,9 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
         return run_lod(args, &ctx, &target, &scene, count, seed);
     }
     let samples = scene.sampler.sample(count, seed);
+    if let Some(kind) = npr {
+        return run_npr(args, &ctx, &target, &scene, &samples, kind, seed);
+    }
     let segments = (args.look.mesh != MeshMode::None)
         .then(|| crate::gpu::splat::face_segments(&scene.sampler));
     let mesh = segments.as_deref().map(|s| (&*scene.mesh, s));
@@ -110,6 +162,52 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", args.out.display()))?;
     println!(
         "rendered {count} samples (seed {seed}) at {}x{} on {}; wrote {}",
+        args.width,
+        args.height,
+        ctx.adapter_summary(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// `strata render --style stipple|strokes`: the samples as dots or strokes on paper,
+/// the mesh drawn into depth only (it hides what lies behind it).
+fn run_npr(
+    args: &RenderArgs,
+    ctx: &GpuContext,
+    target: &HeadlessTarget,
+    scene: &Scene,
+    samples: &[strata_engine::sample::Sample],
+    kind: NprKind,
+    seed: u64,
+) -> anyhow::Result<()> {
+    let mut splats = SplatRenderer::new(&ctx.device, target.format())?;
+    splats.upload(&ctx.device, &ctx.queue, samples)?;
+    splats.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, None)?;
+    let npr = NprRenderer::new(&ctx.device, target.format())?;
+    let camera = args
+        .look
+        .camera(scene, args.width as f32 / args.height as f32);
+    // The sample seed folded to 32 bits: the same picture for the same samples.
+    let style = NprStyle::new(kind, (seed ^ (seed >> 32)) as u32);
+    let image = target.render_npr(
+        ctx,
+        &splats,
+        &npr,
+        &camera,
+        &args.look.style(samples),
+        &style,
+    )?;
+    image
+        .write_png(&args.out)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    let what = match kind {
+        NprKind::Stipple => "stipple".to_string(),
+        NprKind::Strokes(b) => format!("{} strokes", b.name()),
+    };
+    println!(
+        "rendered {} samples as {what} (seed {seed}) at {}x{} on {}; wrote {}",
+        samples.len(),
         args.width,
         args.height,
         ctx.adapter_summary(),

@@ -10,6 +10,7 @@ use strata_engine::sample::Sample;
 use super::buffers::map_read;
 use super::camera::OrbitCamera;
 use super::context::{GpuContext, GpuError, scoped};
+use super::npr::{NprRenderer, NprStyle};
 use super::splat::{FrameTarget, SplatRenderer, SplatStyle, TargetFormat};
 
 /// An 8-bit sRGB RGBA image, rows top to bottom, no padding.
@@ -186,6 +187,43 @@ impl HeadlessTarget {
         camera: &OrbitCamera,
         style: &SplatStyle,
     ) -> Result<RgbaImage, GpuError> {
+        self.draw_and_read(ctx, |encoder, target| {
+            renderer.encode(&ctx.device, &ctx.queue, encoder, target, camera, style)
+        })
+    }
+
+    /// Draws `splats`' samples as strokes or stipple ([`NprRenderer::encode`]) and reads
+    /// the picture back (waits for the device). `npr` must be built for
+    /// [`format`](Self::format).
+    pub fn render_npr(
+        &self,
+        ctx: &GpuContext,
+        splats: &SplatRenderer,
+        npr: &NprRenderer,
+        camera: &OrbitCamera,
+        look: &SplatStyle,
+        style: &NprStyle,
+    ) -> Result<RgbaImage, GpuError> {
+        self.draw_and_read(ctx, |encoder, target| {
+            npr.encode(
+                &ctx.device,
+                &ctx.queue,
+                encoder,
+                target,
+                camera,
+                splats,
+                look,
+                style,
+            )
+        })
+    }
+
+    /// Records `draw` into this target, copies the picture out and reads it back.
+    fn draw_and_read(
+        &self,
+        ctx: &GpuContext,
+        draw: impl FnOnce(&mut wgpu::CommandEncoder, FrameTarget<'_>) -> Result<(), GpuError>,
+    ) -> Result<RgbaImage, GpuError> {
         const OP: &str = "rendering offscreen";
         let (device, queue) = (&ctx.device, &ctx.queue);
         let (width, height) = self.size;
@@ -204,7 +242,7 @@ impl HeadlessTarget {
                 size: self.size,
             },
         };
-        renderer.encode(device, queue, &mut encoder, target, camera, style)?;
+        draw(&mut encoder, target)?;
         scoped(device, OP, || {
             encoder.copy_texture_to_buffer(
                 wgpu::TexelCopyTextureInfo {

@@ -136,7 +136,41 @@ pub struct MeshVertex {
     pub _pad: u32,
 }
 
+/// Per-frame uniforms of the stroke and stipple pipelines (bind group 0, binding 1,
+/// beside [`FrameUniforms`]). WGSL twin: `NprParams` in `shaders/npr.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct NprUniforms {
+    /// Palette colour of the darkest tone, sRGB (alpha unused).
+    pub shadow: [f32; 4],
+    /// Palette colour of the middle tone, sRGB.
+    pub mid: [f32; 4],
+    /// Palette colour of the lightest tone, sRGB.
+    pub light: [f32; 4],
+    /// Ink of stipple dots and of pencil and ink strokes, sRGB.
+    pub ink: [f32; 4],
+    /// Paper colour, sRGB.
+    pub paper: [f32; 4],
+    /// [`NprKind::code`](super::npr::NprKind::code).
+    pub style: u32,
+    /// [`Brush::code`](super::npr::Brush::code).
+    pub brush: u32,
+    /// Seed of the per-stroke hash and of the paper and brush textures.
+    pub seed: u32,
+    /// Focal length of the camera in pixels.
+    pub focal_px: f32,
+    /// Relative spread of stroke and dot size.
+    pub size_jitter: f32,
+    /// Relative spread of stroke colour.
+    pub hue_jitter: f32,
+    /// Stroke length as a multiple of the larger spacing.
+    pub stroke_length: f32,
+    /// Stroke width as a multiple of the smaller spacing.
+    pub stroke_width: f32,
+}
+
 const _: () = assert!(size_of::<Sample>() == 64);
+const _: () = assert!(size_of::<NprUniforms>() == 112);
 const _: () = assert!(size_of::<FrameUniforms>() == 176);
 const _: () = assert!(size_of::<FrameUniforms>().is_multiple_of(16));
 const _: () = assert!(size_of::<MeshVertex>() == 32);
@@ -298,6 +332,31 @@ pub(crate) mod tests {
             let found = members.iter().find(|(n, _)| n == name);
             assert_eq!(found.map(|(_, o)| *o), Some(offset), "Frame.{name}");
         }
+    }
+
+    /// The WGSL `NprParams` has the size and offsets of [`NprUniforms`].
+    #[test]
+    fn npr_uniforms_match_their_wgsl_twin() {
+        let (members, span) = wgsl_layout(super::super::shaders::NPR, "NprParams");
+        assert_eq!(span, size_of::<NprUniforms>());
+        let expected = [
+            ("shadow", offset_of!(NprUniforms, shadow)),
+            ("mid", offset_of!(NprUniforms, mid)),
+            ("light", offset_of!(NprUniforms, light)),
+            ("ink", offset_of!(NprUniforms, ink)),
+            ("paper", offset_of!(NprUniforms, paper)),
+            ("style", offset_of!(NprUniforms, style)),
+            ("brush", offset_of!(NprUniforms, brush)),
+            ("seed", offset_of!(NprUniforms, seed)),
+            ("focal_px", offset_of!(NprUniforms, focal_px)),
+            ("size_jitter", offset_of!(NprUniforms, size_jitter)),
+            ("hue_jitter", offset_of!(NprUniforms, hue_jitter)),
+            ("stroke_length", offset_of!(NprUniforms, stroke_length)),
+            ("stroke_width", offset_of!(NprUniforms, stroke_width)),
+        ];
+        let expected: Vec<(String, usize)> =
+            expected.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        assert_eq!(members, expected);
     }
 
     #[test]

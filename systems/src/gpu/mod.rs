@@ -7,6 +7,8 @@
 //! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
 //! - [`lod`]: GPU-resident progressive pools and the level-of-detail fade pass.
 //! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
+//! - [`npr`]: stroke and stipple pictures on paper from the same sample buffer;
+//!   [`npr::NprRenderer`].
 //! - [`headless`]: offscreen target, readback, PNG.
 //! - [`camera`]: orbit camera and framing.
 //! - [`stream`]: per-frame resampling + upload without ECS.
@@ -24,6 +26,7 @@ pub mod expand;
 pub mod headless;
 pub mod layout;
 pub mod lod;
+pub mod npr;
 pub mod shaders;
 pub mod splat;
 pub mod stream;
@@ -40,6 +43,7 @@ pub use expand::SiteExpander;
 pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
 pub use lod::{GpuLodPool, LodFades, LodFrame, LodScene};
+pub use npr::{Brush, NprKind, NprRenderer, NprStyle, RenderStyle};
 pub use splat::{SplatLod, SplatRenderer, SplatStyle};
 pub use stream::SampleStream;
 pub use upload::{GpuSplats, upload_samples};

@@ -25,6 +25,13 @@ pub const MESH: &str = concat!(
     include_str!("../../../shaders/mesh.wgsl")
 );
 
+/// The stroke and stipple pipelines' module: `common.wgsl` + `npr.wgsl`.
+pub const NPR: &str = concat!(
+    include_str!("../../../shaders/common.wgsl"),
+    "\n",
+    include_str!("../../../shaders/npr.wgsl")
+);
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -42,6 +49,20 @@ mod tests {
             ),
             ("mesh", MESH, &["vs_mesh", "fs_mesh"][..]),
             ("expand", EXPAND, &["cs_expand"][..]),
+            (
+                "npr",
+                NPR,
+                &[
+                    "vs_paper",
+                    "fs_paper",
+                    "vs_depth",
+                    "fs_depth",
+                    "vs_stroke",
+                    "fs_stroke",
+                    "vs_stipple",
+                    "fs_stipple",
+                ][..],
+            ),
         ] {
             let module = naga::front::wgsl::parse_str(source)
                 .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));

@@ -114,7 +114,7 @@ impl SplatLod {
 }
 
 /// The focal length in pixels of `camera` on a target `height` pixels high.
-fn focal_pixels(camera: &OrbitCamera, height: u32) -> f64 {
+pub(crate) fn focal_pixels(camera: &OrbitCamera, height: u32) -> f64 {
     f64::from(height.max(1)) / (2.0 * (f64::from(camera.fov_y) / 2.0).tan())
 }
 
@@ -266,6 +266,12 @@ impl SplatRenderer {
     /// ([`SiteExpander`](super::expand::SiteExpander)).
     pub fn samples_mut(&mut self) -> &mut GpuSampleBuffer {
         &mut self.samples
+    }
+
+    /// The mesh vertex buffer and its vertex count, when a mesh is set (the stroke
+    /// renderer draws it into depth).
+    pub(crate) fn mesh_buffer(&self) -> Option<(&wgpu::Buffer, u32)> {
+        self.mesh.as_ref().map(|(b, n)| (b, *n))
     }
 
     /// Uploads `mesh` (flat-shaded, one vertex per face corner) to draw under the

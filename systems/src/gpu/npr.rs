@@ -1,0 +1,501 @@
+//! Non-photorealistic rendering (issue 21; the paper's Figs. 1, 3, 13 and 14): the
+//! samples drawn as painted strokes with a procedural brush, or as stipple dots, on a
+//! procedural paper (`shaders/npr.wgsl`).
+//!
+//! Input: the [`SplatRenderer`]'s sample buffer (the same instance records the splats
+//! read, no second data path) and its mesh; output: one render pass. Each sample is one
+//! instanced quad; a stroke lies in the sample's tangent plane along the axis of larger
+//! spacing, sized by the spacings, with size, angle and hue varied by a hash of the
+//! sample's rank and the seed, and coloured from a palette by Lambert tone. Colour
+//! writes use min ("darken") blending, so the picture is the same, bit for bit,
+//! whatever order the strokes are drawn in (the shader's header says why).
+//!
+//! Cost: one instanced quad per sample plus a full-screen paper triangle and the mesh
+//! in depth only; the brushes are a few value-noise lookups per fragment.
+
+use super::camera::OrbitCamera;
+use super::context::{GpuError, scoped};
+use super::layout::FrameUniforms;
+use super::layout::{MESH_ATTRIBUTES, MeshVertex, NprUniforms, SAMPLE_ATTRIBUTES};
+use super::shaders;
+use super::splat::{FrameTarget, SplatRenderer, SplatStyle, TargetFormat, frame_uniforms};
+use strata_engine::sample::Sample;
+
+/// How `strata render` draws the samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RenderStyle {
+    /// Field-aligned ellipses or glyphs ([`SplatRenderer`]).
+    #[default]
+    Splats,
+    /// Round ink dots whose size follows the tone.
+    Stipple,
+    /// Painted strokes with a [`Brush`].
+    Strokes,
+}
+
+impl RenderStyle {
+    /// Every style, in the order of [`RenderStyle::NAMES`].
+    pub const ALL: [Self; 3] = [Self::Splats, Self::Stipple, Self::Strokes];
+    /// The styles' command-line names.
+    pub const NAMES: [&'static str; 3] = ["splats", "stipple", "strokes"];
+
+    /// The style named `name` (one of [`NAMES`](Self::NAMES)), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMES
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| Self::ALL[i])
+    }
+
+    /// The style's command-line name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
+/// The brush of [`RenderStyle::Strokes`]: a procedural texture in `fs_stroke`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Brush {
+    /// Opaque paint with bristle streaks along the stroke, drier at its tail.
+    #[default]
+    Acrylic,
+    /// Wax that only catches the paper's tooth: grainy, fuller in dark tones.
+    Crayon,
+    /// A light, blotchy wash with an irregular rim and wet darkened edges.
+    Watercolor,
+    /// Thin graphite lines with paper grain, lighter at both ends.
+    Pencil,
+    /// Thin solid ink lines tapered to points.
+    Ink,
+}
+
+impl Brush {
+    /// Every brush, in the order of [`Brush::NAMES`].
+    pub const ALL: [Self; 5] = [
+        Self::Acrylic,
+        Self::Crayon,
+        Self::Watercolor,
+        Self::Pencil,
+        Self::Ink,
+    ];
+    /// The brushes' command-line names.
+    pub const NAMES: [&'static str; 5] = ["acrylic", "crayon", "watercolor", "pencil", "ink"];
+
+    /// The brush named `name` (one of [`NAMES`](Self::NAMES)), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::NAMES
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| Self::ALL[i])
+    }
+
+    /// The brush's command-line name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    /// The value `fs_stroke` switches on ([`NprUniforms::brush`]).
+    pub fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+/// What an [`NprRenderer`] draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NprKind {
+    /// Stipple dots.
+    Stipple,
+    /// Strokes with a brush.
+    Strokes(Brush),
+}
+
+impl NprKind {
+    /// The value of [`NprUniforms::style`]: 0 stipple, 1 strokes.
+    pub fn code(self) -> u32 {
+        match self {
+            Self::Stipple => 0,
+            Self::Strokes(_) => 1,
+        }
+    }
+}
+
+/// The look of a stroke or stipple picture. Colours are sRGB in `[0, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NprStyle {
+    /// Stipple or strokes with a brush.
+    pub kind: NprKind,
+    /// Seed of the per-stroke variation and of the paper and brush textures.
+    pub seed: u32,
+    /// Palette by tone: shadow, mid-tone, light (the paints; pencil, ink and stipple use
+    /// [`ink`](Self::ink)). Default ultramarine, burnt sienna, Naples yellow.
+    pub palette: [[f32; 3]; 3],
+    /// Ink of stipple dots, pencil and ink strokes. Default near black.
+    pub ink: [f32; 3],
+    /// Paper colour. Default a warm off-white.
+    pub paper: [f32; 3],
+    /// Relative spread of stroke and dot size, `[0, 1)`: a stroke's size is scaled by
+    /// a factor in `1 +- size_jitter`. Default 0.25 (0.15 for stipple).
+    pub size_jitter: f32,
+    /// Relative spread of each colour channel of a stroke, `[0, 1)`. Default 0.12 for
+    /// the paints, 0.05 for pencil, 0 for ink.
+    pub hue_jitter: f32,
+    /// Stroke length as a multiple of the larger spacing (times the splat scale);
+    /// above 1 neighbours overlap. Default 2 (watercolour and ink 1.8).
+    pub stroke_length: f32,
+    /// Stroke width as a multiple of the smaller spacing (times the splat scale),
+    /// capped at 0.45 of the length. Default 1.6 for acrylic, 1.5 crayon, 1.8
+    /// watercolour, 1 for pencil and 0.6 for ink (their lines thin in light tones).
+    pub stroke_width: f32,
+}
+
+impl NprStyle {
+    /// The default look of `kind` with `seed`.
+    pub fn new(kind: NprKind, seed: u32) -> Self {
+        let (size_jitter, hue_jitter, stroke_length, stroke_width) = match kind {
+            NprKind::Stipple => (0.15, 0.0, 1.0, 1.0),
+            NprKind::Strokes(Brush::Acrylic) => (0.25, 0.12, 2.0, 1.6),
+            NprKind::Strokes(Brush::Crayon) => (0.25, 0.1, 2.0, 1.5),
+            NprKind::Strokes(Brush::Watercolor) => (0.3, 0.15, 1.8, 1.8),
+            NprKind::Strokes(Brush::Pencil) => (0.2, 0.05, 2.0, 1.0),
+            NprKind::Strokes(Brush::Ink) => (0.2, 0.0, 1.8, 0.6),
+        };
+        Self {
+            kind,
+            seed,
+            palette: [[0.1, 0.14, 0.4], [0.78, 0.32, 0.12], [0.96, 0.74, 0.3]],
+            ink: [0.07, 0.06, 0.08],
+            paper: [0.97, 0.95, 0.9],
+            size_jitter,
+            hue_jitter,
+            stroke_length,
+            stroke_width,
+        }
+    }
+
+    /// The uniforms of this style for `camera` on a target `height` pixels high.
+    pub fn uniforms(&self, camera: &OrbitCamera, height: u32) -> NprUniforms {
+        let c = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
+        NprUniforms {
+            shadow: c(self.palette[0]),
+            mid: c(self.palette[1]),
+            light: c(self.palette[2]),
+            ink: c(self.ink),
+            paper: c(self.paper),
+            style: self.kind.code(),
+            brush: match self.kind {
+                NprKind::Strokes(b) => b.code(),
+                NprKind::Stipple => 0,
+            },
+            seed: self.seed,
+            focal_px: super::splat::focal_pixels(camera, height) as f32,
+            size_jitter: self.size_jitter,
+            hue_jitter: self.hue_jitter,
+            stroke_length: self.stroke_length,
+            stroke_width: self.stroke_width,
+        }
+    }
+}
+
+/// Min ("darken") blending: the result is the per-channel minimum of what is there and
+/// what is drawn, whatever the order (see the module docs).
+const DARKEN: wgpu::BlendState = wgpu::BlendState {
+    color: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Min,
+    },
+    alpha: wgpu::BlendComponent {
+        src_factor: wgpu::BlendFactor::One,
+        dst_factor: wgpu::BlendFactor::One,
+        operation: wgpu::BlendOperation::Min,
+    },
+};
+
+/// Strokes lie this fraction of their smaller spacing above the surface, and the mesh's
+/// depth is pushed back (its depth bias), so that strokes on the surface pass the
+/// depth test and those behind it fail.
+const STROKE_LIFT: f32 = 0.1;
+
+/// The paper, depth-only mesh, stroke and stipple pipelines with their uniforms.
+#[derive(Debug)]
+pub struct NprRenderer {
+    format: TargetFormat,
+    frame: wgpu::Buffer,
+    params: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    paper: wgpu::RenderPipeline,
+    depth: wgpu::RenderPipeline,
+    strokes: wgpu::RenderPipeline,
+    stipple: wgpu::RenderPipeline,
+}
+
+impl NprRenderer {
+    /// Builds the pipelines for targets of `format`.
+    pub fn new(device: &wgpu::Device, format: TargetFormat) -> Result<Self, GpuError> {
+        scoped(device, "building the stroke pipelines", || {
+            build(device, format)
+        })
+    }
+
+    /// The target format the pipelines were built for.
+    pub fn format(&self) -> TargetFormat {
+        self.format
+    }
+
+    /// Records one render pass: paper, `splats`' mesh into depth (when set), then one
+    /// stroke or dot per sample of `splats`' buffer. `look` gives the light direction
+    /// and the size scale ([`SplatStyle::splat_scale`]); its colours and footprint are
+    /// not used.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: FrameTarget<'_>,
+        camera: &OrbitCamera,
+        splats: &SplatRenderer,
+        look: &SplatStyle,
+        style: &NprStyle,
+    ) -> Result<(), GpuError> {
+        let frame = frame_uniforms(camera, look, target.size, STROKE_LIFT);
+        let params = style.uniforms(camera, target.size.1);
+        scoped(device, "drawing strokes", || {
+            queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("strata strokes"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: target.color,
+                    depth_slice: None,
+                    resolve_target: target.resolve,
+                    ops: wgpu::Operations {
+                        // White: the identity of min blending.
+                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: target.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_pipeline(&self.paper);
+            pass.draw(0..3, 0..1);
+            if let Some((mesh, count)) = splats.mesh_buffer() {
+                pass.set_pipeline(&self.depth);
+                pass.set_vertex_buffer(0, mesh.slice(..));
+                pass.draw(0..count, 0..1);
+            }
+            let n = splats.samples().len() as u32;
+            if n > 0 {
+                pass.set_pipeline(match style.kind {
+                    NprKind::Stipple => &self.stipple,
+                    NprKind::Strokes(_) => &self.strokes,
+                });
+                pass.set_vertex_buffer(0, splats.samples().buffer().slice(..));
+                pass.draw(0..4, 0..n);
+            }
+        })
+    }
+}
+
+fn build(device: &wgpu::Device, format: TargetFormat) -> NprRenderer {
+    let uniform = |label, size: usize| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    };
+    let frame = uniform("strata stroke frame uniforms", size_of::<FrameUniforms>());
+    let params = uniform("strata stroke uniforms", size_of::<NprUniforms>());
+    let entry = |binding, size: usize| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size as u64),
+        },
+        count: None,
+    };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("strata strokes"),
+        entries: &[
+            entry(0, size_of::<FrameUniforms>()),
+            entry(1, size_of::<NprUniforms>()),
+        ],
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("strata strokes"),
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: params.as_entire_binding(),
+            },
+        ],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("strata strokes"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("npr.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(shaders::NPR.into()),
+    });
+    let sample_layout = wgpu::VertexBufferLayout {
+        array_stride: size_of::<Sample>() as u64,
+        step_mode: wgpu::VertexStepMode::Instance,
+        attributes: &SAMPLE_ATTRIBUTES,
+    };
+    let mesh_layout = wgpu::VertexBufferLayout {
+        array_stride: size_of::<MeshVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &MESH_ATTRIBUTES,
+    };
+    // One shape for all four: what differs is the entry points, the vertex buffer, the
+    // topology, the depth test and whether colour is written.
+    struct Spec<'a> {
+        vs: &'a str,
+        fs: &'a str,
+        buffer: Option<wgpu::VertexBufferLayout<'a>>,
+        topology: wgpu::PrimitiveTopology,
+        depth_write: bool,
+        depth_compare: wgpu::CompareFunction,
+        bias: wgpu::DepthBiasState,
+        writes: wgpu::ColorWrites,
+    }
+    let pipeline = |spec: Spec<'_>| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(spec.fs),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some(spec.vs),
+                compilation_options: Default::default(),
+                buffers: &[spec.buffer],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: spec.topology,
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: format.depth,
+                depth_write_enabled: Some(spec.depth_write),
+                depth_compare: Some(spec.depth_compare),
+                stencil: Default::default(),
+                bias: spec.bias,
+            }),
+            multisample: wgpu::MultisampleState {
+                count: format.samples,
+                mask: !0,
+                alpha_to_coverage_enabled: false,
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(spec.fs),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: format.color,
+                    blend: Some(DARKEN),
+                    write_mask: spec.writes,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    let instanced = |vs, fs| Spec {
+        vs,
+        fs,
+        buffer: Some(sample_layout.clone()),
+        topology: wgpu::PrimitiveTopology::TriangleStrip,
+        // Tested against the mesh, never written: no stroke hides another.
+        depth_write: false,
+        depth_compare: wgpu::CompareFunction::Less,
+        bias: Default::default(),
+        writes: wgpu::ColorWrites::ALL,
+    };
+    let paper = pipeline(Spec {
+        vs: "vs_paper",
+        fs: "fs_paper",
+        buffer: None,
+        topology: wgpu::PrimitiveTopology::TriangleList,
+        depth_write: false,
+        depth_compare: wgpu::CompareFunction::Always,
+        bias: Default::default(),
+        writes: wgpu::ColorWrites::ALL,
+    });
+    let depth = pipeline(Spec {
+        vs: "vs_depth",
+        fs: "fs_depth",
+        buffer: Some(mesh_layout),
+        topology: wgpu::PrimitiveTopology::TriangleList,
+        depth_write: true,
+        depth_compare: wgpu::CompareFunction::Less,
+        // As the splat renderer's mesh: pushed back so that strokes on a face win.
+        bias: wgpu::DepthBiasState {
+            constant: 4,
+            slope_scale: 2.0,
+            clamp: 0.0,
+        },
+        writes: wgpu::ColorWrites::empty(),
+    });
+    let strokes = pipeline(instanced("vs_stroke", "fs_stroke"));
+    let stipple = pipeline(instanced("vs_stipple", "fs_stipple"));
+    NprRenderer {
+        format,
+        frame,
+        params,
+        bind_group,
+        paper,
+        depth,
+        strokes,
+        stipple,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_unknown_names_are_none() {
+        for s in RenderStyle::ALL {
+            assert_eq!(RenderStyle::from_name(s.name()), Some(s));
+        }
+        for b in Brush::ALL {
+            assert_eq!(Brush::from_name(b.name()), Some(b));
+            assert_eq!(Brush::ALL[b.code() as usize], b);
+        }
+        assert_eq!(RenderStyle::from_name("Strokes"), None);
+        assert_eq!(Brush::from_name("oil"), None);
+    }
+
+    #[test]
+    fn line_brushes_are_thinner_than_paints() {
+        let width = |b| NprStyle::new(NprKind::Strokes(b), 0).stroke_width;
+        for line in [Brush::Pencil, Brush::Ink] {
+            for paint in [Brush::Acrylic, Brush::Crayon, Brush::Watercolor] {
+                assert!(width(line) < width(paint));
+            }
+        }
+    }
+}
