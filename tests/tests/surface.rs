@@ -523,3 +523,34 @@ fn designed_bunny_segments_do_not_depend_on_the_resolution() {
         "{a} against {b} segments"
     );
 }
+
+#[test]
+fn shading_density_gathers_samples_in_shadow() {
+    // Issue 21's tone density on a unit sphere lit from +z: 0.5 facing the light, 4 on
+    // the back. Samples per unit area on the back over those on the lit cap (z > 0.9,
+    // where the density is 0.5 + 3.5 (1 - z), 0.675 on average by area) should be about
+    // 4 / 0.675 = 5.9.
+    use strata_engine::field::{Anisotropy, Density, Design, Guidance};
+    let spec = FieldSpec::Designed(Design {
+        guidance: Guidance::Smoothest,
+        anisotropy: Anisotropy::Constant(1.0),
+        density: Density::Shading {
+            light: [0.0, 0.0, 1.0],
+            lit: 0.5,
+            shadow: 4.0,
+            exponent: 1.0,
+        },
+        ..Design::default()
+    });
+    let mesh = Arc::new(shapes::sphere(1.0, 16).expect("sphere"));
+    let field = Arc::new(spec.build(&mesh).expect("field"));
+    let pre = Preprocessed::build(mesh, field, &SurfaceOptions::default()).expect("preprocess");
+    let samples = pre.sampler.sample(40_000, 3);
+    let cap = samples.iter().filter(|s| s.position[2] > 0.9).count() as f64;
+    let back = samples.iter().filter(|s| s.position[2] < -0.1).count() as f64;
+    // Zone areas on the unit sphere: 2 pi h.
+    let ratio =
+        (back / (2.0 * std::f64::consts::PI * 0.9)) / (cap / (2.0 * std::f64::consts::PI * 0.1));
+    println!("shadow over lit samples per area: {ratio:.2} (expected about 5.9)");
+    assert!((5.0..7.0).contains(&ratio), "{ratio}");
+}

@@ -158,6 +158,25 @@ pub enum Density {
         /// The field file (relative paths as for `FieldSpec::File`).
         PathBuf,
     ),
+    /// Density that follows tone, for stippling: `lit` where the surface faces the
+    /// light, growing to `shadow` where it turns away
+    /// ([`shading_densities`](super::shading_densities)).
+    Shading {
+        /// Direction toward the light in the mesh's coordinates, finite and non-zero.
+        /// Default `(0.4, 0.8, 0.45)`, the renderer's light.
+        #[cfg_attr(feature = "serde", serde(default = "default_light"))]
+        light: [f64; 3],
+        /// Density where the surface faces the light, > 0. Default 0.25.
+        #[cfg_attr(feature = "serde", serde(default = "quarter"))]
+        lit: f64,
+        /// Density where it faces away, > 0. Default 4.
+        #[cfg_attr(feature = "serde", serde(default = "four"))]
+        shadow: f64,
+        /// Exponent of the darkness `1 - max(n . l, 0)` in the blend, > 0; larger keeps
+        /// the half-lit band lighter. Default 1.
+        #[cfg_attr(feature = "serde", serde(default = "one"))]
+        exponent: f64,
+    },
 }
 
 impl Default for Density {
@@ -219,6 +238,21 @@ fn three() -> f64 {
     3.0
 }
 
+#[cfg(feature = "serde")]
+fn quarter() -> f64 {
+    0.25
+}
+
+#[cfg(feature = "serde")]
+fn four() -> f64 {
+    4.0
+}
+
+#[cfg(feature = "serde")]
+fn default_light() -> [f64; 3] {
+    super::shading::DEFAULT_LIGHT
+}
+
 impl Design {
     /// Checks every setting (not the constraints' vertices, which need the mesh).
     pub fn validate(&self) -> Result<(), FieldError> {
@@ -277,6 +311,17 @@ impl Design {
                 smoothing_iterations_ok(*smoothing_iterations)?;
             }
             Density::File(_) => {}
+            Density::Shading {
+                light,
+                lit,
+                shadow,
+                exponent,
+            } => {
+                direction("light", *light)?;
+                positive("lit", *lit)?;
+                positive("shadow", *shadow)?;
+                positive("exponent", *exponent)?;
+            }
         }
         Ok(())
     }
@@ -374,6 +419,12 @@ impl Design {
                 curvature::densities(mesh, k, *measure, *normalization, *floor, *scale)
             }
             Density::File(path) => super::read_field_file(path, mesh)?.vertex_densities(mesh),
+            Density::Shading {
+                light,
+                lit,
+                shadow,
+                exponent,
+            } => super::shading_densities(mesh, *light, *lit, *shadow, *exponent),
         };
         let eigen: Vec<[f64; 2]> = densities
             .iter()

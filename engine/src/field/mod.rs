@@ -32,6 +32,7 @@ mod lanczos;
 mod line_field;
 mod params;
 mod pattern;
+mod shading;
 mod spec;
 mod warp;
 
@@ -54,6 +55,7 @@ pub use isotropic::{
     ISOTROPIC_DIRECTION_RATIO, all_isotropic, isotropic_copy, isotropic_vertices,
     smooth_isotropic_directions,
 };
+pub use shading::{DEFAULT_LIGHT, shading_densities};
 pub use spec::{FieldSpec, PlanarDensity};
 pub use warp::PlanarWarp;
 
