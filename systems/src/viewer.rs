@@ -9,7 +9,8 @@
 //!
 //! Mouse: drag to orbit, wheel to zoom. Keys: `Up`/`Down` double or halve the count,
 //! `S` a new seed (both until the scene file sets them again), `C` the next colour
-//! mode, `M` the next mesh mode, `F` disc or Gaussian splats, `Escape` quits. A scene
+//! mode, `M` the next mesh mode, `F` disc or Gaussian splats, `P` the next style
+//! (splats, stipple, strokes), `B` strokes with the next brush, `Escape` quits. A scene
 //! saved with an error keeps the last good state and prints the error (file, line,
 //! column); the window shows it in its title until a good save.
 
@@ -34,7 +35,7 @@ use crate::gpu::headless::DEPTH_FORMAT;
 use crate::gpu::splat::{FrameTarget, TargetFormat};
 use crate::gpu::{
     ColorMode, Footprint, GpuContext, GpuOptions, GpuSplats, MeshMode, OrbitCamera, SplatLod,
-    SplatRenderer, SplatStyle,
+    SplatRenderer, SplatStyle, StyleChoice, StyledFrame,
 };
 use crate::hot_reload::StreamingEngine;
 
@@ -62,6 +63,8 @@ pub struct ViewerOptions {
     /// The splat style to start with (the keys change it; the density colour map is
     /// refitted to the samples).
     pub style: SplatStyle,
+    /// Splats, stipple or strokes to start with (`P` and `B` change it).
+    pub paint: StyleChoice,
     /// Level of detail up to this multiplier: the count is the base count of a
     /// progressive pool ([`crate::ecs::Lod`]) that follows the camera, so zooming in
     /// adds samples near the camera and moves none. `None`: every sample drawn.
@@ -133,6 +136,7 @@ pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
         mesh_entity,
         shown_mesh: None,
         style: options.style,
+        paint: options.paint,
         camera: None,
         gpu: None,
         drag: None,
@@ -202,6 +206,8 @@ struct WindowGpu {
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
     depth: wgpu::TextureView,
+    /// Splats or strokes into the surface's format.
+    frame: StyledFrame,
 }
 
 struct Viewer {
@@ -217,6 +223,7 @@ struct Viewer {
     /// mesh or a new transform).
     shown_mesh: Option<(Arc<TriMesh>, glam::DAffine3)>,
     style: SplatStyle,
+    paint: StyleChoice,
     camera: Option<OrbitCamera>,
     gpu: Option<WindowGpu>,
     drag: Option<(f64, f64)>,
@@ -304,14 +311,13 @@ impl Viewer {
         crate::gpu::context::scoped(&ctx.device, "configuring the window surface", || {
             surface.configure(&ctx.device, &config)
         })?;
-        let renderer = SplatRenderer::new(
-            &ctx.device,
-            TargetFormat {
-                color: format,
-                depth: DEPTH_FORMAT,
-                samples: 1,
-            },
-        )?;
+        let target = TargetFormat {
+            color: format,
+            depth: DEPTH_FORMAT,
+            samples: 1,
+        };
+        let renderer = SplatRenderer::new(&ctx.device, target)?;
+        let frame = StyledFrame::new(&ctx.device, target, self.paint)?;
         let max = crate::gpu::buffers::max_samples(&ctx.device);
         let count = self.sampling().count;
         if count > max {
@@ -329,6 +335,7 @@ impl Viewer {
             surface,
             config,
             depth,
+            frame,
         });
         let aspect = self.aspect();
         self.camera = self
@@ -466,6 +473,7 @@ impl Viewer {
                 crate::gpu::layout::log_density_range(self.engine.samples());
             self.refit_colors = false;
         }
+        let seed = self.sampling().seed;
         let (Some(gpu), Some(camera)) = (&mut self.gpu, &self.camera) else {
             return Ok(());
         };
@@ -485,7 +493,8 @@ impl Viewer {
             .ctx
             .device
             .create_command_encoder(&Default::default());
-        splats.renderer.encode(
+        gpu.frame.choice = self.paint;
+        gpu.frame.encode(
             &splats.ctx.device,
             &splats.ctx.queue,
             &mut encoder,
@@ -496,7 +505,9 @@ impl Viewer {
                 size: (gpu.config.width, gpu.config.height),
             },
             camera,
+            &splats.renderer,
             &self.style,
+            seed,
         )?;
         splats.ctx.queue.submit([encoder.finish()]);
         splats.ctx.queue.present(texture);
@@ -518,10 +529,11 @@ impl Viewer {
             "samples"
         };
         self.status = format!(
-            "{count} {what} | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {:?}, {:?}",
+            "{count} {what} | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {}, {:?}, {:?}",
             self.frame_ms,
             sampling.as_secs_f64() * 1e3,
             upload.as_secs_f64() * 1e3,
+            self.paint,
             self.style.color_mode,
             self.style.mesh_mode,
         );
@@ -576,6 +588,8 @@ impl Viewer {
                         MeshMode::None => MeshMode::Plain,
                     }
                 }
+                "p" | "P" => self.repaint(self.paint.next_style()),
+                "b" | "B" => self.repaint(self.paint.next_brush()),
                 "f" | "F" => {
                     self.style.footprint = match self.style.footprint {
                         Footprint::Disc => Footprint::Gaussian,
@@ -586,6 +600,20 @@ impl Viewer {
                 _ => {}
             },
             _ => {}
+        }
+    }
+
+    /// Switches to `paint` (printing it), except with `--lod`, which stipple and
+    /// strokes do not support yet.
+    fn repaint(&mut self, paint: StyleChoice) {
+        if self.lod_max.is_some() && paint.kind().is_some() {
+            println!(
+                "style: {paint} does not support --lod yet; still {}",
+                self.paint
+            );
+        } else {
+            self.paint = paint;
+            println!("style: {paint}");
         }
     }
 

@@ -14,7 +14,7 @@ use strata_systems::gpu::wgpu;
 use strata_systems::gpu::{
     Brush, ColorMode, Footprint, GpuContext, GpuError, GpuOptions, HeadlessTarget, MeshMode,
     NprKind, NprRenderer, NprStyle, OrbitCamera, RgbaImage, SiteExpander, SplatRenderer,
-    SplatStyle,
+    SplatStyle, StyleChoice, StyledFrame,
 };
 use strata_systems::scene::Scene;
 
@@ -961,6 +961,111 @@ fn bad_style_or_brush_fails_in_one_line() {
         let error = strata_systems::cli::run(cli).expect_err("bad choice");
         let line = strata_systems::cli::one_line(&error);
         assert_eq!(line, expected);
+    }
+    assert!(!Path::new("never-written.png").exists());
+}
+
+/// What `strata view` draws into a window whose surface is `Bgra8UnormSrgb` (the usual
+/// swapchain format): [`StyledFrame`] with pipelines built for that format, into an
+/// offscreen target of that format. Min blending works there too, and every style
+/// gives the same picture, byte for byte once read back with red and blue swapped to
+/// RGBA, as `strata render`'s `Rgba8UnormSrgb` target.
+#[test]
+fn window_format_draws_the_same_picture_as_render() {
+    let Some(ctx) = gpu("window_format_draws_the_same_picture_as_render") else {
+        return;
+    };
+    let scene = scene(SPHERE);
+    let samples = scene.sampler.sample(2000, 7);
+    let camera = OrbitCamera::default().fitted_to_mesh(&scene.mesh, 1.0, 1.0);
+    let look = SplatStyle::default();
+    let bgra = wgpu::TextureFormat::Bgra8UnormSrgb;
+    let target = HeadlessTarget::with_format(&ctx.device, 256, 256, 1, bgra).expect("target");
+    assert_eq!(target.format().color, bgra);
+    let mut splats = SplatRenderer::new(&ctx.device, target.format()).expect("pipelines");
+    splats
+        .upload(&ctx.device, &ctx.queue, &samples)
+        .expect("upload");
+    splats
+        .set_mesh(&ctx.device, &ctx.queue, &scene.mesh, None)
+        .expect("mesh");
+    // Built for splats: the stroke pipelines come with the first stroke frame.
+    let mut frame = StyledFrame::new(&ctx.device, target.format(), StyleChoice::default())
+        .expect("splat frame");
+    let kinds = std::iter::once(None).chain(npr_kinds().into_iter().map(Some));
+    for kind in kinds {
+        frame.choice = StyleChoice::new(kind);
+        let name = frame.choice.to_string();
+        let window = target
+            .draw_and_read(&ctx, |encoder, t| {
+                frame.encode(
+                    &ctx.device,
+                    &ctx.queue,
+                    encoder,
+                    t,
+                    &camera,
+                    &splats,
+                    &look,
+                    7,
+                )
+            })
+            .expect("window-format frame");
+        let rendered = match kind {
+            Some(kind) => render_npr(&ctx, &scene, &samples, kind),
+            None => render(&ctx, &scene, &samples, &camera, &look, (256, 256)),
+        };
+        let differing = window
+            .pixels
+            .chunks_exact(4)
+            .zip(rendered.pixels.chunks_exact(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(differing, 0, "{name}: {differing} pixels differ");
+        let paper = window.pixel(0, 0);
+        if kind.is_some() {
+            // Paper, not a blue-for-red swap of it: the read-back is RGBA.
+            assert!(paper[0] >= paper[2], "{name}: corner {paper:?}");
+        }
+    }
+}
+
+/// `strata view` takes `--style` and `--brush` as `strata render` does and refuses the
+/// same mistakes with the same line, before opening any window or GPU (no display
+/// needed); `--lod` with stipple or strokes is refused by both.
+#[test]
+fn view_refuses_bad_style_or_brush_as_render_does() {
+    use clap::Parser;
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/default.ron");
+    for (extra, expected) in [
+        (
+            &["--style", "oil"][..],
+            "--style must be one of splats, stipple, strokes, not 'oil'",
+        ),
+        (
+            &["--brush", "ink"][..],
+            "--brush needs --style strokes (not --style splats)",
+        ),
+        (
+            &["--style", "strokes", "--brush", "sponge"][..],
+            "--brush must be one of acrylic, crayon, watercolor, pencil, ink, not 'sponge'",
+        ),
+        (
+            &["--style", "stipple", "--lod"][..],
+            "--style stipple does not support --lod yet",
+        ),
+    ] {
+        for command in ["view", "render"] {
+            let mut args: Vec<std::ffi::OsString> = vec!["strata".into(), command.into()];
+            args.push(config.clone().into());
+            if command == "render" {
+                args.extend(["--out".into(), "never-written.png".into()]);
+            }
+            args.extend(extra.iter().map(Into::into));
+            let cli = strata_systems::cli::Cli::try_parse_from(args).expect("arguments parse");
+            let error = strata_systems::cli::run(cli).expect_err("bad choice");
+            let line = strata_systems::cli::one_line(&error);
+            assert_eq!(line, expected, "strata {command} {extra:?}");
+        }
     }
     assert!(!Path::new("never-written.png").exists());
 }

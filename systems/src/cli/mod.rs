@@ -1,9 +1,10 @@
 //! The `strata` command-line tool: the clap [`Cli`], [`run`], and one file per
 //! command holding its arguments and their handling (`sample`, `segment`, `field`,
-//! `bench`, `watch`, `render`, `view`, `analyze`; `look` holds the camera and look options that
-//! `render` and `view` share). What a command does beyond reading its arguments and
-//! printing its results lives in the library: [`crate::scene`], [`crate::report`],
-//! [`crate::hot_reload`], [`crate::gpu`] and [`crate::viewer`].
+//! `bench`, `watch`, `render`, `view`, `analyze`; `look` holds the camera and look
+//! options that `render` and `view` share, `style` their `--style` and `--brush`).
+//! What a command does beyond reading its arguments and printing its results lives in
+//! the library: [`crate::scene`], [`crate::report`], [`crate::hot_reload`],
+//! [`crate::gpu`] and [`crate::viewer`].
 
 mod analyze;
 mod bench;
@@ -12,6 +13,7 @@ mod look;
 mod render;
 mod sample;
 mod segment;
+mod style;
 mod view;
 mod watch;
 
@@ -28,6 +30,7 @@ pub use look::LookArgs;
 pub use render::RenderArgs;
 pub use sample::SampleArgs;
 pub use segment::SegmentArgs;
+pub use style::StyleArgs;
 pub use view::ViewArgs;
 pub use watch::WatchArgs;
 

@@ -9,14 +9,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
-use super::LookArgs;
+use super::{LookArgs, StyleArgs};
 use crate::config::SceneConfig;
 use strata_engine::mesh::TriMesh;
 use strata_engine::sample::PoolChange;
 
 use crate::gpu::{
-    Brush, GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer,
-    NprStyle, RenderStyle, SplatLod, SplatRenderer,
+    GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer, NprStyle,
+    SplatLod, SplatRenderer,
 };
 use crate::scene::Scene;
 
@@ -73,49 +73,9 @@ pub struct RenderArgs {
         requires = "lod"
     )]
     pub twist: f32,
-    /// How samples are drawn: `splats` (field-aligned ellipses or glyphs), `stipple`
-    /// (ink dots sized by tone) or `strokes` (brush strokes along the field, see
-    /// `--brush`); stipple and strokes are drawn on paper (docs/styles.md).
-    #[arg(long, default_value = "splats")]
-    pub style: String,
-    /// With `--style strokes`: the brush, `acrylic`, `crayon`, `watercolor`, `pencil`
-    /// or `ink` (default acrylic).
-    #[arg(long)]
-    pub brush: Option<String>,
-}
-
-impl RenderArgs {
-    /// The stroke or stipple look `--style` and `--brush` ask for (`None` for splats),
-    /// or a one-line error naming the valid choices.
-    pub fn npr_kind(&self) -> anyhow::Result<Option<NprKind>> {
-        let Some(style) = RenderStyle::from_name(&self.style) else {
-            anyhow::bail!(
-                "--style must be one of {}, not '{}'",
-                RenderStyle::NAMES.join(", "),
-                self.style
-            );
-        };
-        let brush = match self.brush.as_deref() {
-            None => None,
-            Some(_) if style != RenderStyle::Strokes => {
-                anyhow::bail!(
-                    "--brush needs --style strokes (not --style {})",
-                    style.name()
-                )
-            }
-            Some(name) => Some(Brush::from_name(name).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--brush must be one of {}, not '{name}'",
-                    Brush::NAMES.join(", ")
-                )
-            })?),
-        };
-        Ok(match style {
-            RenderStyle::Splats => None,
-            RenderStyle::Stipple => Some(NprKind::Stipple),
-            RenderStyle::Strokes => Some(NprKind::Strokes(brush.unwrap_or_default())),
-        })
-    }
+    /// `--style` and `--brush`.
+    #[command(flatten)]
+    pub paint: StyleArgs,
 }
 
 /// Runs `strata render`.
@@ -124,10 +84,7 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !matches!(args.msaa, 1 | 4) {
         anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
     }
-    let npr = args.npr_kind()?;
-    if npr.is_some() && args.lod {
-        anyhow::bail!("--style {} does not support --lod yet", args.style);
-    }
+    let npr = args.paint.npr_kind_for(args.lod)?;
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.
@@ -188,8 +145,7 @@ fn run_npr(
     let camera = args
         .look
         .camera(scene, args.width as f32 / args.height as f32);
-    // The sample seed folded to 32 bits: the same picture for the same samples.
-    let style = NprStyle::new(kind, (seed ^ (seed >> 32)) as u32);
+    let style = NprStyle::for_samples(kind, seed);
     let image = target.render_npr(
         ctx,
         &splats,

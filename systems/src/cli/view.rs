@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-use super::LookArgs;
+use super::{LookArgs, StyleArgs};
+use crate::gpu::StyleChoice;
 use crate::viewer::{self, ViewerOptions};
 
 /// Arguments of `strata view`.
@@ -32,11 +33,15 @@ pub struct ViewArgs {
     /// With `--lod`: the largest multiplier of the count's density.
     #[arg(long, default_value_t = 4.0, requires = "lod")]
     pub lod_max: f32,
+    /// `--style` and `--brush`, as `strata render`'s (the keys `P` and `B` change them).
+    #[command(flatten)]
+    pub paint: StyleArgs,
 }
 
 /// Runs `strata view` until the window closes.
 pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
     args.look.validate()?;
+    let paint = StyleChoice::new(args.paint.npr_kind_for(args.lod)?);
     if !(args.lod_max > 0.0 && args.lod_max.is_finite()) {
         anyhow::bail!("--lod-max must be a positive number, not {}", args.lod_max);
     }
@@ -53,6 +58,7 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
         camera: args.look.orientation(),
         zoom: args.look.zoom,
         style: args.look.style(&[]),
+        paint,
         lod_max: args.lod.then_some(args.lod_max),
     };
     let outcome = viewer::run(&options)?;

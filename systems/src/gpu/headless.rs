@@ -62,6 +62,7 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 pub struct HeadlessTarget {
     size: (u32, u32),
     samples: u32,
+    color_format: wgpu::TextureFormat,
     multisampled: Option<wgpu::TextureView>,
     color: wgpu::Texture,
     color_view: wgpu::TextureView,
@@ -78,6 +79,29 @@ impl HeadlessTarget {
         height: u32,
         samples: u32,
     ) -> Result<Self, GpuError> {
+        Self::with_format(device, width, height, samples, COLOR_FORMAT)
+    }
+
+    /// [`new`](Self::new) with the colour format `color` instead of [`COLOR_FORMAT`]:
+    /// a 4-byte `Rgba8*` or `Bgra8*` format (the one a window's surface often has, to
+    /// draw offscreen what a window shows); pictures are read back as RGBA either way.
+    pub fn with_format(
+        device: &wgpu::Device,
+        width: u32,
+        height: u32,
+        samples: u32,
+        color: wgpu::TextureFormat,
+    ) -> Result<Self, GpuError> {
+        use wgpu::TextureFormat as F;
+        if !matches!(
+            color,
+            F::Rgba8Unorm | F::Rgba8UnormSrgb | F::Bgra8Unorm | F::Bgra8UnormSrgb
+        ) {
+            return Err(GpuError::Device {
+                operation: "creating the offscreen target",
+                message: format!("colour format {color:?} is not an 8-bit RGBA or BGRA format"),
+            });
+        }
         let limit = device.limits().max_texture_dimension_2d;
         for v in [width, height] {
             if v == 0 || v > limit {
@@ -108,16 +132,16 @@ impl HeadlessTarget {
                     view_formats: &[],
                 })
             };
-            let color = texture(
+            let color_texture = texture(
                 "strata colour",
-                COLOR_FORMAT,
+                color,
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
                 1,
             );
             let multisampled = (samples > 1).then(|| {
                 texture(
                     "strata colour (multisampled)",
-                    COLOR_FORMAT,
+                    color,
                     wgpu::TextureUsages::RENDER_ATTACHMENT,
                     samples,
                 )
@@ -138,9 +162,10 @@ impl HeadlessTarget {
             Self {
                 size: (width, height),
                 samples,
+                color_format: color,
                 multisampled,
-                color_view: color.create_view(&Default::default()),
-                color,
+                color_view: color_texture.create_view(&Default::default()),
+                color: color_texture,
                 depth_view: depth.create_view(&Default::default()),
                 readback,
                 padded_row,
@@ -151,7 +176,7 @@ impl HeadlessTarget {
     /// The format a [`SplatRenderer`] must be built with to draw here.
     pub fn format(&self) -> TargetFormat {
         TargetFormat {
-            color: COLOR_FORMAT,
+            color: self.color_format,
             depth: DEPTH_FORMAT,
             samples: self.samples,
         }
@@ -218,8 +243,10 @@ impl HeadlessTarget {
         })
     }
 
-    /// Records `draw` into this target, copies the picture out and reads it back.
-    fn draw_and_read(
+    /// Records `draw` into this target (what a window's frame records into its
+    /// surface texture), copies the picture out and reads it back as RGBA (waits for
+    /// the device).
+    pub fn draw_and_read(
         &self,
         ctx: &GpuContext,
         draw: impl FnOnce(&mut wgpu::CommandEncoder, FrameTarget<'_>) -> Result<(), GpuError>,
@@ -273,6 +300,14 @@ impl HeadlessTarget {
         let mut pixels = Vec::with_capacity(row * height as usize);
         for r in padded.chunks_exact(self.padded_row as usize) {
             pixels.extend_from_slice(&r[..row]);
+        }
+        if matches!(
+            self.color_format,
+            wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+        ) {
+            for p in pixels.chunks_exact_mut(4) {
+                p.swap(0, 2);
+            }
         }
         Ok(RgbaImage {
             width,

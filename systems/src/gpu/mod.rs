@@ -8,7 +8,7 @@
 //! - [`lod`]: GPU-resident progressive pools and the level-of-detail fade pass.
 //! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
 //! - [`npr`]: stroke and stipple pictures on paper from the same sample buffer;
-//!   [`npr::NprRenderer`].
+//!   [`npr::NprRenderer`]; [`npr::StyledFrame`] draws either look into a window.
 //! - [`headless`]: offscreen target, readback, PNG.
 //! - [`camera`]: orbit camera and framing.
 //! - [`stream`]: per-frame resampling + upload without ECS.
@@ -43,7 +43,7 @@ pub use expand::SiteExpander;
 pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
 pub use lod::{GpuLodPool, LodFades, LodFrame, LodScene};
-pub use npr::{Brush, NprKind, NprRenderer, NprStyle, RenderStyle};
+pub use npr::{Brush, NprKind, NprRenderer, NprStyle, RenderStyle, StyleChoice, StyledFrame};
 pub use splat::{SplatLod, SplatRenderer, SplatStyle};
 pub use stream::SampleStream;
 pub use upload::{GpuSplats, upload_samples};

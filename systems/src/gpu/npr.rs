@@ -51,6 +51,11 @@ impl RenderStyle {
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]
     }
+
+    /// The next style in [`ALL`](Self::ALL), after the last the first.
+    pub fn next(self) -> Self {
+        Self::ALL[(self as usize + 1) % Self::ALL.len()]
+    }
 }
 
 /// The brush of [`RenderStyle::Strokes`]: a procedural texture in `fs_stroke`.
@@ -97,6 +102,11 @@ impl Brush {
     /// The value `fs_stroke` switches on ([`NprUniforms::brush`]).
     pub fn code(self) -> u32 {
         self as u32
+    }
+
+    /// The next brush in [`ALL`](Self::ALL), after the last the first.
+    pub fn next(self) -> Self {
+        Self::ALL[(self as usize + 1) % Self::ALL.len()]
     }
 }
 
@@ -172,6 +182,12 @@ impl NprStyle {
         }
     }
 
+    /// The default look of `kind` for samples drawn with the 64-bit sample `seed`
+    /// (folded to 32 bits): the same samples give the same picture.
+    pub fn for_samples(kind: NprKind, seed: u64) -> Self {
+        Self::new(kind, (seed ^ (seed >> 32)) as u32)
+    }
+
     /// The uniforms of this style for `camera` on a target `height` pixels high.
     pub fn uniforms(&self, camera: &OrbitCamera, height: u32) -> NprUniforms {
         let c = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
@@ -193,6 +209,130 @@ impl NprStyle {
             stroke_length: self.stroke_length,
             stroke_width: self.stroke_width,
         }
+    }
+}
+
+/// A style and a brush as `strata view`'s keys change them: the brush is kept while
+/// the style is not strokes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StyleChoice {
+    /// How the samples are drawn.
+    pub style: RenderStyle,
+    /// The brush of [`RenderStyle::Strokes`].
+    pub brush: Brush,
+}
+
+impl StyleChoice {
+    /// The choice that draws `kind` (`None`: splats).
+    pub fn new(kind: Option<NprKind>) -> Self {
+        match kind {
+            None => Self::default(),
+            Some(NprKind::Stipple) => Self {
+                style: RenderStyle::Stipple,
+                brush: Brush::default(),
+            },
+            Some(NprKind::Strokes(brush)) => Self {
+                style: RenderStyle::Strokes,
+                brush,
+            },
+        }
+    }
+
+    /// What an [`NprRenderer`] draws for this choice; `None` for splats.
+    pub fn kind(self) -> Option<NprKind> {
+        match self.style {
+            RenderStyle::Splats => None,
+            RenderStyle::Stipple => Some(NprKind::Stipple),
+            RenderStyle::Strokes => Some(NprKind::Strokes(self.brush)),
+        }
+    }
+
+    /// The next style (splats, stipple, strokes, splats, ...), the same brush.
+    pub fn next_style(self) -> Self {
+        Self {
+            style: self.style.next(),
+            ..self
+        }
+    }
+
+    /// Strokes with the next brush; from another style, strokes with the same brush.
+    pub fn next_brush(self) -> Self {
+        Self {
+            style: RenderStyle::Strokes,
+            brush: if self.style == RenderStyle::Strokes {
+                self.brush.next()
+            } else {
+                self.brush
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for StyleChoice {
+    /// `splats`, `stipple` or `strokes (acrylic)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.style {
+            RenderStyle::Strokes => write!(f, "strokes ({})", self.brush.name()),
+            style => f.write_str(style.name()),
+        }
+    }
+}
+
+/// One frame of a sample buffer in the chosen style, as a window draws it: splats
+/// through the [`SplatRenderer`], stipple and strokes through an [`NprRenderer`] built
+/// for the target's format on first use and kept (a frame allocates no buffer).
+#[derive(Debug)]
+pub struct StyledFrame {
+    /// What the next frames draw.
+    pub choice: StyleChoice,
+    format: TargetFormat,
+    npr: Option<NprRenderer>,
+}
+
+impl StyledFrame {
+    /// Frames in `choice` into targets of `format`; builds the stroke pipelines now
+    /// when `choice` needs them, so that a format they cannot draw into fails here.
+    pub fn new(
+        device: &wgpu::Device,
+        format: TargetFormat,
+        choice: StyleChoice,
+    ) -> Result<Self, GpuError> {
+        let mut frame = Self {
+            choice,
+            format,
+            npr: None,
+        };
+        if choice.kind().is_some() {
+            frame.npr = Some(NprRenderer::new(device, format)?);
+        }
+        Ok(frame)
+    }
+
+    /// Records one render pass of `splats`' samples (and mesh) into `target`: splats
+    /// with `look`, or stipple or strokes ([`NprRenderer::encode`]) with the default
+    /// [`NprStyle`] for the sample `seed`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        target: FrameTarget<'_>,
+        camera: &OrbitCamera,
+        splats: &SplatRenderer,
+        look: &SplatStyle,
+        seed: u64,
+    ) -> Result<(), GpuError> {
+        let Some(kind) = self.choice.kind() else {
+            return splats.encode(device, queue, encoder, target, camera, look);
+        };
+        let npr = match self.npr.take() {
+            Some(npr) => npr,
+            None => NprRenderer::new(device, self.format)?,
+        };
+        let npr = self.npr.insert(npr);
+        let style = NprStyle::for_samples(kind, seed);
+        npr.encode(device, queue, encoder, target, camera, splats, look, &style)
     }
 }
 
@@ -487,6 +627,36 @@ mod tests {
         }
         assert_eq!(RenderStyle::from_name("Strokes"), None);
         assert_eq!(Brush::from_name("oil"), None);
+    }
+
+    #[test]
+    fn keys_cycle_styles_and_brushes() {
+        let mut choice = StyleChoice::new(None);
+        let mut seen = Vec::new();
+        for _ in 0..3 {
+            seen.push(choice.to_string());
+            choice = choice.next_style();
+        }
+        assert_eq!(seen, ["splats", "stipple", "strokes (acrylic)"]);
+        assert_eq!(choice, StyleChoice::default());
+        // From splats, the brush key shows strokes with the current brush first.
+        let strokes = choice.next_brush();
+        assert_eq!(strokes.kind(), Some(NprKind::Strokes(Brush::Acrylic)));
+        let mut brushes = vec![strokes.brush];
+        let mut c = strokes;
+        for _ in 1..Brush::ALL.len() {
+            c = c.next_brush();
+            brushes.push(c.brush);
+        }
+        assert_eq!(brushes, Brush::ALL);
+        assert_eq!(c.next_brush().brush, Brush::Acrylic);
+        for kind in [
+            None,
+            Some(NprKind::Stipple),
+            Some(NprKind::Strokes(Brush::Ink)),
+        ] {
+            assert_eq!(StyleChoice::new(kind).kind(), kind);
+        }
     }
 
     #[test]
