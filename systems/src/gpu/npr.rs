@@ -403,30 +403,8 @@ impl NprRenderer {
         scoped(device, "drawing strokes", || {
             queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("strata strokes"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: target.resolve,
-                    ops: wgpu::Operations {
-                        // White: the identity of min blending.
-                        load: wgpu::LoadOp::Clear(wgpu::Color::WHITE),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: target.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            // White: the identity of min blending.
+            let mut pass = target.begin_pass(encoder, "strata strokes", wgpu::Color::WHITE);
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.set_pipeline(&self.paper);
             pass.draw(0..3, 0..1);

@@ -201,6 +201,42 @@ pub struct FrameTarget<'a> {
     pub size: (u32, u32),
 }
 
+impl<'a> FrameTarget<'a> {
+    /// Begins a pass that clears colour to `clear` and depth to 1, resolves a
+    /// multisampled colour, stores colour and discards depth (what every style's frame
+    /// does).
+    pub fn begin_pass<'e>(
+        &self,
+        encoder: &'e mut wgpu::CommandEncoder,
+        label: &str,
+        clear: wgpu::Color,
+    ) -> wgpu::RenderPass<'e> {
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: self.color,
+                depth_slice: None,
+                resolve_target: self.resolve,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: self.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        })
+    }
+}
+
 /// Pipelines, uniforms, the sample buffer and the optional mesh.
 #[derive(Debug)]
 pub struct SplatRenderer {
@@ -322,29 +358,7 @@ impl SplatRenderer {
         let uniforms = frame_uniforms(camera, style, target.size, lift);
         scoped(device, "drawing splats", || {
             queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("strata splats"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target.color,
-                    depth_slice: None,
-                    resolve_target: target.resolve,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(style.clear_color()),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: target.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
+            let mut pass = target.begin_pass(encoder, "strata splats", style.clear_color());
             pass.set_bind_group(0, &self.bind_group, &[]);
             if let (Some((mesh, count)), false) = (&self.mesh, style.mesh_mode == MeshMode::None) {
                 pass.set_pipeline(&self.mesh_pipeline);
