@@ -2,11 +2,10 @@
 //! cells under the surface's shared budget ([`budget_cells`]).
 //!
 //! Input: the mesh, the field and the final segments' [`SegmentParam`]s. Output: one
-//! [`SegmentSampling`] per segment, in segment order. Cost: O(F) for the inputs, then
-//! the cells' construction, segments in parallel with rayon (the result does not
-//! depend on the thread count).
-
-use std::sync::Arc;
+//! [`SegmentCurve`] per segment, in the order of the params (the caller totals the
+//! measures and orders the segments with `surface::assemble`). Cost: O(F) for the
+//! inputs, then the cells' construction, segments in parallel with rayon (the result
+//! does not depend on the thread count).
 
 use rayon::prelude::*;
 
@@ -15,7 +14,6 @@ use crate::curve::{CellInput, CurveError, CurveOptions, SegmentCurve, budget_cel
 use crate::field::TensorField;
 use crate::mesh::TriMesh;
 use crate::param::SegmentParam;
-use crate::sample::SegmentSampling;
 
 impl CellInput {
     /// Prepares `param` (a segment of `mesh`) with `field` for its cells: its layout
@@ -43,34 +41,36 @@ pub fn segment_cells(
     budget_cells(&param.triangles, input, total_measure, options)
 }
 
-/// Cells for every parameterized segment, in parallel. The cell budget is shared:
-/// each segment's `max_cell_share` is scaled by its share of the total measure, and
-/// its boundary refinement by how many cells it gets.
-pub(super) fn build_cells(
+/// The [`CellInput`] of every parameterized segment, in parallel, in `params` order.
+pub(super) fn cell_inputs(
     mesh: &TriMesh,
     field: &TensorField,
     params: &[SegmentParam],
-    options: &CurveOptions,
-) -> Result<Vec<SegmentSampling>, SurfaceError> {
-    let inputs: Vec<CellInput> = params
+) -> Vec<CellInput> {
+    params
         .par_iter()
         .map(|p| CellInput::new(mesh, field, p))
-        .collect();
-    let total: f64 = inputs.iter().map(|c| c.measure).sum();
+        .collect()
+}
+
+/// Cells for every parameterized segment, in parallel, in `params` order. The cell
+/// budget is shared: each segment's `max_cell_share` is scaled by its share of
+/// `total_measure`, and its boundary refinement by how many cells it gets. An error
+/// names the segment by its index in `params`.
+pub(super) fn build_cells(
+    params: &[SegmentParam],
+    inputs: &[CellInput],
+    total_measure: f64,
+    options: &CurveOptions,
+) -> Result<Vec<SegmentCurve>, SurfaceError> {
     params
         .par_iter()
         .zip(inputs.par_iter())
         .enumerate()
         .map(|(id, (p, input))| {
-            let curve =
-                segment_cells(p, input, total, options).map_err(|source| SurfaceError::Curve {
-                    segment: id,
-                    source,
-                })?;
-            Ok(SegmentSampling {
-                segment: id as u32,
-                faces: p.faces.clone(),
-                curve: Arc::new(curve),
+            segment_cells(p, input, total_measure, options).map_err(|source| SurfaceError::Curve {
+                segment: id,
+                source,
             })
         })
         .collect()

@@ -17,6 +17,7 @@
 //! factorization per parameterized segment (segments in parallel with rayon), then the
 //! cells.
 
+mod assemble;
 mod cells;
 mod key;
 pub mod refine;
@@ -33,8 +34,9 @@ use crate::planar::{self, PlanarError, PlanarMap};
 use crate::sample::{SampleError, Sampler};
 use crate::segment::{SegmentError, SegmentOptions, Segmentation};
 
-use cells::build_cells;
+pub use assemble::{order_segments, total_measure};
 pub use cells::segment_cells;
+use cells::{build_cells, cell_inputs};
 pub use key::KeyBuilder;
 pub use refine::{
     SplitContext, lowest_face, parameterize_segment_with_splitting, parameterize_with_splitting,
@@ -359,7 +361,20 @@ impl Preprocessed {
 
         progress(Progress::Start("cells"));
         let t = Instant::now();
-        let segments = build_cells(&mesh, &field, &params, &options.curve)?;
+        let inputs = cell_inputs(&mesh, &field, &params);
+        let total = total_measure(
+            params
+                .iter()
+                .map(lowest_face)
+                .zip(inputs.iter().map(|c| c.measure)),
+        );
+        let curves = build_cells(&params, &inputs, total, &options.curve)?;
+        let segments = order_segments(
+            params
+                .iter()
+                .zip(curves)
+                .map(|(p, c)| (lowest_face(p), p.faces.clone(), Arc::new(c))),
+        );
         report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
         record_stage(&mut stages, progress, "cells", t);
         let sampler = Sampler::new(mesh, field, segments)?;

@@ -29,11 +29,11 @@ use bevy_ecs::prelude::*;
 use rayon::prelude::*;
 use strata_engine::field::TensorField;
 use strata_engine::mesh::{NONE, TriMesh};
-use strata_engine::sample::{Sampler, SegmentSampling};
+use strata_engine::sample::Sampler;
 use strata_engine::segment::{Segmentation, segment, segment_region};
 use strata_engine::surface::{
-    CellInput, SplitContext, SurfaceOptions, lowest_face, parameterize_segment_with_splitting,
-    segment_cells,
+    CellInput, SplitContext, SurfaceOptions, lowest_face, order_segments,
+    parameterize_segment_with_splitting, segment_cells, total_measure,
 };
 
 use super::EngineError;
@@ -394,20 +394,14 @@ pub fn build_curves(
                     .map(|p| CellInput::new(mesh, field, p))
                     .collect();
             });
-        // The total measure, summed in the engine's segment order (by lowest face) so
-        // that it is bit-identical to a whole-surface build.
-        let mut measures: Vec<(u32, f64)> = mine
-            .iter()
-            .flat_map(|(_, _, params, cells)| {
-                params
-                    .pieces
-                    .iter()
-                    .zip(&cells.inputs)
-                    .map(|(p, c)| (lowest_face(p), c.measure))
-            })
-            .collect();
-        measures.sort_by_key(|m| m.0);
-        let total: f64 = measures.iter().map(|m| m.1).sum();
+        // Summed in the engine's segment order: bit-identical to a whole build.
+        let total = total_measure(mine.iter().flat_map(|(_, _, params, cells)| {
+            params
+                .pieces
+                .iter()
+                .zip(&cells.inputs)
+                .map(|(p, c)| (lowest_face(p), c.measure))
+        }));
         let options = curve.0;
         let results: Vec<Result<(), EngineError>> = mine
             .par_iter_mut()
@@ -466,7 +460,7 @@ pub fn assemble_samplers(
             continue;
         }
         let t = Instant::now();
-        let mut pieces: Vec<(u32, Vec<u32>, Arc<strata_engine::curve::SegmentCurve>)> = Vec::new();
+        let mut pieces = Vec::new();
         let mut complete = true;
         for (_, params, cells) in &mine {
             complete &= cells.curves.len() == params.pieces.len() && !params.pieces.is_empty();
@@ -478,16 +472,7 @@ pub fn assemble_samplers(
             // A segment failed upstream (its error is reported): keep the last sampler.
             continue;
         }
-        pieces.sort_by_key(|p| p.0);
-        let segs: Vec<SegmentSampling> = pieces
-            .into_iter()
-            .enumerate()
-            .map(|(id, (_, faces, curve))| SegmentSampling {
-                segment: id as u32,
-                faces,
-                curve,
-            })
-            .collect();
+        let segs = order_segments(pieces);
         let count = segs.len();
         // Same segments as the current sampler (only their cells changed, e.g. a new
         // omega): keep its chains instead of linking them again.
