@@ -33,7 +33,7 @@ pub use charts::{CHART_NORMAL_ANGLE, chart_labels, isotropic_charts};
 pub use clusters::{SingularityCluster, singularity_clusters};
 pub use from_labels::segmentation_from_labels;
 pub use pipeline::segment;
-pub use region::{RegionError, segment_region};
+pub use region::{RegionError, segment_region, touched_segments};
 
 pub use paths::{
     ShortestPaths, dijkstra, field_edge_costs, field_edge_costs_with, singularity_tree,

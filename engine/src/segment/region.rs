@@ -171,12 +171,97 @@ pub fn segment_region(
     })
 }
 
+/// Which of `segments` (each a list of faces) a change of field from `old` to `new`
+/// touches: those with a vertex whose tensor differs (compared exactly, so a field
+/// rebuilt bit for bit touches nothing). Returns their indices, ascending; their faces
+/// are the region to re-segment with [`segment_region`]. Fields of different sizes
+/// (another mesh) touch every segment. Cost O(V + faces of the segments).
+///
+/// ```
+/// use strata_engine::{field::FieldSpec, mesh::shapes, segment::touched_segments};
+/// let mesh = shapes::plane(1.0, 2)?;
+/// let spec = |d| FieldSpec::Constant { direction: d, anisotropy: 2.0, density: 1.0 };
+/// let old = spec([1.0, 0.0, 0.0]).build(&mesh)?;
+/// let segments: Vec<Vec<u32>> = (0..mesh.face_count() as u32).map(|f| vec![f]).collect();
+/// assert!(touched_segments(&mesh, &old, &old, &segments).is_empty());
+/// let new = spec([0.0, 1.0, 0.0]).build(&mesh)?;
+/// assert_eq!(touched_segments(&mesh, &old, &new, &segments).len(), segments.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn touched_segments<S: AsRef<[u32]>>(
+    mesh: &TriMesh,
+    old: &TensorField,
+    new: &TensorField,
+    segments: &[S],
+) -> Vec<usize> {
+    let (a, b) = (old.tensors(), new.tensors());
+    if a.len() != b.len() || a.len() != mesh.vertex_count() {
+        return (0..segments.len()).collect();
+    }
+    let changed: Vec<bool> = a.iter().zip(b).map(|(x, y)| x != y).collect();
+    let triangles = mesh.triangles();
+    (0..segments.len())
+        .filter(|&i| {
+            segments[i].as_ref().iter().any(|&f| {
+                triangles
+                    .get(f as usize)
+                    .is_none_or(|t| t.iter().any(|&v| changed[v as usize]))
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::shapes;
     use crate::segment::segment;
+
+    #[test]
+    fn a_changed_vertex_touches_exactly_the_segments_around_it() {
+        let mesh = shapes::plane(1.0, 4).expect("plane");
+        let old = FieldSpec::Constant {
+            direction: [1.0, 0.0, 0.0],
+            anisotropy: 2.0,
+            density: 1.0,
+        }
+        .build(&mesh)
+        .expect("field");
+        // One segment per row of quads (8 faces each).
+        let rows: Vec<Vec<u32>> = (0..4).map(|r| (8 * r..8 * r + 8).collect()).collect();
+        assert!(touched_segments(&mesh, &old, &old, &rows).is_empty());
+        // A vertex on the line between rows 1 and 2, away from the border.
+        let v = (0..mesh.vertex_count())
+            .find(|&v| {
+                let p = mesh.positions()[v];
+                (p.y - 0.5).abs() < 1e-9 && (p.x - 0.5).abs() < 1e-9
+            })
+            .expect("centre vertex");
+        let mut tensors = old.tensors().to_vec();
+        tensors[v] *= 2.0;
+        let new = TensorField::new(&mesh, tensors).expect("field");
+        let around: Vec<usize> = (0..rows.len())
+            .filter(|&i| {
+                rows[i]
+                    .iter()
+                    .any(|&f| mesh.triangles()[f as usize].contains(&(v as u32)))
+            })
+            .collect();
+        assert_eq!(around, vec![1, 2], "the plane's rows as assumed");
+        assert_eq!(touched_segments(&mesh, &old, &new, &rows), around);
+        // Another mesh's field touches everything; so does a face out of range.
+        let other = shapes::plane(1.0, 2).expect("plane");
+        let small = FieldSpec::default_curvature().build(&other).expect("field");
+        assert_eq!(
+            touched_segments(&mesh, &old, &small, &rows),
+            vec![0, 1, 2, 3]
+        );
+        assert_eq!(
+            touched_segments(&mesh, &old, &old, &[vec![999u32]]),
+            vec![0]
+        );
+    }
 
     #[test]
     fn whole_mesh_region_equals_segment() {

@@ -30,7 +30,7 @@ use rayon::prelude::*;
 use strata_engine::field::TensorField;
 use strata_engine::mesh::{NONE, TriMesh};
 use strata_engine::sample::Sampler;
-use strata_engine::segment::{Segmentation, segment, segment_region};
+use strata_engine::segment::{Segmentation, segment, segment_region, touched_segments};
 use strata_engine::surface::{
     CellInput, SplitContext, SurfaceOptions, lowest_face, order_segments,
     parameterize_segment_with_splitting, segment_cells, total_measure,
@@ -147,22 +147,12 @@ pub fn segment_meshes(
         ) {
             (true, Some(old)) => {
                 // Field-only change: re-segment the segments it touched.
-                let changed: Vec<bool> = old
-                    .tensors()
-                    .iter()
-                    .zip(field.tensors())
-                    .map(|(a, b)| a != b)
-                    .collect();
-                let touched: Vec<&(Entity, &SegmentFaces)> = existing
-                    .iter()
-                    .filter(|(_, s)| {
-                        s.faces.iter().any(|&f| {
-                            mesh.triangles()[f as usize]
-                                .iter()
-                                .any(|&v| changed[v as usize])
-                        })
-                    })
-                    .collect();
+                let faces: Vec<&[u32]> = existing.iter().map(|(_, s)| &s.faces[..]).collect();
+                let touched: Vec<&(Entity, &SegmentFaces)> =
+                    touched_segments(mesh, &old, field, &faces)
+                        .into_iter()
+                        .map(|i| &existing[i])
+                        .collect();
                 let mut region: Vec<u32> =
                     touched.iter().flat_map(|(_, s)| s.faces.clone()).collect();
                 region.sort_unstable();
