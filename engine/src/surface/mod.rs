@@ -362,18 +362,15 @@ impl Preprocessed {
         progress(Progress::Start("cells"));
         let t = Instant::now();
         let inputs = cell_inputs(&mesh, &field, &params);
-        let total = total_measure(
-            params
-                .iter()
-                .map(lowest_face)
-                .zip(inputs.iter().map(|c| c.measure)),
-        );
+        let lowest: Vec<u32> = params.iter().map(lowest_face).collect();
+        let total = total_measure(lowest.iter().copied().zip(inputs.iter().map(|c| c.measure)));
         let curves = build_cells(&params, &inputs, total, &options.curve)?;
         let segments = order_segments(
-            params
+            lowest
                 .iter()
+                .zip(&params)
                 .zip(curves)
-                .map(|(p, c)| (lowest_face(p), p.faces.clone(), Arc::new(c))),
+                .map(|((&low, p), c)| (low, p.faces.clone(), Arc::new(c))),
         );
         report.cells = segments.iter().map(|s| s.curve.cell_count()).sum();
         record_stage(&mut stages, progress, "cells", t);

@@ -326,11 +326,11 @@ impl StyledFrame {
         let Some(kind) = self.choice.kind() else {
             return splats.encode(device, queue, encoder, target, camera, look);
         };
-        let npr = match self.npr.take() {
+        // Built on the first frame that needs it (a key switched away from splats).
+        let npr = match &mut self.npr {
             Some(npr) => npr,
-            None => NprRenderer::new(device, self.format)?,
+            slot @ None => slot.insert(NprRenderer::new(device, self.format)?),
         };
-        let npr = self.npr.insert(npr);
         let style = NprStyle::for_samples(kind, seed);
         npr.encode(device, queue, encoder, target, camera, splats, look, &style)
     }
