@@ -18,7 +18,9 @@
 //! cells.
 
 mod assemble;
+mod build_control;
 mod cells;
+pub mod incremental;
 mod key;
 pub mod refine;
 mod segmentation;
@@ -41,7 +43,9 @@ pub use key::KeyBuilder;
 pub use refine::{
     SplitContext, lowest_face, parameterize_segment_with_splitting, parameterize_with_splitting,
 };
-pub use segmentation::{SegmentationKind, SurfaceSegmentation, segment_surface};
+pub use segmentation::{
+    SegmentationKind, SurfaceSegmentation, prepare_field, segment_prepared, segment_surface,
+};
 // Old paths of items that moved to their stage (new code should use the new homes:
 // `curve::CellInput`, `segment::segmentation_from_labels`).
 pub use crate::curve::CellInput;
@@ -171,6 +175,10 @@ pub enum SurfaceError {
     /// `chart_angle` is not in (0, pi].
     #[error("chart_angle must be in (0, pi] radians, got {0}")]
     InvalidChartAngle(f64),
+    /// An incremental build was cancelled through its
+    /// [`BuildControl`](incremental::BuildControl) (a newer change superseded it).
+    #[error("cancelled: a newer change superseded this build")]
+    Cancelled,
 }
 
 /// Which path of the preprocessing ran.

@@ -70,33 +70,62 @@ pub fn segment_surface(
 ) -> Result<SurfaceSegmentation, SurfaceError> {
     progress(Progress::Start("isotropic directions"));
     let t = Instant::now();
-    if options.isotropy_threshold > 1.0 && all_isotropic(mesh, &field, options.isotropy_threshold) {
-        let field = Arc::new(isotropic_copy(mesh, &field)?);
-        record_stage(stages, progress, "isotropic directions", t);
-        progress(Progress::Start("segmentation"));
-        let t = Instant::now();
-        let segmentation = isotropic_charts(mesh, options.chart_angle);
-        record_stage(stages, progress, "segmentation", t);
-        return Ok(SurfaceSegmentation {
-            field,
-            segmentation,
-            kind: SegmentationKind::IsotropicCharts,
-        });
-    }
-    let (field, smoothed_vertices) =
-        match smooth_isotropic_directions(mesh, &field, options.isotropy_threshold)? {
-            Some((smoothed, changed)) => (Arc::new(smoothed), changed),
-            None => (field, 0),
-        };
+    let (field, kind) = prepare_field(mesh, field, options)?;
     record_stage(stages, progress, "isotropic directions", t);
     progress(Progress::Start("segmentation"));
     let t = Instant::now();
-    let segmentation = segment(mesh, &field, &options.segment)?;
+    let segmentation = segment_prepared(mesh, &field, kind, options)?;
     record_stage(stages, progress, "segmentation", t);
     Ok(SurfaceSegmentation {
         field,
         segmentation,
-        kind: SegmentationKind::FieldAligned { smoothed_vertices },
+        kind,
+    })
+}
+
+/// The first half of [`segment_surface`]: the field the surface path works with (the
+/// input's isotropic copy when every vertex is isotropic, the input with smooth
+/// directions at its isotropic vertices otherwise) and which segmentation it takes.
+/// `options` must be validated. Cost: O(V) when no vertex is isotropic, one sparse
+/// line-field solve otherwise.
+pub fn prepare_field(
+    mesh: &TriMesh,
+    field: Arc<TensorField>,
+    options: &SurfaceOptions,
+) -> Result<(Arc<TensorField>, SegmentationKind), SurfaceError> {
+    if options.isotropy_threshold > 1.0 && all_isotropic(mesh, &field, options.isotropy_threshold) {
+        let field = Arc::new(isotropic_copy(mesh, &field)?);
+        return Ok((field, SegmentationKind::IsotropicCharts));
+    }
+    Ok(
+        match smooth_isotropic_directions(mesh, &field, options.isotropy_threshold)? {
+            Some((smoothed, changed)) => (
+                Arc::new(smoothed),
+                SegmentationKind::FieldAligned {
+                    smoothed_vertices: changed,
+                },
+            ),
+            None => (
+                field,
+                SegmentationKind::FieldAligned {
+                    smoothed_vertices: 0,
+                },
+            ),
+        },
+    )
+}
+
+/// The second half of [`segment_surface`]: normal-cone charts or the field-aligned
+/// segmentation of `field` (from [`prepare_field`], with its `kind`).
+pub fn segment_prepared(
+    mesh: &TriMesh,
+    field: &TensorField,
+    kind: SegmentationKind,
+    options: &SurfaceOptions,
+) -> Result<Segmentation, SurfaceError> {
+    Ok(match kind {
+        SegmentationKind::IsotropicCharts => isotropic_charts(mesh, options.chart_angle),
+        SegmentationKind::FieldAligned { .. } => segment(mesh, field, &options.segment)?,
     })
 }
 
