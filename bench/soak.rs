@@ -339,7 +339,7 @@ fn run_until(
 ) -> Result<(), SoakError> {
     let deadline = Instant::now() + EDIT_LIMIT;
     loop {
-        if engine.wait_for_change(Duration::from_millis(250)) {
+        if engine.wait(Duration::from_millis(250)) {
             let t = Instant::now();
             engine.update();
             *update_time += t.elapsed();
@@ -384,7 +384,7 @@ pub fn watch_soak(edits: usize, warm_up: usize) -> Result<SoakReport, SoakError>
     let mut errors = Vec::new();
     let mut update_time = Duration::ZERO;
     run_until(&mut engine, &mut errors, &mut update_time, |e, _| {
-        applied(e) == Some(&expected)
+        applied(e) == Some(&expected) && e.is_idle()
     })?;
     if !errors.is_empty() {
         return Err(format!("the first scene failed: {errors:?}").into());
@@ -435,7 +435,8 @@ pub fn watch_soak(edits: usize, warm_up: usize) -> Result<SoakReport, SoakError>
             good = text;
             expected = SceneConfig::from_ron(&good, &scene)?;
             run_until(&mut engine, &mut errors, &mut update_time, |e, _| {
-                e.stats().runs_of(Stage::Scene) > 0 && applied(e) == Some(&expected)
+                // The scene applied and its build (if any) applied too.
+                e.stats().runs_of(Stage::Scene) > 0 && applied(e) == Some(&expected) && e.is_idle()
             })?;
             stray += errors.len();
             check_stages(&engine, edit, before).map_err(|m| context(&m))?;
@@ -533,6 +534,10 @@ pub fn ecs_soak(frames: usize, warm_up: usize, period: usize) -> Result<SoakRepo
     strata_systems::ecs::register(&mut world, &mut schedule);
     let bundle = MeshBundle::new(mesh, fields[0].clone(), options, ECS_COUNT_MIN, 9);
     let entity = world.spawn(bundle).id();
+    // The first build runs off the frame: wait for it before the frames are timed.
+    if !strata_systems::ecs::settle(&mut world, &mut schedule, Duration::from_secs(600)) {
+        return Err("the first build did not finish in 10 minutes".into());
+    }
 
     let mut recorder = Recorder::new(frames, warm_up);
     let mut update_time = Duration::ZERO;

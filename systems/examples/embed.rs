@@ -43,7 +43,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let mut update = |world: &mut World, what: &str| {
         world.resource_mut::<StageStats>().clear();
-        schedule.run(world);
+        // Builds run off the frame; an application calls `schedule.run` every frame,
+        // this example waits until each change's build is applied.
+        ecs::settle(world, &mut schedule, std::time::Duration::from_secs(600));
         world.clear_trackers();
         let stats = world.resource::<StageStats>();
         println!("{what}:");

@@ -1,21 +1,24 @@
-//! Hot reload of scene files: a watcher thread turns file changes into parsed scenes,
-//! and a system applies them to the world at the start of the next update.
+//! Hot reload of scene files: a watcher thread turns file changes into loaded scenes
+//! (parsed, their mesh loaded and their field built, off the frame), and a system
+//! applies them to the world at the start of the next update.
 //!
 //! The thread (notify) watches the folder of the scene file and the folders of the
 //! files it names (mesh, field file), non-recursively, and matches file names, so that
 //! editors that save by writing a temporary file and renaming it, and files deleted and
 //! re-created, are seen. It reacts to `Access(Close(Write))`, `Modify(Name(_))` and
 //! `Create(_)` only (plain `Modify` events arrive while a file is half written), waits
-//! until no relevant event came for [`DEBOUNCE`], then parses the scene and sends the
-//! result over a crossbeam channel: bursts of saves give one parse of the final file.
+//! until no relevant event came for [`DEBOUNCE`], then parses the scene, loads what
+//! changed (the mesh when its source changed or its file changed on disk, the field
+//! when its spec, the mesh or its file changed; the rest is reused from the last good
+//! scene) and sends the result over a crossbeam channel: bursts of saves give one load
+//! of the final file.
 //!
-//! [`apply_scene_updates`] drains the channel: a scene that failed to read, parse or
-//! validate is reported (file, line, column, message) in [`EngineErrors`] and changes
-//! nothing; of the good ones the newest is applied: the mesh is reloaded when its
-//! source changed or its file changed on disk, the field rebuilt when its spec, the
-//! mesh or its file changed, and the other settings set only when they differ, so
-//! change detection sees only what changed. A scene that was bad at start-up is
-//! picked up as soon as a good version is saved.
+//! [`apply_scene_updates`] drains the channel: a scene that failed to read, parse,
+//! validate or load is reported (file, line, column, message) in [`EngineErrors`] and
+//! changes nothing; of the good ones the newest is applied, setting only the
+//! components that differ, so change detection sees only what changed (and the
+//! builds of [`crate::ecs::jobs`] redo only that). Nothing heavy runs in the update. A
+//! scene that was bad at start-up is picked up as soon as a good version is saved.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -28,21 +31,89 @@ use crossbeam_channel::{Receiver, RecvTimeoutError, Sender, select};
 use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind};
 use notify::{RecursiveMode, Watcher};
 
+use strata_engine::field::TensorField;
+use strata_engine::mesh::TriMesh;
+
 use crate::config::{ConfigError, MeshSource, SceneConfig};
 use crate::ecs::components::*;
-use crate::ecs::{EngineError, EngineErrors, EngineSystems, Stage, StageStats};
+use crate::ecs::{
+    EngineError, EngineErrors, EngineSystems, JobCounts, PreprocessJobs, PreprocessProgress, Stage,
+    StageStats,
+};
 
 /// Quiet time after the last relevant file event before the scene is parsed.
 pub const DEBOUNCE: Duration = Duration::from_millis(100);
 
-/// A scene file read by the watcher.
+/// A scene file read and loaded by the watcher.
 #[derive(Debug)]
 pub struct SceneUpdate {
     /// The scene, or why it could not be used.
-    pub scene: Result<SceneConfig, ConfigError>,
-    /// Files that changed on disk since the previous update (the scene file and the
-    /// files it names), absolute.
-    pub changed: Vec<PathBuf>,
+    pub scene: Result<LoadedScene, EngineError>,
+}
+
+/// A good scene with its mesh and field, as the watcher loaded them.
+#[derive(Debug)]
+pub struct LoadedScene {
+    /// The scene.
+    pub config: SceneConfig,
+    /// Its mesh (the last good scene's when neither its source nor its file changed).
+    pub mesh: Arc<TriMesh>,
+    /// Its field (the last good scene's when neither its spec, the mesh nor its files
+    /// changed).
+    pub field: Arc<TensorField>,
+    /// Whether the mesh was loaded anew.
+    pub reloaded_mesh: bool,
+    /// Whether the field was built anew.
+    pub rebuilt_field: bool,
+    /// Time the watcher spent loading.
+    pub took: Duration,
+}
+
+/// The watcher thread's memory of the last good scene, so that a change loads only
+/// what it touched.
+#[derive(Default)]
+struct Loader {
+    last: Option<(SceneConfig, Arc<TriMesh>, Arc<TensorField>)>,
+    /// Files changed on disk that no good scene has loaded since.
+    unapplied: Vec<PathBuf>,
+}
+
+impl Loader {
+    fn load(
+        &mut self,
+        parsed: Result<SceneConfig, ConfigError>,
+        changed: Vec<PathBuf>,
+    ) -> Result<LoadedScene, EngineError> {
+        let t = Instant::now();
+        self.unapplied.extend(changed);
+        let config = parsed?;
+        let changed = &self.unapplied;
+        let on_disk = |p: &Path| std::path::absolute(p).is_ok_and(|a| changed.contains(&a));
+        let last = self.last.as_ref();
+        let mesh_file_changed = matches!(&config.mesh, MeshSource::File(p) if on_disk(p));
+        let reloaded_mesh = last.is_none_or(|(c, ..)| c.mesh != config.mesh) || mesh_file_changed;
+        let mesh = match last.filter(|_| !reloaded_mesh) {
+            Some((_, m, _)) => m.clone(),
+            None => Arc::new(crate::scene::load_mesh(&config)?),
+        };
+        let rebuilt_field = reloaded_mesh
+            || last.is_none_or(|(c, ..)| c.field != config.field)
+            || config.field.files().into_iter().any(on_disk);
+        let field = match last.filter(|_| !rebuilt_field) {
+            Some((_, _, f)) => f.clone(),
+            None => Arc::new(config.field.build(&mesh)?),
+        };
+        self.unapplied.clear();
+        self.last = Some((config.clone(), mesh.clone(), field.clone()));
+        Ok(LoadedScene {
+            config,
+            mesh,
+            field,
+            reloaded_mesh,
+            rebuilt_field,
+            took: t.elapsed(),
+        })
+    }
 }
 
 /// The receiving end of the watcher's channel, as a resource.
@@ -126,7 +197,7 @@ pub enum WatchError {
 }
 
 /// Starts watching `scene`: the first update (the file as it is now, good or bad) is
-/// in the channel when this returns; later ones follow each (debounced) change.
+/// sent as soon as the thread has loaded it; later ones follow each (debounced) change.
 pub fn watch_scene(scene: &Path) -> Result<(SceneWatcher, Receiver<SceneUpdate>), WatchError> {
     let scene = std::path::absolute(scene).map_err(|e| WatchError::Path(scene.to_path_buf(), e))?;
     let (out_tx, out_rx) = crossbeam_channel::unbounded();
@@ -150,13 +221,24 @@ pub fn watch_scene(scene: &Path) -> Result<(SceneWatcher, Receiver<SceneUpdate>)
             let _ = watch_dir(&mut watcher, &mut watched, dir);
         }
     }
-    let _ = out_tx.send(SceneUpdate {
-        scene: first,
-        changed: Vec::new(),
-    });
     let thread = std::thread::Builder::new()
         .name("strata-scene-watcher".to_owned())
         .spawn(move || {
+            let mut loader = Loader::default();
+            // Loading (a mesh file, a field solve) runs on the build pool, not on
+            // rayon's global pool that the frame samples on.
+            let scene_update = |loader: &mut Loader, parsed, changed| SceneUpdate {
+                scene: match crate::ecs::preprocess_pool() {
+                    Some(pool) => pool.install(|| loader.load(parsed, changed)),
+                    None => loader.load(parsed, changed),
+                },
+            };
+            if out_tx
+                .send(scene_update(&mut loader, first, Vec::new()))
+                .is_err()
+            {
+                return;
+            }
             let relevant = |event: &notify::Event, deps: &[PathBuf]| -> Vec<PathBuf> {
                 let kind_ok = matches!(
                     event.kind,
@@ -221,10 +303,7 @@ pub fn watch_scene(scene: &Path) -> Result<(SceneWatcher, Receiver<SceneUpdate>)
                     deps = new_deps;
                 }
                 if out_tx
-                    .send(SceneUpdate {
-                        scene: parsed,
-                        changed,
-                    })
+                    .send(scene_update(&mut loader, parsed, changed))
                     .is_err()
                 {
                     return; // the engine is gone
@@ -273,39 +352,42 @@ pub fn apply_scene_updates(world: &mut World) {
         Some(mut inbox) => inbox.drain(),
         None => return,
     };
-    if updates.is_empty() {
-        return;
-    }
-    let mut changed: HashSet<PathBuf> = HashSet::new();
     let mut newest = None;
     for u in updates {
-        changed.extend(u.changed);
         match u.scene {
             Ok(scene) => newest = Some(scene),
-            Err(e) => world.resource_mut::<EngineErrors>().0.push(e.into()),
+            Err(e) => world.resource_mut::<EngineErrors>().0.push(e),
         }
     }
-    let Some(config) = newest else {
+    let Some(loaded) = newest else {
         return;
     };
     let t = Instant::now();
-    match apply_scene(world, config, &changed) {
+    let took = loaded.took;
+    match apply_scene(world, loaded) {
         Ok((entity, note)) => {
-            world
-                .resource_mut::<StageStats>()
-                .record(Stage::Scene, entity, 1, t.elapsed(), note);
+            world.resource_mut::<StageStats>().record(
+                Stage::Scene,
+                entity,
+                1,
+                took + t.elapsed(),
+                note,
+            );
         }
         Err(e) => world.resource_mut::<EngineErrors>().0.push(e),
     }
 }
 
-/// Applies one scene: loads what changed, sets components only where they differ.
-fn apply_scene(
-    world: &mut World,
-    config: SceneConfig,
-    changed: &HashSet<PathBuf>,
-) -> Result<(Entity, String), EngineError> {
-    let on_disk = |p: &Path| std::path::absolute(p).is_ok_and(|a| changed.contains(&a));
+/// Applies one loaded scene: sets components only where they differ.
+fn apply_scene(world: &mut World, loaded: LoadedScene) -> Result<(Entity, String), EngineError> {
+    let LoadedScene {
+        config,
+        mesh,
+        field,
+        reloaded_mesh,
+        rebuilt_field,
+        ..
+    } = loaded;
     let state = world.get_resource_or_init::<SceneState>();
     let old = state.config.clone();
     let entity = state.entity.filter(|e| world.get_entity(*e).is_ok());
@@ -317,23 +399,6 @@ fn apply_scene(
     {
         crate::budget::check_memory(config.sampling.count)?;
     }
-    let mesh_file_changed = matches!(&config.mesh, MeshSource::File(p) if on_disk(p));
-    let field_file_changed = config.field.files().into_iter().any(on_disk);
-    let reload_mesh =
-        entity.is_none() || old.as_ref().is_none_or(|o| o.mesh != config.mesh) || mesh_file_changed;
-    let mesh = match (reload_mesh, entity.and_then(|e| world.get::<MeshData>(e))) {
-        (false, Some(m)) => m.0.clone(),
-        _ => Arc::new(crate::scene::load_mesh(&config)?),
-    };
-    let rebuild_field =
-        reload_mesh || old.as_ref().is_none_or(|o| o.field != config.field) || field_file_changed;
-    let field = match (
-        rebuild_field,
-        entity.and_then(|e| world.get::<FieldData>(e)),
-    ) {
-        (false, Some(f)) => f.0.clone(),
-        _ => Arc::new(config.field.build(&mesh)?),
-    };
     let options = config.surface_options();
     let count = usize::try_from(config.sampling.count).unwrap_or(usize::MAX);
     let mut what = Vec::new();
@@ -346,11 +411,14 @@ fn apply_scene(
         }
         Some(e) => {
             let mut entity = world.entity_mut(e);
-            if reload_mesh {
+            // Host code may have set other data meanwhile: the scene's wins.
+            let differs = |a: Option<&Arc<TriMesh>>| a.is_none_or(|a| !Arc::ptr_eq(a, &mesh));
+            if reloaded_mesh || differs(entity.get::<MeshData>().map(|m| &m.0)) {
                 entity.insert(MeshData(mesh));
                 what.push("mesh");
             }
-            if rebuild_field {
+            let differs = |a: Option<&Arc<TensorField>>| a.is_none_or(|a| !Arc::ptr_eq(a, &field));
+            if rebuilt_field || differs(entity.get::<FieldData>().map(|f| &f.0)) {
                 entity.insert(FieldData(field));
                 what.push("field");
             }
@@ -439,6 +507,63 @@ impl StreamingEngine {
     /// Blocks until a scene change is waiting or `timeout` passed; true if one is.
     pub fn wait_for_change(&mut self, timeout: Duration) -> bool {
         self.world.resource_mut::<SceneInbox>().wait(timeout)
+    }
+
+    /// Blocks until a scene change or a finished build waits to be applied, or
+    /// `timeout` passed; true if something waits. The loop of `strata watch`: wait,
+    /// then [`update`](Self::update).
+    pub fn wait(&mut self, timeout: Duration) -> bool {
+        self.world
+            .resource_scope(|world, mut inbox: Mut<SceneInbox>| {
+                let mut jobs = world.resource_mut::<PreprocessJobs>();
+                if !inbox.pending.is_empty() || !inbox.receiver.is_empty() {
+                    return true;
+                }
+                let (builds, stash) = jobs.finished_channel();
+                if !stash.is_empty() || !builds.is_empty() {
+                    return true;
+                }
+                select! {
+                    recv(inbox.receiver) -> u => {
+                        if let Ok(u) = u {
+                            inbox.pending.push(u);
+                        }
+                        true
+                    }
+                    recv(builds) -> done => {
+                        if let Ok(done) = done {
+                            stash.push(done);
+                        }
+                        true
+                    }
+                    default(timeout) => false,
+                }
+            })
+    }
+
+    /// True when no build runs or waits to start and no finished one waits to be
+    /// applied (scene changes not yet seen by the watcher do not count).
+    pub fn is_idle(&self) -> bool {
+        self.world.resource::<PreprocessJobs>().is_idle()
+    }
+
+    /// Runs updates until every build has been applied (or `timeout` passed); true if
+    /// the engine is idle. A scene change that arrives meanwhile is applied too.
+    pub fn settle(&mut self, timeout: Duration) -> bool {
+        let idle = crate::ecs::settle(&mut self.world, &mut self.schedule, timeout);
+        self.world.clear_trackers();
+        idle
+    }
+
+    /// The running builds' progress (`None` when none runs): what `strata watch`
+    /// prints and `strata view` shows in its title.
+    pub fn progress(&self) -> Option<String> {
+        self.world.resource::<PreprocessProgress>().summary()
+    }
+
+    /// How many builds started, completed, were cancelled or failed.
+    pub fn builds(&self) -> JobCounts {
+        self.world.resource::<PreprocessJobs>().counts()
     }
 
     /// The mesh entity driven by the scene, once a good scene was applied.

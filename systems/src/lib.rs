@@ -8,6 +8,7 @@
 //!   the engine's options ([`config::SceneConfig::surface_options`]).
 //! - [`scene`]: a scene turned into engine data (mesh, field, sampler).
 //! - [`ecs`]: the streaming engine's components and systems.
+//! - [`plugin`]: [`StrataPlugin`], the engine as a `bevy_app` plugin for Bevy hosts.
 //! - [`hot_reload`]: the scene watcher and its application to the world.
 //! - [`gpu`]: wgpu streaming, splat rendering, offscreen pictures.
 //! - [`viewer`]: the interactive window over the streaming engine.
@@ -21,6 +22,9 @@ pub mod config;
 pub mod ecs;
 pub mod gpu;
 pub mod hot_reload;
+pub mod plugin;
 pub mod report;
 pub mod scene;
 pub mod viewer;
+
+pub use plugin::StrataPlugin;

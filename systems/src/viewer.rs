@@ -2,7 +2,8 @@
 //! ([`crate::hot_reload::StreamingEngine`]), behind `strata view`: the scene file (and
 //! the mesh and field files it names) is watched and hot-reloaded, the engine resamples
 //! every frame, and the GPU upload system ([`crate::gpu::upload`]) streams the samples
-//! into the renderer's buffer; the title shows the frame time and the sample count.
+//! into the renderer's buffer; the title shows the frame time, the sample count and
+//! the progress of a build running off the frame (the last samples keep drawing).
 //!
 //! Input: [`ViewerOptions`]. Output: the window until it closes, then a
 //! [`ViewerOutcome`]. Cost per frame: one sampling of the scene, one upload, one draw.
@@ -106,18 +107,23 @@ pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
         .sample_every_update = true;
     crate::gpu::upload::register(&mut engine.schedule);
     // A scene that is bad at start-up is waited for: the first good save opens it.
+    // The watcher loads the scene off this thread; a scene that is bad at start-up
+    // is waited for: the first good save opens it.
     let mesh_entity = loop {
         engine.update();
-        for e in engine.take_errors() {
+        let errors = engine.take_errors();
+        for e in &errors {
             eprintln!("error: {e}");
         }
         if let Some(e) = engine.mesh_entity() {
             break e;
         }
-        eprintln!(
-            "waiting for a good save of {} (Ctrl-C quits)",
-            options.scene.display()
-        );
+        if !errors.is_empty() {
+            eprintln!(
+                "waiting for a good save of {} (Ctrl-C quits)",
+                options.scene.display()
+            );
+        }
         engine.wait_for_change(Duration::from_secs(3600));
     };
     if let Some(count) = options.count {
@@ -537,6 +543,10 @@ impl Viewer {
             self.style.color_mode,
             self.style.mesh_mode,
         );
+        // A build off the frame shows its stage and progress; the last samples draw.
+        if let Some(progress) = self.engine.progress() {
+            self.status = format!("{} | {progress}", self.status);
+        }
         let title = match &self.scene_error {
             Some(e) => format!("strata view: {} | {} | {e}", self.title, self.status),
             None => format!("strata view: {} | {}", self.title, self.status),

@@ -67,6 +67,9 @@ fn cap_height(mesh: &TriMesh, share: f64) -> f64 {
     top[((1.0 - share) * top.len() as f64) as usize]
 }
 
+/// Longest wait for a build (the bunny on a busy machine).
+const LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
+
 struct Engine {
     world: World,
     schedule: Schedule,
@@ -89,9 +92,13 @@ impl Engine {
         e
     }
 
+    /// Runs updates until the builds a change started are applied.
     fn update(&mut self) {
         self.world.resource_mut::<StageStats>().clear();
-        self.schedule.run(&mut self.world);
+        assert!(
+            ecs::settle(&mut self.world, &mut self.schedule, LIMIT),
+            "builds did not finish"
+        );
         self.world.clear_trackers();
         let errors = &self.world.resource::<ecs::EngineErrors>().0;
         assert!(errors.is_empty(), "{errors:?}");
@@ -349,7 +356,15 @@ fn registers_into_a_labelled_schedule_stored_in_the_world() {
             1,
         ))
         .id();
-    world.run_schedule(Update);
+    // The first update starts the build off the frame; updates apply it when done.
+    let start = std::time::Instant::now();
+    loop {
+        world.run_schedule(Update);
+        if world.resource::<ecs::PreprocessJobs>().is_idle() || start.elapsed() > LIMIT {
+            break;
+        }
+        world.resource_mut::<ecs::PreprocessJobs>().wait(LIMIT);
+    }
     assert_eq!(
         world.get::<SampleBuffer>(e).map(|b| b.samples.len()),
         Some(321)

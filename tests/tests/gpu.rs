@@ -708,7 +708,12 @@ fn ecs_upload_system_streams_the_engine_samples() {
             .expect("read back");
         assert!(back == cpu, "GPU buffer differs from the engine's samples");
     };
-    schedule.run(&mut world);
+    // The first build runs off the frame; settle waits for it.
+    assert!(ecs::settle(
+        &mut world,
+        &mut schedule,
+        std::time::Duration::from_secs(120)
+    ));
     world.clear_trackers();
     check(&mut world, 3000, 1);
     // Nothing changed: no resampling, no upload.

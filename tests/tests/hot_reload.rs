@@ -31,7 +31,7 @@ fn wait_until(
         if start.elapsed() > LIMIT {
             return false;
         }
-        engine.wait_for_change(Duration::from_millis(50));
+        engine.wait(Duration::from_millis(50));
     }
 }
 
@@ -362,16 +362,15 @@ fn bunny_scene_changes_rerun_only_what_they_invalidate() {
     assert_eq!(engine.samples().len(), 30_000);
 
     // The mesh file rewritten on disk is reloaded; identical content keeps every
-    // segment's parameterization (same content hashes).
+    // segment (the same content: nothing is segmented again).
     engine.clear_stats();
     let generation = engine.sample_generation();
     let segments_before = segment_count(&mut engine);
     strata_engine::io::write_mesh_ply(&dir.path().join("bunny.ply"), &files.mesh, None)
         .expect("rewrite mesh");
-    assert!(wait_until(&mut engine, |e| e
-        .stats()
-        .runs_of(Stage::Segmentation)
-        > 0));
+    let builds = engine.builds().completed;
+    assert!(wait_until(&mut engine, |e| e.builds().completed > builds
+        && e.is_idle()));
     assert_eq!(
         engine.sample_generation(),
         generation,
@@ -381,13 +380,8 @@ fn bunny_scene_changes_rerun_only_what_they_invalidate() {
     let stats = engine.stats();
     let scene_note = &stats.runs[0].note;
     assert!(scene_note.contains("mesh"), "{scene_note}");
-    assert_eq!(stats.runs_of(Stage::Segmentation), 1);
-    assert_eq!(
-        stats.items_of(Stage::Parameterization),
-        0,
-        "{:?}",
-        stats.runs
-    );
+    // The same positions, triangles and tensors: nothing to segment again.
+    assert_eq!(stats.stages_run(), vec![Stage::Scene], "{:?}", stats.runs);
     assert_eq!(segment_count(&mut engine), segments_before);
 }
 

@@ -297,7 +297,11 @@ fn ecs_lod_pools_follow_the_camera() {
             LodState::default(),
         ))
         .id();
-    schedule.run(&mut world);
+    assert!(ecs::settle(
+        &mut world,
+        &mut schedule,
+        std::time::Duration::from_secs(120)
+    ));
     let entries = |world: &World| {
         let state = world.get::<LodState>(e).expect("state");
         (state.pool.as_ref().map_or(0, |p| p.len()), state.builds)
@@ -384,7 +388,11 @@ fn ecs_lod_pools_follow_a_placed_mesh() {
             LodState::default(),
         ))
         .id();
-    schedule.run(&mut world);
+    assert!(ecs::settle(
+        &mut world,
+        &mut schedule,
+        std::time::Duration::from_secs(120)
+    ));
     let sampler = world
         .get::<MeshSampler>(e)
         .and_then(|s| s.0.clone())

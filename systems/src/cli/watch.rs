@@ -1,6 +1,7 @@
 //! `strata watch`: the engine loop on a scene file. Applies every change of the scene
-//! (or of the mesh and field files it names), prints what reran and how long it took,
-//! and rewrites the samples file atomically after each change.
+//! (or of the mesh and field files it names), prints what reran and how long it took
+//! (and a running build's progress every half second), and rewrites the samples file
+//! atomically after each change.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -19,8 +20,8 @@ pub struct WatchArgs {
     /// after every change.
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
-    /// Stop after this many updates that changed something (default: run until
-    /// interrupted).
+    /// Stop after this many changes applied in full, their builds included (default:
+    /// run until interrupted).
     #[arg(long)]
     pub updates: Option<usize>,
 }
@@ -85,14 +86,24 @@ pub(super) fn run(args: &WatchArgs) -> anyhow::Result<()> {
                 }
             }
         }
+        // Builds run off the loop: while one runs, its progress every half second.
+        let idle = engine.is_idle();
+        if let Some(progress) = engine.progress() {
+            writeln!(out, "  {progress}")?;
+        }
         out.flush()?;
         drop(out);
-        if !runs.is_empty() {
+        if !runs.is_empty() && idle {
             done += 1;
             if args.updates.is_some_and(|n| done >= n) {
                 return Ok(());
             }
         }
-        while !engine.wait_for_change(Duration::from_secs(3600)) {}
+        let tick = if idle {
+            Duration::from_secs(3600)
+        } else {
+            Duration::from_millis(500)
+        };
+        while !engine.wait(tick) && idle {}
     }
 }

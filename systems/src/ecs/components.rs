@@ -1,17 +1,20 @@
 //! Components of the streaming engine: a mesh entity holds the mesh, its field, its
 //! settings, the assembled sampler (segments linked into chains) and the current
 //! samples; one entity per segment holds the segment's faces, parameterizations and
-//! cells, and a link to its mesh.
+//! cells (shared with the engine's build state), related to its mesh by [`SegmentOf`].
 
 use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
-use strata_engine::curve::{CurveOptions, SegmentCurve};
+use strata_engine::curve::CurveOptions;
 use strata_engine::field::TensorField;
 use strata_engine::mesh::TriMesh;
-use strata_engine::param::SegmentParam;
 use strata_engine::sample::{Sample, Sampler};
-use strata_engine::surface::{CellInput, SurfaceOptions, SurfaceReport};
+use strata_engine::surface::SegmentationKind;
+use strata_engine::surface::SurfaceOptions;
+use strata_engine::surface::incremental::{
+    BuildInputs, BuiltSegment, SegmentCurves, SegmentCut, SegmentPieces,
+};
 
 /// The mesh of a mesh entity. Replacing it reruns everything downstream (segments
 /// whose content hash is unchanged keep their parameterizations and cells).
@@ -19,7 +22,7 @@ use strata_engine::surface::{CellInput, SurfaceOptions, SurfaceReport};
 pub struct MeshData(pub Arc<TriMesh>);
 
 /// The tensor field on the mesh. Replacing it re-segments only the segments that hold
-/// a vertex whose tensor changed (see [`segment_meshes`](super::preprocess::segment_meshes)).
+/// a vertex whose tensor changed ([`strata_engine::surface::incremental`]).
 #[derive(Component, Clone, Debug)]
 pub struct FieldData(pub Arc<TensorField>);
 
@@ -64,24 +67,21 @@ impl Default for MeshTransform {
     }
 }
 
-/// What the last segmentation of a mesh entity was computed from, so that the next
-/// change can be compared with it.
+/// What the last completed build of a mesh entity was computed from: the base that the
+/// next build compares a change with. `None` until a build completed.
 #[derive(Component, Clone, Debug, Default)]
-pub struct SegmentationState {
-    /// The mesh segmented.
-    pub mesh: Option<Arc<TriMesh>>,
-    /// The field segmented.
-    pub field: Option<Arc<TensorField>>,
-    /// The settings used.
-    pub settings: Option<PreprocessSettings>,
-}
+pub struct SurfaceBase(pub Option<LastBuild>);
 
-impl SegmentationState {
-    /// Whether the segments were computed on `mesh` (false after a segmentation of a
-    /// new mesh failed: the old segments then must not be used with it).
-    pub fn segments_current(&self, mesh: &MeshData) -> bool {
-        self.mesh.as_ref().is_some_and(|m| Arc::ptr_eq(m, &mesh.0))
-    }
+/// The inputs and prepared field of a completed build (the segments are the mesh's
+/// segment entities, the chains its sampler's).
+#[derive(Clone, Debug)]
+pub struct LastBuild {
+    /// Mesh, field and settings built.
+    pub inputs: BuildInputs,
+    /// The field the surface path worked with.
+    pub working_field: Arc<TensorField>,
+    /// Charts or field-aligned segments.
+    pub kind: SegmentationKind,
 }
 
 /// The sampler of a mesh entity: all its segments' cells, in the engine's segment
@@ -113,8 +113,8 @@ pub struct MeshBundle {
     pub sampling: SamplingSettings,
     /// Placement.
     pub transform: MeshTransform,
-    /// Bookkeeping of the last segmentation.
-    pub state: SegmentationState,
+    /// What the last build was computed from.
+    pub base: SurfaceBase,
     /// The assembled sampler.
     pub sampler: MeshSampler,
     /// The samples.
@@ -138,56 +138,90 @@ impl MeshBundle {
             curve: CurveSettings(options.curve),
             sampling: SamplingSettings { count, seed },
             transform: MeshTransform::default(),
-            state: SegmentationState::default(),
+            base: SurfaceBase::default(),
             sampler: MeshSampler::default(),
             samples: SampleBuffer::default(),
         }
     }
 }
 
-/// One segment of a mesh: a connected set of faces that the segmentation made a disc.
-/// Its `hash` covers everything its parameterization depends on (faces, their vertex
-/// positions and tensors, cut edges, settings); a re-segmentation that produces a
-/// segment with the same hash keeps the existing entity and its results.
+/// Links a segment entity to its mesh entity (a bevy_ecs relationship: the mesh holds
+/// the reverse list in [`Segments`], and despawning the mesh despawns its segments).
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+#[relationship(relationship_target = Segments)]
+pub struct SegmentOf(pub Entity);
+
+/// The segment entities of a mesh entity, kept by bevy_ecs from their [`SegmentOf`].
+#[derive(Component, Debug, Default)]
+#[relationship_target(relationship = SegmentOf, linked_spawn)]
+pub struct Segments(Vec<Entity>);
+
+/// One segment of a mesh: a connected set of faces that the segmentation made a disc,
+/// with the cut edges that touch it and its content key
+/// ([`segment_key`](strata_engine::surface::incremental::segment_key): a later
+/// build that produces a segment with the same key keeps this entity and its results).
 #[derive(Component, Clone, Debug)]
-pub struct SegmentFaces {
-    /// The mesh entity it belongs to.
-    pub mesh: Entity,
-    /// Its faces (mesh face ids, ascending).
-    pub faces: Vec<u32>,
-    /// Cut edges of the segmentation that touch its faces (the walk and the
-    /// parameterization treat them as boundary).
-    pub cut_edges: Vec<u32>,
-    /// Content hash (see the type docs).
-    pub hash: u64,
-}
+pub struct SegmentFaces(pub Arc<SegmentCut>);
 
 /// The parameterizations of a segment: one per piece it was split into while invalid
-/// (usually one).
-#[derive(Component, Clone, Debug, Default)]
-pub struct SegmentParams {
-    /// The pieces, ordered by their lowest face.
-    pub pieces: Vec<SegmentParam>,
-    /// Splits and fallbacks that happened.
-    pub report: SurfaceReport,
-}
+/// (usually one), with its cells' inputs.
+#[derive(Component, Clone, Debug)]
+pub struct SegmentParams(pub Arc<SegmentPieces>);
 
-/// The cells of a segment's pieces (one [`SegmentCurve`] per piece).
-#[derive(Component, Clone, Debug, Default)]
-pub struct SegmentCells {
-    /// Per piece: unit-square layout, corner densities and measure.
-    pub inputs: Vec<CellInput>,
-    /// Per piece: the adaptive Hilbert cells (shared with the mesh's sampler).
-    pub curves: Vec<Arc<SegmentCurve>>,
-}
+/// The cells of a segment's pieces (one
+/// [`SegmentCurve`](strata_engine::curve::SegmentCurve) per piece, shared with the
+/// mesh's sampler).
+#[derive(Component, Clone, Debug)]
+pub struct SegmentCells(pub Arc<SegmentCurves>);
 
-/// The components a segment entity starts with.
+macro_rules! deref_to {
+    ($component:ty, $target:ty) => {
+        impl std::ops::Deref for $component {
+            type Target = $target;
+            fn deref(&self) -> &$target {
+                &self.0
+            }
+        }
+    };
+}
+deref_to!(SegmentFaces, SegmentCut);
+deref_to!(SegmentParams, SegmentPieces);
+deref_to!(SegmentCells, SegmentCurves);
+
+/// The components a segment entity is spawned with.
 #[derive(Bundle)]
 pub struct SegmentBundle {
-    /// Faces, link to the mesh, hash.
+    /// Its mesh.
+    pub of: SegmentOf,
+    /// Faces, cut edges, key.
     pub faces: SegmentFaces,
-    /// Filled by parameterization.
+    /// Parameterized pieces.
     pub params: SegmentParams,
-    /// Filled by the curve stage.
+    /// Cells.
     pub cells: SegmentCells,
+}
+
+impl SegmentBundle {
+    /// The entity of segment `s` of mesh entity `mesh`.
+    pub fn new(mesh: Entity, s: &BuiltSegment) -> Self {
+        Self {
+            of: SegmentOf(mesh),
+            faces: SegmentFaces(s.cut.clone()),
+            params: SegmentParams(s.pieces.clone()),
+            cells: SegmentCells(s.curves.clone()),
+        }
+    }
+
+    /// The engine's view of a segment entity's components.
+    pub fn built(
+        faces: &SegmentFaces,
+        params: &SegmentParams,
+        cells: &SegmentCells,
+    ) -> BuiltSegment {
+        BuiltSegment {
+            cut: faces.0.clone(),
+            pieces: params.0.clone(),
+            curves: cells.0.clone(),
+        }
+    }
 }

@@ -1,11 +1,14 @@
 //! The streaming engine as a bevy_ecs world: meshes, segments, parameterizations and
 //! cells are components; systems with change detection redo only what a change of the
-//! mesh, the field or the settings invalidated (DESIGN.md, "Architecture").
+//! mesh, the field or the settings invalidated (DESIGN.md, "Architecture"), as builds
+//! off the frame ([`jobs`]) while the last good sampler keeps drawing.
 //!
-//! Embedding: call [`register`] on a caller's `World` and `Schedule`, spawn a mesh
-//! entity with [`MeshBundle`], run the schedule; the samples appear in the entity's
-//! [`SampleBuffer`]. Per-stage runs are recorded in [`StageStats`], errors in
-//! [`EngineErrors`]. Scene files and hot reload: [`crate::hot_reload`].
+//! Embedding: call [`register`] on a caller's `World` and `Schedule` (or add
+//! [`StrataPlugin`](crate::StrataPlugin) to a Bevy app), spawn a mesh entity with
+//! [`MeshBundle`], run the schedule every frame; the samples appear in the entity's
+//! [`SampleBuffer`] once its first build finished ([`settle`] runs updates until then).
+//! Per-stage runs are recorded in [`StageStats`], errors in [`EngineErrors`], running
+//! builds in [`PreprocessProgress`]. Scene files and hot reload: [`crate::hot_reload`].
 //!
 //! ```
 //! use std::sync::Arc;
@@ -19,25 +22,27 @@
 //! let mut schedule = Schedule::default();
 //! ecs::register(&mut world, &mut schedule);
 //! let e = world.spawn(MeshBundle::new(mesh, field, SurfaceOptions::default(), 500, 7)).id();
-//! schedule.run(&mut world);
+//! schedule.run(&mut world); // starts the build; the buffer is empty until it is done
+//! assert!(ecs::settle(&mut world, &mut schedule, std::time::Duration::from_secs(60)));
 //! assert_eq!(world.get::<SampleBuffer>(e).map(|b| b.samples.len()), Some(500));
 //! assert_eq!(world.resource::<StageStats>().runs_of(Stage::Segmentation), 1);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 pub mod components;
+pub mod jobs;
 pub mod lod;
-pub mod preprocess;
 pub mod sampling;
 pub mod stats;
 
 use bevy_ecs::prelude::*;
 
 pub use components::*;
-pub use lod::{Lod, LodState, update_lod_pools};
-pub use preprocess::{
-    assemble_samplers, build_curves, despawn_orphan_segments, parameterize_segments, segment_meshes,
+pub use jobs::{
+    JobCounts, JobStatus, PreprocessJobs, PreprocessMode, PreprocessProgress, apply_builds,
+    launch_builds, preprocess_pool, report_progress, settle,
 };
+pub use lod::{Lod, LodState, update_lod_pools};
 pub use sampling::{SampleRequest, sample_meshes};
 pub use stats::{EngineErrors, Stage, StageRun, StageStats};
 
@@ -48,14 +53,10 @@ pub enum EngineSystems {
     Begin,
     /// Applying changed scene files ([`crate::hot_reload`]).
     ApplyScene,
-    /// Segmentation.
-    Segment,
-    /// Parameterization.
-    Parameterize,
-    /// Cells.
-    Curves,
-    /// Sampler assembly (chains).
-    Chains,
+    /// Starting builds for changed meshes ([`launch_builds`]).
+    Launch,
+    /// Applying finished builds: segment entities and samplers ([`apply_builds`]).
+    Apply,
     /// Sampling into the sample buffers.
     Sample,
 }
@@ -63,6 +64,8 @@ pub enum EngineSystems {
 /// Global settings of the engine.
 #[derive(Resource, Clone, Copy, Debug, Default)]
 pub struct EngineSettings {
+    /// Where builds run: off the frame (the default) or inside the update.
+    pub preprocess: PreprocessMode,
     /// Resample every update even when nothing changed (per-frame LOD, renderers that
     /// consume the buffer); default false: sample when something changed or on
     /// [`SampleRequest`].
@@ -112,26 +115,24 @@ pub fn register(world: &mut World, schedule: &mut Schedule) {
     world.init_resource::<EngineErrors>();
     world.init_resource::<EngineSettings>();
     world.init_resource::<SampleRequest>();
+    world.init_resource::<PreprocessJobs>();
+    world.init_resource::<PreprocessProgress>();
     schedule.configure_sets(
         (
             EngineSystems::Begin,
             EngineSystems::ApplyScene,
-            EngineSystems::Segment,
-            EngineSystems::Parameterize,
-            EngineSystems::Curves,
-            EngineSystems::Chains,
+            EngineSystems::Launch,
+            EngineSystems::Apply,
             EngineSystems::Sample,
         )
             .chain(),
     );
     schedule.add_systems((
         stats::begin_update.in_set(EngineSystems::Begin),
-        (despawn_orphan_segments, segment_meshes)
+        launch_builds.in_set(EngineSystems::Launch),
+        (apply_builds, report_progress)
             .chain()
-            .in_set(EngineSystems::Segment),
-        parameterize_segments.in_set(EngineSystems::Parameterize),
-        build_curves.in_set(EngineSystems::Curves),
-        assemble_samplers.in_set(EngineSystems::Chains),
+            .in_set(EngineSystems::Apply),
         (sample_meshes, update_lod_pools).in_set(EngineSystems::Sample),
     ));
 }

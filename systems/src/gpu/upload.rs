@@ -130,7 +130,8 @@ pub fn upload_samples(
         }
         return;
     }
-    if gpu.uploaded == Some((entity, buffer.generation)) {
+    // Nothing new, or nothing sampled yet (the first build still runs).
+    if gpu.uploaded == Some((entity, buffer.generation)) || buffer.generation == 0 {
         return;
     }
     let t = Instant::now();
