@@ -331,3 +331,87 @@ fn a_failed_build_keeps_the_last_good_state() {
     assert!(samples(&world, e) == good);
     assert_eq!(world.resource::<PreprocessJobs>().counts().failed, 1);
 }
+
+/// A level-of-detail pool (ranks `0..base` drawn again when the sampler changes) is
+/// built off the frame too: while it builds, the old pool keeps following the camera
+/// with the sampler it was drawn from; then the new pool and its sampler replace both.
+#[test]
+fn a_level_of_detail_pool_is_rebuilt_off_the_frame() {
+    use strata_systems::ecs::{Lod, LodState};
+    use strata_systems::gpu::{OrbitCamera, SplatLod};
+    let mesh = Arc::new(shapes::sphere(1.0, 30).expect("sphere"));
+    let camera = OrbitCamera {
+        target: glam::Vec3::ZERO,
+        distance: 4.0,
+        yaw: 0.3,
+        pitch: 0.5,
+        fov_y: 40f32.to_radians(),
+        radius: 1.0,
+    };
+    let splat = SplatLod {
+        base: 200_000.0,
+        reference: 4000.0,
+        max: 4.0,
+        cull_back_faces: true,
+    };
+    let view = splat.view(&camera, (320, 240));
+    let (mut world, mut schedule) = world(PreprocessMode::Background);
+    let bundle = MeshBundle::new(
+        mesh.clone(),
+        capped(&mesh, 2.0, DVec3::Z),
+        SurfaceOptions::default(),
+        100,
+        2,
+    );
+    let lod = Lod {
+        view,
+        base: 200_000,
+        budget: 100_000,
+    };
+    let e = world.spawn((bundle, lod, LodState::default())).id();
+    settle(&mut world, &mut schedule);
+    let state = world.get::<LodState>(e).expect("state");
+    assert_eq!(state.builds, 1);
+    assert!(state.pool.as_ref().is_some_and(|p| p.len() >= 200_000));
+    let old_segments = state.drawn_from().expect("sampler").segments().len();
+
+    // A field edit: the build, then the pool, run off the frame; updates meanwhile
+    // keep the old pool and its sampler.
+    world.get_mut::<FieldData>(e).expect("field").0 = capped(&mesh, 0.3, DVec3::Y);
+    let mut saw_old_pool_with_new_sampler = false;
+    let start = std::time::Instant::now();
+    while world.get::<LodState>(e).expect("state").builds < 2 {
+        schedule.run(&mut world);
+        let state = world.get::<LodState>(e).expect("state");
+        let current = world
+            .get::<MeshSampler>(e)
+            .and_then(|s| s.0.as_ref())
+            .expect("sampler");
+        let drawn = state.drawn_from().expect("the old pool's sampler");
+        assert!(state.pool.is_some(), "no pool while the new one builds");
+        if state.builds == 1 && drawn.sample(50, 1) != current.sample(50, 1) {
+            saw_old_pool_with_new_sampler = true;
+        }
+        assert!(start.elapsed() < LIMIT, "the pool was not rebuilt");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    settle(&mut world, &mut schedule);
+    let state = world.get::<LodState>(e).expect("state");
+    let current = world
+        .get::<MeshSampler>(e)
+        .and_then(|s| s.0.as_ref())
+        .expect("sampler");
+    let drawn = state.drawn_from().expect("sampler");
+    assert_eq!(drawn.segments().len(), current.segments().len());
+    assert!(
+        drawn.sample(500, 1) == current.sample(500, 1),
+        "the pool is the new sampler's"
+    );
+    assert_ne!(old_segments, 0);
+    // The pool of 200,000 ranks starts building in the update that applies the new
+    // sampler, so that update (at least) draws with the old pool and its sampler.
+    assert!(
+        saw_old_pool_with_new_sampler,
+        "the pool was rebuilt inside an update"
+    );
+}

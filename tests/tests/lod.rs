@@ -331,9 +331,16 @@ fn ecs_lod_pools_follow_the_camera() {
     schedule.run(&mut world);
     assert_eq!(entries(&world).0, second);
     assert_eq!(world.resource::<GpuSplats>().last.uploads, uploads + 1);
-    // A new base count rebuilds the pool.
+    // A new base count rebuilds the pool, off the frame: the update that sees it keeps
+    // the old pool; the new one is in use once it is built.
     world.get_mut::<Lod>(e).expect("lod").base = 10_000;
     schedule.run(&mut world);
+    assert_eq!(entries(&world).1, 1);
+    assert!(ecs::settle(
+        &mut world,
+        &mut schedule,
+        std::time::Duration::from_secs(120)
+    ));
     assert_eq!(entries(&world).1, 2);
     assert_eq!(
         world.resource::<GpuSplats>().lod_entries(),

@@ -24,6 +24,7 @@
 //! build inside the update instead (tools and tests that want one update to do
 //! everything); the result is the same bit for bit.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -129,6 +130,19 @@ pub struct PreprocessJobs {
     pending: Vec<Entity>,
     next_job: u64,
     counts: JobCounts,
+    /// Other work off the frame not yet taken by the world (level-of-detail pools).
+    tasks: Arc<AtomicUsize>,
+}
+
+/// Counts one piece of work off the frame as pending until dropped (when its result is
+/// taken, or its owner is gone).
+#[derive(Debug)]
+pub struct TaskToken(Arc<AtomicUsize>);
+
+impl Drop for TaskToken {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::Relaxed);
+    }
 }
 
 impl Default for PreprocessJobs {
@@ -142,6 +156,7 @@ impl Default for PreprocessJobs {
             pending: Vec::new(),
             next_job: 0,
             counts: JobCounts::default(),
+            tasks: Arc::new(AtomicUsize::new(0)),
         }
     }
 }
@@ -159,7 +174,8 @@ impl PreprocessJobs {
 
     /// True when no build runs, none waits to start and no result waits to be applied.
     pub fn is_idle(&self) -> bool {
-        self.running.is_empty()
+        self.tasks.load(Ordering::Relaxed) == 0
+            && self.running.is_empty()
             && self.pending.is_empty()
             && self.stash.is_empty()
             && self.receiver.is_empty()
@@ -178,6 +194,13 @@ impl PreprocessJobs {
             }
             Err(_) => false,
         }
+    }
+
+    /// A token that keeps the engine from counting as idle (see [`is_idle`](Self::is_idle))
+    /// until dropped: for other work off the frame whose result an update takes.
+    pub fn task_token(&self) -> TaskToken {
+        self.tasks.fetch_add(1, Ordering::Relaxed);
+        TaskToken(self.tasks.clone())
     }
 
     /// The channel finished builds arrive on, and where a waiter that took one off it
@@ -200,6 +223,18 @@ impl PreprocessJobs {
         if !self.pending.contains(&entity) {
             self.pending.push(entity);
         }
+    }
+
+    /// The changed meshes whose build may start now (none of theirs is running; a
+    /// cancelled one must stop first), taken off the pending list.
+    fn take_startable(&mut self) -> Vec<Entity> {
+        let running = &self.running;
+        let (wait, start): (Vec<Entity>, Vec<Entity>) = self
+            .pending
+            .iter()
+            .partition(|&&e| running.iter().any(|r| r.entity == e));
+        self.pending = wait;
+        start
     }
 
     /// Starts a build of `entity` from `previous` (its segments are `snapshot`).
@@ -279,6 +314,20 @@ impl PreprocessProgress {
     }
 }
 
+/// What a build of a mesh entity reads: its inputs, its last build and segments.
+type MeshInputs<'a> = (
+    &'a MeshData,
+    &'a FieldData,
+    &'a PreprocessSettings,
+    &'a CurveSettings,
+    &'a SurfaceBase,
+    &'a MeshSampler,
+    Option<&'a Segments>,
+);
+
+/// A segment entity's shared build state.
+type SegmentParts<'a> = (&'a SegmentFaces, &'a SegmentParams, &'a SegmentCells);
+
 /// Starts builds for changed meshes (see the module docs).
 #[allow(clippy::type_complexity)]
 pub fn launch_builds(
@@ -293,16 +342,8 @@ pub fn launch_builds(
             Changed<CurveSettings>,
         )>,
     >,
-    meshes: Query<(
-        &MeshData,
-        &FieldData,
-        &PreprocessSettings,
-        &CurveSettings,
-        &SurfaceBase,
-        &MeshSampler,
-        Option<&Segments>,
-    )>,
-    segments: Query<(&SegmentFaces, &SegmentParams, &SegmentCells)>,
+    meshes: Query<MeshInputs>,
+    segments: Query<SegmentParts>,
 ) {
     for entity in &changed {
         jobs.mark(entity);
@@ -313,42 +354,46 @@ pub fn launch_builds(
             r.cancelled_at.get_or_insert_with(Instant::now);
         }
     }
-    let jobs = &mut *jobs;
-    let mut i = 0;
-    while i < jobs.pending.len() {
-        let entity = jobs.pending[i];
-        if jobs.running.iter().any(|r| r.entity == entity) {
-            i += 1;
-            continue; // starts when the cancelled build has stopped
+    for entity in jobs.take_startable() {
+        if let Ok(mesh) = meshes.get(entity) {
+            let (inputs, previous, snapshot) = snapshot(mesh, &segments);
+            jobs.launch(entity, inputs, previous, snapshot, settings.preprocess);
         }
-        jobs.pending.remove(i);
-        let Ok((mesh, field, pre, curve, base, sampler, children)) = meshes.get(entity) else {
-            continue;
-        };
-        let inputs = BuildInputs {
-            mesh: mesh.0.clone(),
-            field: field.0.clone(),
-            options: strata_engine::surface::SurfaceOptions {
-                curve: curve.0,
-                ..pre.0
-            },
-        };
-        let snapshot: Vec<Entity> = children.map_or_else(Vec::new, |c| c.iter().collect());
-        let previous = base.0.as_ref().map(|b| SurfaceState {
-            inputs: b.inputs.clone(),
-            working_field: b.working_field.clone(),
-            kind: b.kind,
-            segments: snapshot
-                .iter()
-                .filter_map(|&e| segments.get(e).ok())
-                .map(|(f, p, c)| SegmentBundle::built(f, p, c))
-                .collect(),
-            chains: sampler.0.as_ref().map_or_else(Vec::new, |s| {
-                s.chains().iter().map(|c| c.to_vec()).collect()
-            }),
-        });
-        jobs.launch(entity, inputs, previous, snapshot, settings.preprocess);
     }
+}
+
+/// A mesh entity's build inputs, its last build (`None` before the first) and the
+/// segment entities that build's segments come from, in the same order.
+fn snapshot(
+    (mesh, field, pre, curve, base, sampler, children): MeshInputs,
+    segments: &Query<SegmentParts>,
+) -> (BuildInputs, Option<SurfaceState>, Vec<Entity>) {
+    let inputs = BuildInputs {
+        mesh: mesh.0.clone(),
+        field: field.0.clone(),
+        options: strata_engine::surface::SurfaceOptions {
+            curve: curve.0,
+            ..pre.0
+        },
+    };
+    let (entities, built): (Vec<Entity>, Vec<BuiltSegment>) = children
+        .into_iter()
+        .flat_map(|c| c.iter())
+        .filter_map(|e| {
+            let (f, p, c) = segments.get(e).ok()?;
+            Some((e, SegmentBundle::built(f, p, c)))
+        })
+        .unzip();
+    let previous = base.0.as_ref().map(|b| SurfaceState {
+        inputs: b.inputs.clone(),
+        working_field: b.working_field.clone(),
+        kind: b.kind,
+        segments: built,
+        chains: sampler.0.as_ref().map_or_else(Vec::new, |s| {
+            s.chains().iter().map(|c| c.to_vec()).collect()
+        }),
+    });
+    (inputs, previous, entities)
 }
 
 /// Applies finished builds (see the module docs). What they replace (the old sampler,
@@ -363,11 +408,10 @@ pub fn apply_builds(
 ) {
     let mut garbage = Garbage::default();
     while let Some(done) = jobs.next_finished() {
-        let outcome = match jobs.end(&done) {
-            Ok(()) => done.result,
-            Err(()) => continue,
-        };
-        let outcome = match outcome {
+        if !jobs.end(&done) {
+            continue; // cancelled
+        }
+        let outcome = match done.result {
             Ok(outcome) => outcome,
             Err(e) => {
                 errors.0.push(EngineError::Surface(e));
@@ -382,10 +426,11 @@ pub fn apply_builds(
             let note = run.note.clone();
             stats.record(stage_of(run.stage), done.entity, run.items, run.took, note);
         }
+        let (entity, snapshot) = (done.entity, &done.snapshot);
         write_segments(
             &mut commands,
-            done.entity,
-            &done.snapshot,
+            entity,
+            snapshot,
             &outcome,
             &mut segments,
             &mut garbage,
@@ -393,15 +438,22 @@ pub fn apply_builds(
         if let Some(s) = outcome.sampler {
             garbage.0.push(Box::new(sampler.0.replace(s)));
         }
-        let state = outcome.state;
-        let last = LastBuild {
+        garbage
+            .0
+            .push(Box::new(base.0.replace(LastBuild::from(outcome.state))));
+    }
+    garbage.drop_off_frame();
+}
+
+impl From<SurfaceState> for LastBuild {
+    /// The inputs and prepared field of a build's state (its segments go to entities).
+    fn from(state: SurfaceState) -> Self {
+        Self {
             inputs: state.inputs,
             working_field: state.working_field,
             kind: state.kind,
-        };
-        garbage.0.push(Box::new(base.0.replace(last)));
+        }
     }
-    garbage.drop_off_frame();
 }
 
 /// Values to drop on the build pool (freeing a large sampler takes milliseconds).
@@ -422,8 +474,8 @@ impl Garbage {
 
 impl PreprocessJobs {
     /// Takes a finished build off the running list and counts a cancelled or failed
-    /// one; `Err` when there is nothing to apply (cancelled).
-    fn end(&mut self, done: &Finished) -> Result<(), ()> {
+    /// one; false when there is nothing to apply (cancelled).
+    fn end(&mut self, done: &Finished) -> bool {
         let cancelled_at = self
             .running
             .iter()
@@ -435,13 +487,13 @@ impl PreprocessJobs {
                 self.counts.cancelled += 1;
                 let wait = cancelled_at.map_or(Duration::ZERO, |t| t.elapsed());
                 self.counts.max_cancel_wait = self.counts.max_cancel_wait.max(wait);
-                Err(())
+                false
             }
             Err(_) => {
                 self.counts.failed += 1;
-                Ok(())
+                true
             }
-            Ok(_) => Ok(()),
+            Ok(_) => true,
         }
     }
 }
@@ -551,8 +603,14 @@ pub fn settle(world: &mut World, schedule: &mut Schedule, timeout: Duration) -> 
         if left.is_zero() {
             return false;
         }
+        // Builds report on the channel; other tasks are polled.
+        let others = jobs.tasks.load(Ordering::Relaxed) > 0;
         if jobs.pending.is_empty() {
-            jobs.wait(left);
+            jobs.wait(if others {
+                left.min(Duration::from_millis(2))
+            } else {
+                left
+            });
         }
     }
 }

@@ -11,18 +11,24 @@
 //! mesh shows. Another transform is an [`EngineError::Lod`] and leaves the pool as it was.
 //!
 //! The pool is rebuilt (ranks `0..base` drawn again) when the sampler, the seed, the
-//! base count or the budget changes: that is preprocessing-sized work and, like the
-//! other preprocessing systems, still runs inside the update (issue 20).
+//! base count or the budget changes. That is preprocessing-sized work (about a second
+//! for 3 x 10^6 ranks), so it runs on the build pool ([`super::jobs`]), like a build:
+//! meanwhile the old pool keeps following the camera with the sampler it was drawn
+//! from, and the new pool replaces both in one update when it is ready
+//! ([`PreprocessMode::Blocking`] builds it inside
+//! the update instead).
 
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
+use crossbeam_channel::Receiver;
 use strata_engine::sample::lod::ViewLod;
-use strata_engine::sample::{LodPool, PoolChange};
+use strata_engine::sample::{LodPool, PoolChange, Sampler};
 
-use super::EngineError;
 use super::components::{MeshSampler, MeshTransform, SamplingSettings};
+use super::jobs::{PreprocessJobs, PreprocessMode, TaskToken, preprocess_pool};
 use super::stats::{EngineErrors, Stage, StageStats};
+use super::{EngineError, EngineSettings};
 
 /// Level of detail of a mesh entity: the camera (plain data, updated by the
 /// application every frame), the base count and the pool's budget.
@@ -48,11 +54,27 @@ pub struct LodState {
     pub builds: u64,
     /// `(base, budget, seed)` the pool was built with.
     built_for: Option<(u32, usize, u64)>,
+    /// The sampler the pool was drawn from: the pool's ranks are its sequence's, so the
+    /// pool is extended with it until a pool of a newer sampler replaces both.
+    drawn_from: Option<Sampler>,
+    /// A pool building off the frame, and what it is built for.
+    building: Option<PendingPool>,
+}
+
+/// A pool being built on the build pool.
+#[derive(Debug)]
+struct PendingPool {
+    key: (u32, usize, u64),
+    receiver: Receiver<(LodPool, Sampler)>,
+    /// Keeps the engine from counting as idle until the pool is taken.
+    _task: TaskToken,
 }
 
 /// Brings every [`Lod`] entity's pool up to its camera (see the module docs).
 #[allow(clippy::type_complexity)]
 pub fn update_lod_pools(
+    settings: Res<EngineSettings>,
+    jobs: Res<PreprocessJobs>,
     mut stats: ResMut<StageStats>,
     mut errors: ResMut<EngineErrors>,
     mut meshes: Query<(
@@ -79,13 +101,14 @@ pub fn update_lod_pools(
         let key = (lod.base, lod.budget, sampling.seed);
         let state = &mut *state;
         let t = Instant::now();
-        if sampler.is_changed() || state.built_for != Some(key) || state.pool.is_none() {
-            state.pool = Some(LodPool::new(s, sampling.seed, lod.base, lod.budget));
-            state.built_for = Some(key);
-            state.builds += 1;
+        // The key of the pool in use or being built.
+        let target = state.building.as_ref().map(|b| b.key).or(state.built_for);
+        if sampler.is_changed() || target != Some(key) {
+            rebuild_pool(state, s, key, settings.preprocess, &jobs);
         }
-        let Some(pool) = state.pool.as_mut() else {
-            continue;
+        state.take_built();
+        let (Some(pool), Some(s)) = (state.pool.as_mut(), state.drawn_from.as_ref()) else {
+            continue; // the first pool is still building
         };
         let change = pool.update(s, &view, f64::from(lod.base));
         if change != PoolChange::Unchanged {
@@ -98,5 +121,57 @@ pub fn update_lod_pools(
             );
         }
         state.last = Some(change);
+    }
+}
+
+impl LodState {
+    /// The sampler the pool was drawn from (its sites index that sampler's segments).
+    pub fn drawn_from(&self) -> Option<&Sampler> {
+        self.drawn_from.as_ref()
+    }
+
+    /// Puts a pool built off the frame in use, with the sampler it was drawn from; the
+    /// ones it replaces are dropped on the build pool (a large pool takes milliseconds
+    /// to free).
+    fn take_built(&mut self) {
+        let Some(b) = &self.building else {
+            return;
+        };
+        if let Ok((pool, drawn_from)) = b.receiver.try_recv() {
+            self.built_for = Some(b.key);
+            let old = (self.pool.replace(pool), self.drawn_from.replace(drawn_from));
+            if let Some(threads) = preprocess_pool() {
+                threads.spawn(move || drop(old));
+            }
+            self.builds += 1;
+            self.building = None;
+        }
+    }
+}
+
+/// Starts building the pool of `sampler` for `key` (replacing a build in flight, whose
+/// result is then dropped), on the build pool or, blocking, right here.
+fn rebuild_pool(
+    state: &mut LodState,
+    sampler: &Sampler,
+    key: (u32, usize, u64),
+    mode: PreprocessMode,
+    jobs: &PreprocessJobs,
+) {
+    let (sender, receiver) = crossbeam_channel::bounded(1);
+    let sampler = sampler.clone();
+    let (base, budget, seed) = key;
+    let work = move || {
+        let pool = LodPool::new(&sampler, seed, base, budget);
+        let _ = sender.send((pool, sampler));
+    };
+    state.building = Some(PendingPool {
+        key,
+        receiver,
+        _task: jobs.task_token(),
+    });
+    match (mode, preprocess_pool()) {
+        (PreprocessMode::Background, Some(pool)) => pool.spawn(work),
+        _ => work(),
     }
 }

@@ -18,7 +18,7 @@ use super::context::{GpuContext, GpuError};
 use super::expand::SiteExpander;
 use super::lod::GpuLodPool;
 use super::splat::SplatRenderer;
-use crate::ecs::{EngineSystems, LodState, MeshData, MeshSampler, SampleBuffer};
+use crate::ecs::{EngineSystems, LodState, MeshData, SampleBuffer};
 
 /// The GPU side of the engine: the device and the renderer whose sample buffer
 /// [`upload_samples`] keeps current.
@@ -100,7 +100,6 @@ impl GpuSplats {
 pub fn upload_samples(
     gpu: Option<ResMut<GpuSplats>>,
     meshes: Query<(Entity, &SampleBuffer, Option<&LodState>), With<MeshData>>,
-    samplers: Query<&MeshSampler>,
 ) {
     let Some(mut gpu) = gpu else {
         return;
@@ -113,8 +112,8 @@ pub fn upload_samples(
         return;
     };
     if let Some(state) = lod.filter(|l| l.pool.is_some()) {
-        let sampler = samplers.get(entity).ok().and_then(|s| s.0.as_ref());
-        if let Some(sampler) = sampler {
+        // The pool's own sampler: a newer one may be building its pool meanwhile.
+        if let Some(sampler) = state.drawn_from() {
             let t = Instant::now();
             match stream_lod(&mut gpu, entity, state, sampler) {
                 Ok(bytes) => {
