@@ -60,3 +60,22 @@ pub fn bundled_scenes<'a>(
         .map(|(name, file)| Ok((*name, SceneConfig::load(&configs.join(file))?)))
         .collect()
 }
+
+/// The height `y` above which about `share` of `mesh`'s faces lie (by their highest
+/// vertex): the edge of a cap for edits that touch a known part of a mesh (the reload
+/// bench and the hot-reload tests edit the bunny's field above it).
+pub fn cap_height(mesh: &strata_engine::mesh::TriMesh, share: f64) -> f64 {
+    let mut top: Vec<f64> = (0..mesh.face_count() as u32)
+        .map(|f| {
+            mesh.face_positions(f)
+                .iter()
+                .map(|p| p.y)
+                .fold(f64::MIN, f64::max)
+        })
+        .collect();
+    top.sort_by(f64::total_cmp);
+    let i = ((1.0 - share.clamp(0.0, 1.0)) * top.len() as f64) as usize;
+    top.get(i.min(top.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(f64::INFINITY)
+}

@@ -225,13 +225,10 @@ pub fn watch_scene(scene: &Path) -> Result<(SceneWatcher, Receiver<SceneUpdate>)
         .name("strata-scene-watcher".to_owned())
         .spawn(move || {
             let mut loader = Loader::default();
-            // Loading (a mesh file, a field solve) runs on the build pool, not on
-            // rayon's global pool that the frame samples on.
+            // Not on the build pool: a load waiting behind a long build would hold back
+            // the change that cancels that build.
             let scene_update = |loader: &mut Loader, parsed, changed| SceneUpdate {
-                scene: match crate::ecs::preprocess_pool() {
-                    Some(pool) => pool.install(|| loader.load(parsed, changed)),
-                    None => loader.load(parsed, changed),
-                },
+                scene: loader.load(parsed, changed),
             };
             if out_tx
                 .send(scene_update(&mut loader, first, Vec::new()))

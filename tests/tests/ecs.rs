@@ -53,20 +53,6 @@ fn field_with_cap(mesh: &TriMesh, y_min: f64, turned: DVec3) -> Arc<TensorField>
     Arc::new(TensorField::from_frames(mesh, &dirs, &ev).expect("field"))
 }
 
-/// The y above which about `share` of the faces lie (by their highest vertex).
-fn cap_height(mesh: &TriMesh, share: f64) -> f64 {
-    let mut top: Vec<f64> = (0..mesh.face_count() as u32)
-        .map(|f| {
-            mesh.face_positions(f)
-                .iter()
-                .map(|p| p.y)
-                .fold(f64::MIN, f64::max)
-        })
-        .collect();
-    top.sort_by(f64::total_cmp);
-    top[((1.0 - share) * top.len() as f64) as usize]
-}
-
 /// Longest wait for a build (the bunny on a busy machine).
 const LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
 
@@ -280,7 +266,7 @@ fn each_change_reruns_only_what_it_invalidates() {
 
     // The field in a cap of about 10% of the faces: only the segments it touched are
     // re-segmented and re-parameterized; the others keep their entities.
-    let cap = cap_height(&mesh, 0.1);
+    let cap = strata_bench::cap_height(&mesh, 0.1);
     engine.world.get_mut::<FieldData>(e).expect("field").0 =
         field_with_cap(&mesh, cap, DVec3::new(0.0, 0.0, 1.0));
     engine.update();

@@ -321,18 +321,7 @@ fn bunny_scene_changes_rerun_only_what_they_invalidate() {
     // untouched): only the segments holding a changed vertex are redone.
     engine.clear_stats();
     let generation = engine.sample_generation();
-    let mut top: Vec<f64> = (0..files.mesh.face_count() as u32)
-        .map(|f| {
-            files
-                .mesh
-                .face_positions(f)
-                .iter()
-                .map(|p| p.y)
-                .fold(f64::MIN, f64::max)
-        })
-        .collect();
-    top.sort_by(f64::total_cmp);
-    let cap = top[top.len() * 9 / 10];
+    let cap = strata_bench::cap_height(&files.mesh, 0.1);
     let text = format_field_file(&bunny_field(&files.mesh, cap));
     let tmp = dir.path().join("bunny.field.tmp");
     std::fs::write(&tmp, text).expect("write");

@@ -92,7 +92,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
 
     // Field saves on a ~10% cap, alternating two directions: region rebuilds.
-    let cap = cap_height(&mesh);
+    let cap = strata_bench::cap_height(&mesh, 0.1);
     let mut region = Vec::new();
     for i in 0..repeats {
         let turned = if i % 2 == 0 { DVec3::Y } else { DVec3::Z };
@@ -365,7 +365,7 @@ fn eight_meshes(
     engine.clear_stats();
     let f = Arc::new(cap_field(
         mesh,
-        cap_height(mesh),
+        strata_bench::cap_height(mesh, 0.1),
         DVec3::new(1.0, 1.0, 0.0),
     )?);
     engine
@@ -397,20 +397,6 @@ fn eight_meshes(
         }
     }
     Ok(other_runs)
-}
-
-/// The y above which about 10% of the faces lie (by their highest vertex).
-fn cap_height(mesh: &TriMesh) -> f64 {
-    let mut top: Vec<f64> = (0..mesh.face_count() as u32)
-        .map(|f| {
-            mesh.face_positions(f)
-                .iter()
-                .map(|p| p.y)
-                .fold(f64::MIN, f64::max)
-        })
-        .collect();
-    top.sort_by(f64::total_cmp);
-    top[top.len() * 9 / 10]
 }
 
 /// The field (1, 0.3, 0.2) 3:1, turned to `turned` above `y_min`.
