@@ -41,30 +41,39 @@ pub fn sample_meshes(
             continue;
         }
         let t = Instant::now();
-        let buffer = &mut *buffer;
-        // A count set by host code is checked here: too many, or more than memory
-        // gives, is an error that keeps the last samples, never an abort.
-        if let Err(e) = reserve(&mut buffer.samples, sampling.count) {
-            errors.0.push(EngineError::Budget(e));
-            continue;
+        match draw(s, *sampling, &transform.0, &mut buffer) {
+            Ok(()) => stats.record(
+                Stage::Sampling,
+                entity,
+                sampling.count,
+                t.elapsed(),
+                String::new(),
+            ),
+            Err(e) => errors.0.push(EngineError::Budget(e)),
         }
-        buffer.samples.resize(sampling.count, Sample::default());
-        s.sample_into(sampling.seed, &mut buffer.samples);
-        if transform.0 != glam::DAffine3::IDENTITY {
-            transform_samples(&transform.0, &mut buffer.samples);
-        }
-        buffer.generation += 1;
-        stats.record(
-            Stage::Sampling,
-            entity,
-            sampling.count,
-            t.elapsed(),
-            String::new(),
-        );
     }
     if request.0 {
         request.0 = false;
     }
+}
+
+/// Draws `sampling`'s samples from `sampler` into `buffer`, placed by `transform`. A
+/// count set by host code is checked here: too many, or more than memory gives, is an
+/// error that keeps the last samples, never an abort.
+fn draw(
+    sampler: &strata_engine::sample::Sampler,
+    sampling: SamplingSettings,
+    transform: &glam::DAffine3,
+    buffer: &mut SampleBuffer,
+) -> Result<(), BudgetError> {
+    reserve(&mut buffer.samples, sampling.count)?;
+    buffer.samples.resize(sampling.count, Sample::default());
+    sampler.sample_into(sampling.seed, &mut buffer.samples);
+    if *transform != glam::DAffine3::IDENTITY {
+        transform_samples(transform, &mut buffer.samples);
+    }
+    buffer.generation += 1;
+    Ok(())
 }
 
 /// Makes room for `count` samples in `samples` without aborting: counts above the
