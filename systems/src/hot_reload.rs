@@ -86,6 +86,8 @@ impl Loader {
     ) -> Result<LoadedScene, EngineError> {
         let t = Instant::now();
         self.unapplied.extend(changed);
+        self.unapplied.sort();
+        self.unapplied.dedup();
         let config = parsed?;
         let changed = &self.unapplied;
         let on_disk = |p: &Path| std::path::absolute(p).is_ok_and(|a| changed.contains(&a));
