@@ -165,6 +165,11 @@ fn a_scene_bad_at_startup_is_picked_up_when_fixed() {
         "(mesh: Shape(Sphere(radius: 1.0, resolution: 6)), colour: 3)",
     );
     let mut engine = StreamingEngine::watch(&scene).expect("watch");
+    // The watcher sends the first scene (here: its error) once it has read it.
+    assert!(
+        engine.wait_for_change(LIMIT),
+        "the first scene was not read"
+    );
     engine.update();
     let errors = engine.take_errors();
     assert_eq!(errors.len(), 1, "{errors:?}");
