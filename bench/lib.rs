@@ -79,3 +79,27 @@ pub fn cap_height(mesh: &strata_engine::mesh::TriMesh, share: f64) -> f64 {
         .copied()
         .unwrap_or(f64::INFINITY)
 }
+
+/// A 3:1 field along `(1, 0.3, 0.2)` (projected into the tangent planes), turned to
+/// `turned` on the vertices above height `y_min`: an edit of a cap of the mesh, for the
+/// reload bench and the engine's tests (every tensor below the cap is the same bits
+/// whatever the cap).
+pub fn cap_field(
+    mesh: &strata_engine::mesh::TriMesh,
+    y_min: f64,
+    turned: glam::DVec3,
+) -> Result<strata_engine::field::TensorField, strata_engine::field::FieldError> {
+    let dirs: Vec<glam::DVec3> = mesh
+        .positions()
+        .iter()
+        .map(|p| {
+            if p.y > y_min {
+                turned
+            } else {
+                glam::DVec3::new(1.0, 0.3, 0.2)
+            }
+        })
+        .collect();
+    let eigenvalues = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
+    strata_engine::field::TensorField::from_frames(mesh, &dirs, &eigenvalues)
+}

@@ -35,24 +35,6 @@ fn projected(mesh: &TriMesh) -> Arc<TensorField> {
     )
 }
 
-/// The projected field with the major direction turned to `turned` on the vertices
-/// whose y is above `y_min` (a cap of the mesh).
-fn field_with_cap(mesh: &TriMesh, y_min: f64, turned: DVec3) -> Arc<TensorField> {
-    let dirs: Vec<DVec3> = mesh
-        .positions()
-        .iter()
-        .map(|p| {
-            if p.y > y_min {
-                turned
-            } else {
-                DVec3::new(1.0, 0.3, 0.2)
-            }
-        })
-        .collect();
-    let ev = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
-    Arc::new(TensorField::from_frames(mesh, &dirs, &ev).expect("field"))
-}
-
 /// Longest wait for a build (the bunny on a busy machine).
 const LIMIT: std::time::Duration = std::time::Duration::from_secs(120);
 
@@ -268,7 +250,7 @@ fn each_change_reruns_only_what_it_invalidates() {
     // re-segmented and re-parameterized; the others keep their entities.
     let cap = strata_bench::cap_height(&mesh, 0.1);
     engine.world.get_mut::<FieldData>(e).expect("field").0 =
-        field_with_cap(&mesh, cap, DVec3::new(0.0, 0.0, 1.0));
+        Arc::new(strata_bench::cap_field(&mesh, cap, DVec3::Z).expect("field"));
     engine.update();
     let stats = engine.stats().clone();
     assert_eq!(

@@ -30,21 +30,9 @@ fn field(mesh: &TriMesh, direction: [f64; 3]) -> Arc<TensorField> {
     Arc::new(spec.build(mesh).expect("field"))
 }
 
-/// `base` with its direction turned to `turned` where `z > z_min`.
-fn capped(mesh: &TriMesh, z_min: f64, turned: DVec3) -> Arc<TensorField> {
-    let dirs: Vec<DVec3> = mesh
-        .positions()
-        .iter()
-        .map(|p| {
-            if p.z > z_min {
-                turned
-            } else {
-                DVec3::new(1.0, 0.3, 0.2)
-            }
-        })
-        .collect();
-    let eigen = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
-    Arc::new(TensorField::from_frames(mesh, &dirs, &eigen).expect("field"))
+/// `strata_bench::cap_field` (caps along y), shared.
+fn cap(mesh: &TriMesh, y_min: f64, turned: DVec3) -> Arc<TensorField> {
+    Arc::new(strata_bench::cap_field(mesh, y_min, turned).expect("field"))
 }
 
 fn world(mode: PreprocessMode) -> (World, Schedule) {
@@ -75,7 +63,7 @@ fn an_update_starts_the_build_and_the_last_sampler_keeps_drawing_until_it_is_don
     let (mut world, mut schedule) = world(PreprocessMode::Background);
     let bundle = MeshBundle::new(
         mesh.clone(),
-        capped(&mesh, 2.0, DVec3::Z),
+        cap(&mesh, 2.0, DVec3::Z),
         SurfaceOptions::default(),
         5000,
         3,
@@ -91,7 +79,7 @@ fn an_update_starts_the_build_and_the_last_sampler_keeps_drawing_until_it_is_don
         .and_then(|s| s.0.clone())
         .expect("sampler");
     // A field edit on a cap: the update that sees it only starts the build.
-    world.get_mut::<FieldData>(e).expect("field").0 = capped(&mesh, 0.6, DVec3::Y);
+    world.get_mut::<FieldData>(e).expect("field").0 = cap(&mesh, 0.6, DVec3::Z);
     world.resource_mut::<StageStats>().clear();
     schedule.run(&mut world);
     assert_eq!(world.resource::<PreprocessJobs>().in_flight(), 1);
@@ -142,13 +130,13 @@ fn an_update_starts_the_build_and_the_last_sampler_keeps_drawing_until_it_is_don
 #[test]
 fn edits_during_a_build_cancel_it_and_end_in_one_build_of_the_last_state() {
     let mesh = Arc::new(shapes::sphere(1.0, 40).expect("sphere"));
-    let first = capped(&mesh, 2.0, DVec3::Z);
+    let first = cap(&mesh, 2.0, DVec3::Z);
     let edits: Vec<Arc<TensorField>> = (0..10)
         .map(|i| {
-            capped(
+            cap(
                 &mesh,
                 0.3 + 0.04 * f64::from(i),
-                DVec3::new(0.0, 1.0, 0.1 * f64::from(i)),
+                DVec3::new(0.1 * f64::from(i), 0.0, 1.0),
             )
         })
         .collect();
@@ -358,7 +346,7 @@ fn a_level_of_detail_pool_is_rebuilt_off_the_frame() {
     let (mut world, mut schedule) = world(PreprocessMode::Background);
     let bundle = MeshBundle::new(
         mesh.clone(),
-        capped(&mesh, 2.0, DVec3::Z),
+        cap(&mesh, 2.0, DVec3::Z),
         SurfaceOptions::default(),
         100,
         2,
@@ -377,7 +365,7 @@ fn a_level_of_detail_pool_is_rebuilt_off_the_frame() {
 
     // A field edit: the build, then the pool, run off the frame; updates meanwhile
     // keep the old pool and its sampler.
-    world.get_mut::<FieldData>(e).expect("field").0 = capped(&mesh, 0.3, DVec3::Y);
+    world.get_mut::<FieldData>(e).expect("field").0 = cap(&mesh, 0.3, DVec3::Z);
     let mut saw_old_pool_with_new_sampler = false;
     let start = std::time::Instant::now();
     while world.get::<LodState>(e).expect("state").builds < 2 {

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
-use strata_engine::field::{TensorField, format_field_file};
+use strata_engine::field::format_field_file;
 use strata_engine::mesh::TriMesh;
 use strata_systems::ecs::{SegmentFaces, Stage};
 use strata_systems::hot_reload::{SceneState, StreamingEngine};
@@ -247,7 +247,7 @@ fn bunny_files(dir: &Path) -> Option<BunnyFiles> {
     let field = dir.join("bunny.field");
     std::fs::write(
         &field,
-        format_field_file(&bunny_field(&mesh, f64::INFINITY)),
+        format_field_file(&strata_bench::cap_field(&mesh, f64::INFINITY, DVec3::Z).expect("field")),
     )
     .expect("field");
     let scene = dir.join("bunny.ron");
@@ -258,23 +258,6 @@ fn bunny_scene(count: u64, max_cell_share: f64) -> String {
     format!(
         "(\n    mesh: File(\"bunny.ply\"),\n    field: File(path: \"bunny.field\"),\n    sampling: (count: {count}, seed: 2),\n    curve: (max_cell_share: {max_cell_share:?}),\n)\n"
     )
-}
-
-/// Major direction (1, 0.3, 0.2), 3:1, turned to +z on the vertices above `y_min`.
-fn bunny_field(mesh: &TriMesh, y_min: f64) -> TensorField {
-    let dirs: Vec<DVec3> = mesh
-        .positions()
-        .iter()
-        .map(|p| {
-            if p.y > y_min {
-                DVec3::Z
-            } else {
-                DVec3::new(1.0, 0.3, 0.2)
-            }
-        })
-        .collect();
-    let ev = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
-    TensorField::from_frames(mesh, &dirs, &ev).expect("field")
 }
 
 fn segment_count(engine: &mut StreamingEngine) -> usize {
@@ -327,7 +310,8 @@ fn bunny_scene_changes_rerun_only_what_they_invalidate() {
     engine.clear_stats();
     let generation = engine.sample_generation();
     let cap = strata_bench::cap_height(&files.mesh, 0.1);
-    let text = format_field_file(&bunny_field(&files.mesh, cap));
+    let text =
+        format_field_file(&strata_bench::cap_field(&files.mesh, cap, DVec3::Z).expect("field"));
     let tmp = dir.path().join("bunny.field.tmp");
     std::fs::write(&tmp, text).expect("write");
     std::fs::rename(&tmp, &files.field).expect("rename");

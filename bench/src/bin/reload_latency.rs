@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use glam::DVec3;
 use serde_json::json;
-use strata_engine::field::{FieldSpec, TensorField, format_field_file};
+use strata_engine::field::{FieldSpec, format_field_file};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::surface::SurfaceOptions;
 use strata_systems::ecs::{EngineSettings, FieldData, MeshBundle, MeshSampler, Stage};
@@ -63,7 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let field_path = dir.path().join("bunny.field");
     std::fs::write(
         &field_path,
-        format_field_file(&cap_field(&mesh, f64::INFINITY, DVec3::Z)?),
+        format_field_file(&strata_bench::cap_field(&mesh, f64::INFINITY, DVec3::Z)?),
     )?;
     let scene = dir.path().join("bunny.ron");
     let scene_text = |seed: u64| {
@@ -96,7 +96,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut region = Vec::new();
     for i in 0..repeats {
         let turned = if i % 2 == 0 { DVec3::Y } else { DVec3::Z };
-        let text = format_field_file(&cap_field(&mesh, cap, turned)?);
+        let text = format_field_file(&strata_bench::cap_field(&mesh, cap, turned)?);
         region.push(reload(&mut engine, || {
             strata_engine::io::write_atomically(&field_path, |w| w.write_all(text.as_bytes()))
         })?);
@@ -285,8 +285,12 @@ fn burst(
 ) -> Result<(Duration, strata_systems::ecs::JobCounts, Duration), Box<dyn std::error::Error>> {
     let entity = engine.mesh_entity().ok_or("no mesh entity")?;
     let fields = [
-        Arc::new(cap_field(mesh, cap, DVec3::Y)?),
-        Arc::new(cap_field(mesh, cap, DVec3::new(0.3, 0.2, 1.0))?),
+        Arc::new(strata_bench::cap_field(mesh, cap, DVec3::Y)?),
+        Arc::new(strata_bench::cap_field(
+            mesh,
+            cap,
+            DVec3::new(0.3, 0.2, 1.0),
+        )?),
     ];
     let before = engine.builds();
     let mut longest = Duration::ZERO;
@@ -363,7 +367,7 @@ fn eight_meshes(
         return Err("the eight meshes did not build in 300 s".into());
     }
     engine.clear_stats();
-    let f = Arc::new(cap_field(
+    let f = Arc::new(strata_bench::cap_field(
         mesh,
         strata_bench::cap_height(mesh, 0.1),
         DVec3::new(1.0, 1.0, 0.0),
@@ -397,27 +401,6 @@ fn eight_meshes(
         }
     }
     Ok(other_runs)
-}
-
-/// The field (1, 0.3, 0.2) 3:1, turned to `turned` above `y_min`.
-fn cap_field(
-    mesh: &TriMesh,
-    y_min: f64,
-    turned: DVec3,
-) -> Result<TensorField, Box<dyn std::error::Error>> {
-    let dirs: Vec<DVec3> = mesh
-        .positions()
-        .iter()
-        .map(|p| {
-            if p.y > y_min {
-                turned
-            } else {
-                DVec3::new(1.0, 0.3, 0.2)
-            }
-        })
-        .collect();
-    let ev = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
-    Ok(TensorField::from_frames(mesh, &dirs, &ev)?)
 }
 
 fn median(v: &mut [Duration]) -> Duration {

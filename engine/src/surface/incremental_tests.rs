@@ -8,6 +8,14 @@ use crate::mesh::NONE;
 use crate::surface::Preprocessed;
 use crate::surface::tests::torus_case;
 
+/// The stages of a build that segments.
+const ALL_STAGES: [BuildStage; 4] = [
+    BuildStage::Segmentation,
+    BuildStage::Parameterization,
+    BuildStage::Cells,
+    BuildStage::Chains,
+];
+
 fn inputs(mesh: &Arc<TriMesh>, field: &Arc<TensorField>, options: SurfaceOptions) -> BuildInputs {
     BuildInputs {
         mesh: mesh.clone(),
@@ -82,15 +90,7 @@ fn a_first_build_is_the_whole_surface_path_bit_for_bit() {
     let options = SurfaceOptions::default();
     let (mesh, field) = torus_case();
     let out = build(inputs(&mesh, &field, options), None);
-    assert_eq!(
-        stages(&out),
-        [
-            BuildStage::Segmentation,
-            BuildStage::Parameterization,
-            BuildStage::Cells,
-            BuildStage::Chains
-        ]
-    );
+    assert_eq!(stages(&out), ALL_STAGES);
     assert!(out.origins.iter().all(Option::is_none));
     assert_equals_whole_build(&out, &options);
     assert_covering(&out.state);
@@ -162,15 +162,7 @@ fn a_field_change_resegments_only_the_segments_it_touches() {
     let (field, turned) = cap_fields(&mesh);
     let first = build(inputs(&mesh, &field, options), None);
     let out = build(inputs(&mesh, &turned, options), Some(&first.state));
-    assert_eq!(
-        stages(&out),
-        [
-            BuildStage::Segmentation,
-            BuildStage::Parameterization,
-            BuildStage::Cells,
-            BuildStage::Chains
-        ]
-    );
+    assert_eq!(stages(&out), ALL_STAGES);
     assert!(
         out.runs[0].note.starts_with("region of"),
         "{}",
