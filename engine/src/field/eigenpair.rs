@@ -52,6 +52,7 @@ fn inverse_iteration(
         Factor::Multigrid(amg) => Some(amg.workspace()),
         Factor::Direct(_) => None,
     };
+    let mut step = vec![c64::new(0.0, 0.0); if work.is_some() { x.len() } else { 0 }];
     for _ in 0..max {
         if let (Factor::Multigrid(amg), Some(work)) = (&*factor, &mut work) {
             // Preconditioned inverse iteration (Knyazev and Neymeyr 2003): a V-cycle
@@ -62,7 +63,6 @@ fn inverse_iteration(
             for ((r, z), m) in residual.iter_mut().zip(&x).zip(&system.mass) {
                 *r -= *z * (rho * m);
             }
-            let mut step = vec![c64::new(0.0, 0.0); x.len()];
             amg.apply(&residual, &mut step, work);
             for (z, s) in x.iter_mut().zip(&step) {
                 *z -= *s;

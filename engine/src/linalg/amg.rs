@@ -133,12 +133,10 @@ impl<S: Scalar> Amg<S> {
     /// One V-cycle for `A x = b` in the caller's numbering (see [`cycle`](Self::cycle)):
     /// an approximate inverse of `A`, the preconditioner of eigenvalue iterations.
     pub fn apply(&self, b: &[S], x: &mut [S], work: &mut Workspace<S>) {
-        let n = self.order.len();
-        let mut bi = vec![S::ZERO; n];
-        let mut xi = vec![S::ZERO; n];
-        self.to_internal(b, &mut bi);
-        self.cycle(&bi, &mut xi, work);
-        self.from_internal(&xi, x);
+        // The finest level's scratch holds the renumbered vectors: no allocation.
+        self.to_internal(b, &mut work.levels[0][0]);
+        self.descend(0, work);
+        self.from_internal(&work.levels[0][1], x);
     }
 
     /// `x` in the internal numbering, into `out`.

@@ -1,7 +1,51 @@
 //! Compressed sparse row matrices: assembly from triplets, products, and the Galerkin
 //! triple product of the multigrid hierarchy.
+//!
+//! From [`PARALLEL_ROWS`] rows the products and the renumbering run on every thread, in
+//! blocks of whole rows. Each row is computed by the same operations in the same order
+//! as on one thread, so the results are bit for bit those of a sequential run, whatever
+//! the thread count.
+
+use std::ops::Range;
+
+use rayon::prelude::*;
 
 use super::scalar::Scalar;
+
+/// Matrices with at least this many rows multiply and renumber on every thread (below
+/// it the rayon hand-off costs more than it saves).
+pub const PARALLEL_ROWS: usize = 32_768;
+
+/// Rows per block of a parallel pass, at least.
+const MIN_BLOCK_ROWS: usize = 4096;
+
+/// The rows `0..rows` cut into consecutive blocks for a parallel pass: a few per thread
+/// so that work stealing can even out uneven rows. The results never depend on the cut.
+fn row_blocks(rows: usize) -> Vec<Range<usize>> {
+    let blocks = 4 * rayon::current_num_threads().max(1);
+    let size = rows.div_ceil(blocks).max(MIN_BLOCK_ROWS);
+    (0..rows)
+        .step_by(size)
+        .map(|start| start..(start + size).min(rows))
+        .collect()
+}
+
+/// Rows made by one block of a parallel pass: each row's end within the block's entries.
+struct RowBlock<S> {
+    ends: Vec<usize>,
+    indices: Vec<u32>,
+    values: Vec<S>,
+}
+
+impl<S> RowBlock<S> {
+    fn with_rows(rows: usize) -> Self {
+        Self {
+            ends: Vec::with_capacity(rows),
+            indices: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+}
 
 /// A sparse matrix in compressed sparse row form, with sorted, unique columns per row.
 #[derive(Clone, Debug, PartialEq)]
@@ -96,15 +140,69 @@ impl<S: Scalar> Csr<S> {
         cols.binary_search(&(r as u32)).map_or(S::ZERO, |k| vals[k])
     }
 
-    /// `y = A x`.
+    /// `y = A x` (on every thread from [`PARALLEL_ROWS`] rows).
     pub fn mul_into(&self, x: &[S], y: &mut [S]) {
-        for (r, out) in y.iter_mut().enumerate().take(self.rows) {
-            let (cols, vals) = self.row(r);
-            let mut sum = S::ZERO;
-            for (&c, &v) in cols.iter().zip(vals) {
-                sum += v * x[c as usize];
+        let y = &mut y[..self.rows];
+        let rows_from = |first: usize, out: &mut [S]| {
+            for (k, out) in out.iter_mut().enumerate() {
+                let (cols, vals) = self.row(first + k);
+                let mut sum = S::ZERO;
+                for (&c, &v) in cols.iter().zip(vals) {
+                    sum += v * x[c as usize];
+                }
+                *out = sum;
             }
-            *out = sum;
+        };
+        if self.rows < PARALLEL_ROWS {
+            rows_from(0, y);
+        } else {
+            let size = row_blocks(self.rows)[0].len();
+            y.par_chunks_mut(size)
+                .enumerate()
+                .for_each(|(b, out)| rows_from(b * size, out));
+        }
+    }
+
+    /// The matrix made of `rows` rows, each written by `row(r, indices, values)` (which
+    /// appends row `r`'s sorted columns and values), on every thread from
+    /// [`PARALLEL_ROWS`] rows with one `state` per block.
+    fn from_rows<T>(
+        rows: usize,
+        cols: usize,
+        state: impl Fn() -> T + Sync,
+        row: impl Fn(&mut T, usize, &mut Vec<u32>, &mut Vec<S>) + Sync,
+    ) -> Self {
+        let block = |range: Range<usize>| {
+            let mut state = state();
+            let mut out = RowBlock::with_rows(range.len());
+            for r in range {
+                row(&mut state, r, &mut out.indices, &mut out.values);
+                out.ends.push(out.indices.len());
+            }
+            out
+        };
+        let blocks: Vec<RowBlock<S>> = if rows < PARALLEL_ROWS {
+            vec![block(0..rows)]
+        } else {
+            row_blocks(rows).into_par_iter().map(block).collect()
+        };
+        let nnz = blocks.iter().map(|b| b.indices.len()).sum();
+        let mut starts = Vec::with_capacity(rows + 1);
+        let mut indices = Vec::with_capacity(nnz);
+        let mut values = Vec::with_capacity(nnz);
+        starts.push(0);
+        for b in blocks {
+            let offset = indices.len();
+            starts.extend(b.ends.iter().map(|e| e + offset));
+            indices.extend_from_slice(&b.indices);
+            values.extend_from_slice(&b.values);
+        }
+        Self {
+            rows,
+            cols,
+            starts,
+            indices,
+            values,
         }
     }
 
@@ -139,82 +237,73 @@ impl<S: Scalar> Csr<S> {
         }
     }
 
-    /// `A B` (Gustavson's row-by-row product with a dense accumulator).
+    /// `A B` (Gustavson's row-by-row product with a dense accumulator; on every thread
+    /// from [`PARALLEL_ROWS`] rows).
     pub fn matmul(&self, b: &Self) -> Self {
         assert_eq!(
             self.cols, b.rows,
             "matmul of {}x{} by {}x{}",
             self.rows, self.cols, b.rows, b.cols
         );
-        let mut accumulator = vec![S::ZERO; b.cols];
-        let mut seen = vec![false; b.cols];
-        let mut pattern: Vec<u32> = Vec::new();
-        let mut starts = Vec::with_capacity(self.rows + 1);
-        let mut indices = Vec::new();
-        let mut values = Vec::new();
-        starts.push(0);
-        for r in 0..self.rows {
-            let (cols, vals) = self.row(r);
-            for (&k, &a) in cols.iter().zip(vals) {
-                let (bc, bv) = b.row(k as usize);
-                for (&c, &v) in bc.iter().zip(bv) {
-                    let c = c as usize;
-                    if !seen[c] {
-                        seen[c] = true;
-                        pattern.push(c as u32);
+        // Per block: the dense accumulator, which columns it holds, and their list.
+        let state = || {
+            (
+                vec![S::ZERO; b.cols],
+                vec![false; b.cols],
+                Vec::<u32>::new(),
+            )
+        };
+        Self::from_rows(
+            self.rows,
+            b.cols,
+            state,
+            |(accumulator, seen, pattern), r, indices, values| {
+                let (cols, vals) = self.row(r);
+                for (&k, &a) in cols.iter().zip(vals) {
+                    let (bc, bv) = b.row(k as usize);
+                    for (&c, &v) in bc.iter().zip(bv) {
+                        let c = c as usize;
+                        if !seen[c] {
+                            seen[c] = true;
+                            pattern.push(c as u32);
+                        }
+                        accumulator[c] += a * v;
                     }
-                    accumulator[c] += a * v;
                 }
-            }
-            pattern.sort_unstable();
-            for &c in &pattern {
-                indices.push(c);
-                values.push(accumulator[c as usize]);
-                accumulator[c as usize] = S::ZERO;
-                seen[c as usize] = false;
-            }
-            pattern.clear();
-            starts.push(indices.len());
-        }
-        Self {
-            rows: self.rows,
-            cols: b.cols,
-            starts,
-            indices,
-            values,
-        }
+                pattern.sort_unstable();
+                for &c in pattern.iter() {
+                    indices.push(c);
+                    values.push(accumulator[c as usize]);
+                    accumulator[c as usize] = S::ZERO;
+                    seen[c as usize] = false;
+                }
+                pattern.clear();
+            },
+        )
     }
 
     /// `Q A Q^T` for the permutation taking old index `order[k]` to new index `k`
-    /// (`position[order[k]] == k`).
+    /// (`position[order[k]] == k`; on every thread from [`PARALLEL_ROWS`] rows).
     pub fn permuted(&self, order: &[u32], position: &[u32]) -> Self {
-        let mut starts = Vec::with_capacity(self.rows + 1);
-        let mut indices = Vec::with_capacity(self.nnz());
-        let mut values = Vec::with_capacity(self.nnz());
-        let mut row: Vec<(u32, S)> = Vec::new();
-        starts.push(0);
-        for &old in order {
-            let (cols, vals) = self.row(old as usize);
-            row.clear();
-            row.extend(
-                cols.iter()
-                    .zip(vals)
-                    .map(|(&c, &v)| (position[c as usize], v)),
-            );
-            row.sort_unstable_by_key(|&(c, _)| c);
-            for &(c, v) in &row {
-                indices.push(c);
-                values.push(v);
-            }
-            starts.push(indices.len());
-        }
-        Self {
-            rows: self.rows,
-            cols: self.cols,
-            starts,
-            indices,
-            values,
-        }
+        Self::from_rows(
+            self.rows,
+            self.cols,
+            Vec::<(u32, S)>::new,
+            |row, k, indices, values| {
+                let (cols, vals) = self.row(order[k] as usize);
+                row.clear();
+                row.extend(
+                    cols.iter()
+                        .zip(vals)
+                        .map(|(&c, &v)| (position[c as usize], v)),
+                );
+                row.sort_unstable_by_key(|&(c, _)| c);
+                for &(c, v) in row.iter() {
+                    indices.push(c);
+                    values.push(v);
+                }
+            },
+        )
     }
 
     /// A breadth-first (Cuthill-McKee) order of the rows of a square matrix, each

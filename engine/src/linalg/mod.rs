@@ -40,7 +40,7 @@ pub mod pcg;
 mod scalar;
 
 pub use amg::{Amg, AmgOptions, Workspace};
-pub use csr::Csr;
+pub use csr::{Csr, PARALLEL_ROWS};
 pub use dense::DenseCholesky;
 pub use error::LinalgError;
 pub use scalar::{Scalar, dot, norm2};
