@@ -450,3 +450,24 @@ fn designed_fields_are_bit_identical_across_runs_and_thread_counts() {
     let three = pool.install(|| design.build(&mesh).expect("field"));
     assert_eq!(one, three);
 }
+
+#[test]
+fn multigrid_designed_fields_are_bit_identical_across_thread_counts() {
+    // Large enough for the sparse kernels' parallel passes (from PARALLEL_ROWS rows).
+    let mut mesh = shapes::genus2(1.0, 2).expect("genus 2");
+    while mesh.vertex_count() < crate::linalg::PARALLEL_ROWS + 1000 {
+        mesh = crate::mesh::loop_subdivide(&mesh).expect("subdivide");
+    }
+    let design = Design {
+        solver: crate::field::LinearSolver::Multigrid,
+        ..Design::default()
+    };
+    let build = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| design.build(&mesh).expect("field"))
+    };
+    assert_eq!(build(1), build(3));
+}

@@ -25,7 +25,10 @@
 //!
 //! Cost: setup and each cycle are linear in the non-zeros (operator complexity, the
 //! non-zeros of all levels over the finest's, is about 1.5 to 2 on meshes).
-//! Deterministic: every loop runs in a fixed order on one thread.
+//! Deterministic: the smoother, aggregation and vector updates run in a fixed order on
+//! one thread; the sparse products and renumbering run on every thread by blocks of whole
+//! rows ([`Csr`]), each row as on one thread, so the hierarchy and every cycle are the same
+//! for any thread count.
 
 use super::csr::Csr;
 use super::dense::DenseCholesky;
