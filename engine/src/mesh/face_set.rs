@@ -19,11 +19,29 @@ use super::{NONE, TriMesh};
 /// that sizes its arrays by a mask rather than the mesh, so that work on a small
 /// segment of a large mesh costs in proportion to the segment. Building it is one
 /// O(F) scan of the mask; [`index`](Self::index) is the identity when the mask is the
-/// whole mesh and a binary search otherwise.
+/// whole mesh, a table lookup when the mask holds at least 1/[`DENSE_SHARE`] of the
+/// mesh (the table costs O(F) to fill, a small price next to the mask's own work),
+/// and a binary search otherwise.
 #[derive(Clone, Debug)]
 pub(crate) struct MaskFaces {
     faces: Vec<u32>,
-    whole: bool,
+    places: Places,
+}
+
+/// A mask of at least 1/`DENSE_SHARE` of the mesh gets a per-mesh-face table of places:
+/// filling it (one O(F) pass) costs less than the binary searches it saves, which
+/// miss the cache once the mask has hundreds of thousands of faces.
+const DENSE_SHARE: usize = 16;
+
+/// How [`MaskFaces::index`] finds a face's place.
+#[derive(Clone, Debug)]
+enum Places {
+    /// Every mesh face: the place is the face.
+    Whole,
+    /// Place per mesh face, `NONE` outside the mask.
+    Table(Vec<u32>),
+    /// Binary search in the faces.
+    Search,
 }
 
 impl MaskFaces {
@@ -32,8 +50,25 @@ impl MaskFaces {
         let faces: Vec<u32> = (0..mask.len() as u32)
             .filter(|&f| mask[f as usize])
             .collect();
-        let whole = faces.len() == mask.len();
-        Self { faces, whole }
+        Self::from_sorted(faces, mask.len())
+    }
+
+    /// `faces` (ascending, distinct, each below `face_count`) of a mesh with
+    /// `face_count` faces.
+    pub(crate) fn from_sorted(faces: Vec<u32>, face_count: usize) -> Self {
+        debug_assert!(faces.windows(2).all(|w| w[0] < w[1]), "ascending faces");
+        let places = if faces.len() == face_count {
+            Places::Whole
+        } else if faces.len() * DENSE_SHARE >= face_count {
+            let mut table = vec![NONE; face_count];
+            for (i, &f) in faces.iter().enumerate() {
+                table[f as usize] = i as u32;
+            }
+            Places::Table(table)
+        } else {
+            Places::Search
+        };
+        Self { faces, places }
     }
 
     /// The faces, ascending.
@@ -44,10 +79,13 @@ impl MaskFaces {
     /// The place of face `f` among the faces; `None` if it is not one.
     #[inline]
     pub(crate) fn index(&self, f: u32) -> Option<usize> {
-        if self.whole {
-            (f < self.faces.len() as u32).then_some(f as usize)
-        } else {
-            self.faces.binary_search(&f).ok()
+        match &self.places {
+            Places::Whole => (f < self.faces.len() as u32).then_some(f as usize),
+            Places::Table(table) => table
+                .get(f as usize)
+                .filter(|&&i| i != NONE)
+                .map(|&i| i as usize),
+            Places::Search => self.faces.binary_search(&f).ok(),
         }
     }
 
@@ -180,12 +218,15 @@ impl FaceSet {
     /// exactly one group: set faces labelled `NONE` come last, as one group.
     pub fn parts(&self, mesh: &TriMesh, labels: &[u32], cut: &[bool]) -> Vec<Vec<u32>> {
         // As `connected_parts` numbers them (by lowest face), but visiting only the
-        // set's faces: O(set log set) instead of O(F), which matters when a small
-        // segment of a large mesh is split again and again.
+        // set's faces: O(set log set) instead of O(F) for a small set (which matters
+        // when a small segment of a large mesh is split again and again), a table of
+        // places for a large one (see `MaskFaces`).
         let mut sorted = self.faces.clone();
         sorted.sort_unstable();
-        let local = |f: u32| sorted.binary_search(&f).ok();
-        let (part, count) = number_parts(mesh, sorted.len(), |i| sorted[i], local, labels, cut);
+        let sorted = MaskFaces::from_sorted(sorted, mesh.face_count());
+        let local = |f: u32| sorted.index(f);
+        let faces = sorted.faces();
+        let (part, count) = number_parts(mesh, faces.len(), |i| faces[i], local, labels, cut);
         let mut groups = vec![Vec::new(); count as usize];
         let mut unlabelled = Vec::new();
         for &f in &self.faces {
@@ -321,6 +362,28 @@ mod tests {
         let whole = MaskFaces::new(&[true; 3]);
         assert_eq!((whole.index(2), whole.index(3)), (Some(2), None));
         assert_eq!(whole.into_faces(), vec![0, 1, 2]);
+    }
+
+    /// The table (large masks) and the binary search (small ones) give the same
+    /// places as a naive scan, for members, non-members and faces past the mesh.
+    #[test]
+    fn mask_faces_table_and_search_agree_with_a_scan() {
+        let face_count = 1000;
+        for step in [1usize, 3, 7, 15, 16, 17, 40, 999] {
+            let faces: Vec<u32> = (0..face_count as u32).step_by(step).collect();
+            let index = MaskFaces::from_sorted(faces.clone(), face_count);
+            let expected = match step {
+                1 => matches!(index.places, Places::Whole),
+                // 63 faces (step 16) fill a table for 1000, 59 (step 17) do not.
+                2..=16 => matches!(index.places, Places::Table(_)),
+                _ => matches!(index.places, Places::Search),
+            };
+            assert!(expected, "step {step}: {:?}", index.places);
+            for f in 0..face_count as u32 + 2 {
+                let want = faces.iter().position(|&g| g == f);
+                assert_eq!(index.index(f), want, "step {step}, face {f}");
+            }
+        }
     }
     use crate::mesh::shapes;
 
