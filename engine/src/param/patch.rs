@@ -3,9 +3,11 @@
 //! Local vertices are the classes of face corners joined through glued edges (segment
 //! faces on both sides, not cut, manifold): one local vertex per fan of faces around a
 //! mesh vertex. Cost O(F) with a union-find over corners (plus a hash map from mesh
-//! faces to local faces).
+//! faces to local faces, or a per-mesh-face table for a segment that is a large share
+//! of the mesh).
 
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 
 use crate::mesh::{NONE, TriMesh};
 
@@ -49,6 +51,61 @@ impl UnionFind {
     }
 }
 
+/// A segment of at least 1/`DENSE_SHARE` of the mesh's faces finds its local faces in
+/// a per-mesh-face table (filling it costs O(F), less than hashing a large segment);
+/// a smaller one in a hash map, so that its cost stays in proportion to its size.
+const DENSE_SHARE: usize = 16;
+
+/// The local face of each mesh face of a segment.
+enum LocalFaces {
+    /// Local face per mesh face, `NONE` outside the segment.
+    Table(Vec<u32>),
+    /// Local face by mesh face.
+    Map(HashMap<u32, u32>),
+}
+
+impl LocalFaces {
+    /// Room for `len` faces of a mesh of `face_count` faces.
+    fn new(len: usize, face_count: usize) -> Self {
+        if len * DENSE_SHARE >= face_count {
+            Self::Table(vec![NONE; face_count])
+        } else {
+            Self::Map(HashMap::with_capacity(len))
+        }
+    }
+
+    /// Records mesh face `f` (below the mesh's face count) as local face `i`; `false`
+    /// (and nothing changed) if `f` was recorded already.
+    fn insert(&mut self, f: u32, i: u32) -> bool {
+        match self {
+            Self::Table(table) => {
+                let slot = &mut table[f as usize];
+                let fresh = *slot == NONE;
+                if fresh {
+                    *slot = i;
+                }
+                fresh
+            }
+            Self::Map(map) => match map.entry(f) {
+                Entry::Occupied(_) => false,
+                Entry::Vacant(v) => {
+                    v.insert(i);
+                    true
+                }
+            },
+        }
+    }
+
+    /// The local face of mesh face `f`, `None` if it is not in the segment.
+    #[inline]
+    fn get(&self, f: u32) -> Option<u32> {
+        match self {
+            Self::Table(table) => table.get(f as usize).copied().filter(|&i| i != NONE),
+            Self::Map(map) => map.get(&f).copied(),
+        }
+    }
+}
+
 impl Patch {
     /// Builds the cut-open patch and checks that it is a connected disc.
     pub fn build(mesh: &TriMesh, faces: &[u32], cut: &[bool]) -> Result<Self, ParamError> {
@@ -61,7 +118,7 @@ impl Patch {
                 found: cut.len(),
             });
         }
-        let mut local_of: HashMap<u32, u32> = HashMap::with_capacity(faces.len());
+        let mut local_of = LocalFaces::new(faces.len(), mesh.face_count());
         for (i, &f) in faces.iter().enumerate() {
             if f as usize >= mesh.face_count() {
                 return Err(ParamError::FaceOutOfRange {
@@ -69,7 +126,7 @@ impl Patch {
                     face_count: mesh.face_count(),
                 });
             }
-            if local_of.insert(f, i as u32).is_some() {
+            if !local_of.insert(f, i as u32) {
                 return Err(ParamError::DuplicateFace { face: f });
             }
         }
@@ -85,7 +142,7 @@ impl Patch {
                 if g == NONE || cut[e as usize] {
                     continue;
                 }
-                let Some(&j) = local_of.get(&g) else {
+                let Some(j) = local_of.get(g) else {
                     continue;
                 };
                 let Some(kg) = mesh.face_edges()[g as usize].iter().position(|&x| x == e) else {
@@ -193,5 +250,34 @@ impl Patch {
             }
         }
         components
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both ways of finding local faces (a table for a large share of the mesh, a map
+    /// otherwise) record, refuse duplicates and look up alike.
+    #[test]
+    fn local_faces_table_and_map_agree() {
+        let face_count = 100;
+        for len in [3, 10] {
+            let mut local = LocalFaces::new(len, face_count);
+            assert_eq!(
+                matches!(local, LocalFaces::Table(_)),
+                len == 10,
+                "len {len}"
+            );
+            let faces: Vec<u32> = (0..len as u32).map(|i| 97 - 9 * i).collect();
+            for (i, &f) in faces.iter().enumerate() {
+                assert!(local.insert(f, i as u32), "face {f}");
+            }
+            assert!(!local.insert(faces[1], 99), "a duplicate is refused");
+            for f in 0..face_count as u32 + 1 {
+                let want = faces.iter().position(|&g| g == f).map(|i| i as u32);
+                assert_eq!(local.get(f), want, "len {len}, face {f}");
+            }
+        }
     }
 }
