@@ -18,9 +18,11 @@
 //! triangles, which are always valid. So every face ends in a parameterized piece.
 //!
 //! Cost: one sparse factorization per parameterization, one random walk per split;
-//! segments in parallel with rayon, the result independent of the thread count.
+//! segments in parallel with rayon, and within a segment each piece as soon as its
+//! parent is split (no waiting for the other pieces of a round, so a few large
+//! segments keep every thread busy); the result independent of the thread count.
 
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock, PoisonError};
 
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -28,7 +30,7 @@ use rayon::prelude::*;
 use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
-use crate::param::{SegmentParam, parameterize_all};
+use crate::param::{SegmentParam, parameterize, parameterize_all};
 use crate::segment::{
     FaceField, SegmentError, Segmentation, face_frames, is_disc, random_walk, walk_weights,
 };
@@ -147,29 +149,24 @@ pub fn parameterize_segment_with_splitting(
     options: &SurfaceOptions,
 ) -> Result<(Vec<SegmentParam>, SurfaceReport), SurfaceError> {
     let cut = &context.cut;
-    let mut report = SurfaceReport::default();
-    let mut accepted: Vec<SegmentParam> = Vec::new();
-    let mut pending: Vec<Vec<u32>> = vec![faces.to_vec()];
-    let mut small: Vec<Vec<u32>> = Vec::new();
-    while !pending.is_empty() {
-        let results = parameterize_all(mesh, field, &pending, cut, &options.param);
-        let mut to_split = Vec::new();
-        for (faces, result) in pending.into_iter().zip(results) {
-            match result {
-                Ok(p) if p.report.valid && angle_ok(&p, options) => accepted.push(p),
-                _ if faces.len() < options.min_segment_faces.max(2) => small.push(faces),
-                _ => to_split.push(faces),
-            }
-        }
-        report.splits += to_split.len();
-        // Each split is one random walk over its segment: independent, so in parallel;
-        // the halves are collected in order, so the result does not depend on threads.
-        let halves: Vec<Vec<Vec<u32>>> = to_split
-            .par_iter()
-            .map(|faces| split_in_two(mesh, &context.frames, &context.weights, cut, faces))
-            .collect::<Result<_, _>>()?;
-        pending = halves.into_iter().flatten().collect();
-    }
+    let splitter = Splitter {
+        mesh,
+        field,
+        context,
+        options,
+    };
+    let Pieces {
+        mut accepted,
+        mut small,
+        splits,
+    } = splitter.split_until_valid(faces.to_vec())?;
+    let mut report = SurfaceReport {
+        splits,
+        ..SurfaceReport::default()
+    };
+    // The pieces arrive in the order they finish; the fallback below treats each
+    // piece on its own and the result is sorted, but keep it independent of timing.
+    small.sort_by_key(|f| f.iter().copied().min());
     // Isotropic fallback: the same density, no anisotropy. A piece whose fallback
     // parameterization still flips or overlaps (around a sharp cone, say) is halved
     // again; a single triangle is always valid.
@@ -194,6 +191,97 @@ pub fn parameterize_segment_with_splitting(
     }
     accepted.sort_by_key(lowest_face);
     Ok((accepted, report))
+}
+
+/// What splitting with the field leaves: valid pieces, pieces too small to split
+/// further (for the isotropic fallback) and the number of splits.
+#[derive(Debug, Default)]
+struct Pieces {
+    accepted: Vec<SegmentParam>,
+    small: Vec<Vec<u32>>,
+    splits: usize,
+}
+
+/// Parameterizes pieces and splits the invalid ones in two, each piece as soon as its
+/// parent is split: a large piece does not wait for the other pieces of its round, so
+/// the few large segments of a smooth field keep every thread busy. Each piece's
+/// outcome depends on its faces alone, so the pieces do not depend on the threads.
+struct Splitter<'a> {
+    mesh: &'a TriMesh,
+    field: &'a TensorField,
+    context: &'a SplitContext,
+    options: &'a SurfaceOptions,
+}
+
+/// What becomes of one piece.
+enum Outcome {
+    Accepted(SegmentParam),
+    Small(Vec<u32>),
+    Split(Vec<Vec<u32>>),
+}
+
+impl Splitter<'_> {
+    /// Splits `faces` until every piece is valid or too small (see the module docs).
+    fn split_until_valid(&self, faces: Vec<u32>) -> Result<Pieces, SurfaceError> {
+        let out = Mutex::new(Ok(Pieces::default()));
+        rayon::scope(|scope| self.visit(scope, &out, faces));
+        out.into_inner().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Treats one piece and spawns its halves (spawned, not recursed into, so a
+    /// long chain of splits does not deepen the stack).
+    fn visit<'s>(
+        &'s self,
+        scope: &rayon::Scope<'s>,
+        out: &'s Mutex<Result<Pieces, SurfaceError>>,
+        faces: Vec<u32>,
+    ) {
+        let lock = || out.lock().unwrap_or_else(PoisonError::into_inner);
+        if lock().is_err() {
+            return; // another piece failed: the whole segment does
+        }
+        match self.outcome(faces) {
+            Ok(Outcome::Accepted(p)) => {
+                if let Ok(pieces) = &mut *lock() {
+                    pieces.accepted.push(p);
+                }
+            }
+            Ok(Outcome::Small(faces)) => {
+                if let Ok(pieces) = &mut *lock() {
+                    pieces.small.push(faces);
+                }
+            }
+            Ok(Outcome::Split(halves)) => {
+                if let Ok(pieces) = &mut *lock() {
+                    pieces.splits += 1;
+                }
+                for half in halves {
+                    scope.spawn(move |scope| self.visit(scope, out, half));
+                }
+            }
+            Err(e) => {
+                let mut guard = lock();
+                if guard.is_ok() {
+                    *guard = Err(e);
+                }
+            }
+        }
+    }
+
+    /// Parameterizes one piece: accepted if valid, kept for the fallback if too small
+    /// to split, split in two otherwise.
+    fn outcome(&self, faces: Vec<u32>) -> Result<Outcome, SurfaceError> {
+        let (cut, options) = (&self.context.cut, self.options);
+        match parameterize(self.mesh, self.field, &faces, cut, &options.param) {
+            Ok(p) if p.report.valid && angle_ok(&p, options) => return Ok(Outcome::Accepted(p)),
+            _ if faces.len() < options.min_segment_faces.max(2) => {
+                return Ok(Outcome::Small(faces));
+            }
+            _ => {}
+        }
+        let context = self.context;
+        split_in_two(self.mesh, &context.frames, &context.weights, cut, &faces).map(Outcome::Split)
+    }
 }
 
 /// The optional stricter angle test (the mean is part of `report.valid` already).
@@ -377,6 +465,44 @@ mod tests {
             );
             assert!(is_disc(&mesh, p, &context.cut));
         }
+    }
+
+    /// A whole sphere is no disc, so it is split, and its halves again: the pieces
+    /// partition it and are the same, bit for bit, on one thread and on four.
+    #[test]
+    fn splitting_gives_the_same_pieces_on_any_number_of_threads() {
+        let mesh = shapes::sphere(1.0, 3).expect("sphere");
+        let field = TensorField::from_frames(
+            &mesh,
+            &vec![DVec3::X; mesh.vertex_count()],
+            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
+        )
+        .expect("field");
+        let options = SurfaceOptions::default();
+        let context = SplitContext::new(&mesh, &field, &[], &options);
+        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool");
+            pool.install(|| {
+                parameterize_segment_with_splitting(&mesh, &field, &context, &faces, &options)
+            })
+            .expect("split")
+        };
+        let (one, report) = run(1);
+        assert!(report.splits >= 2, "{} splits", report.splits);
+        let mut covered: Vec<u32> = one.iter().flat_map(|p| p.faces.clone()).collect();
+        covered.sort_unstable();
+        assert_eq!(covered, faces, "every face in exactly one piece");
+        assert!(
+            one.windows(2)
+                .all(|w| lowest_face(&w[0]) < lowest_face(&w[1]))
+        );
+        let (four, report4) = run(4);
+        assert_eq!(report4, report);
+        assert_eq!(four, one);
     }
 
     #[test]
