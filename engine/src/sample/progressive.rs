@@ -458,17 +458,30 @@ impl Sampler {
         ranks: &[u32],
         out: &mut [SampleSite],
     ) {
+        self.progressive_cover_sites_with(cover, ranks, out, &mut LeafScratch::default());
+    }
+
+    /// As [`progressive_cover_sites_of`](Self::progressive_cover_sites_of), with the
+    /// scratch memory of the leaf descent given by the caller: a caller drawing a few
+    /// ranks in each of many covers reuses one instead of initialising its kilobytes
+    /// per cover (the sites do not depend on it, [`LeafScratch`]'s contract).
+    pub(crate) fn progressive_cover_sites_with<'a>(
+        &'a self,
+        cover: &RankCover,
+        ranks: &[u32],
+        out: &mut [SampleSite],
+        scratch: &mut LeafScratch<'a>,
+    ) {
         assert_eq!(ranks.len(), out.len(), "one site per rank");
         let seg = &self.segments[cover.segment as usize];
         let chain = self.chain_slot[cover.segment as usize] as usize;
         let leaves = cover.leaves.start as usize..cover.leaves.end as usize;
-        let mut scratch = LeafScratch::default();
         for (slot, &rank) in out.iter_mut().zip(ranks) {
             let m = cover.scramble.value(rank) * self.total_measure;
             let (leaf, t) = self.leaf_among(chain, &seg.curve, m, leaves.clone());
             let p = seg
                 .curve
-                .point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, &mut scratch);
+                .point_in_leaf_with(leaf, t, PROGRESSIVE_LEVELS, scratch);
             *slot = SampleSite::make(self, seg, &p, rank, 1.0);
         }
     }
