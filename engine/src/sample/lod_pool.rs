@@ -7,17 +7,29 @@
 //! multiplier asks for them. The surface is cut into bins, about [`BINS`] runs of
 //! consecutive cells of equal measure (a bin never spans two segments). For each bin
 //! an upper bound of the multiplier, from a sphere around the faces its cells overlap
-//! and a cone around their normals, gives the rank it needs, `ceil(N bound)`, and the
-//! ranks it lacks are enumerated in that bin alone
-//! ([`Sampler::progressive_ranks_in_leaves`]), so an update costs in proportion to the
-//! bins plus the new ranks. Bin `b` holds every rank below `reach[b]` that falls in it.
+//! and a cone around their normals (`lod_bounds.rs`, evaluated for all bins in one
+//! branch-free loop), gives the rank it needs, `ceil(N bound)`, and
+//! the ranks it lacks are enumerated in that bin alone
+//! ([`Sampler::progressive_ranks_in_leaves`]) and placed there, so an update costs in
+//! proportion to the bins plus the new ranks. Bin `b` holds every rank below
+//! `reach[b]` that falls in it.
+//!
+//! **Draw-ahead.** A moving camera raises the needed rank of thousands of bins by a
+//! few ranks each per frame, and a rank drawn alone in its bin costs two to three
+//! times one drawn among others (its cells are cold). A bin that lacks ranks is
+//! therefore filled past its need, to `need (1 + a (1 + j))` with `a` the draw-ahead
+//! fraction ([`DRAW_AHEAD`], [`LodPool::with_draw_ahead`]) and `j` in `[0, 1)` fixed
+//! per bin (so that bins filled in one frame run dry in different ones): it is
+//! refilled every few frames, in batches. This changes which ranks the pool holds,
+//! never which are visible: a renderer thresholds by rank.
 //!
 //! Entries are only ever appended, so a GPU copy of the pool is extended by streaming
 //! the new tail ([`PoolChange::Appended`]). When the extension would outgrow its budget
-//! and holds ranks the view no longer needs, it is rebuilt for the current view
-//! ([`PoolChange::Rebuilt`]); when the current view alone needs more than the budget,
-//! bins are served in order until it is spent and the rest keep the ranks
-//! they have ([`LodPool::complete`] says whether every visible rank is held).
+//! and holds ranks the view no longer needs, even with its draw-ahead, it is rebuilt
+//! for the current view ([`PoolChange::Rebuilt`]); when the current view alone needs
+//! more than the budget, bins are served in order, without draw-ahead, until it is
+//! spent and the rest keep the ranks they have ([`LodPool::complete`] says whether
+//! every visible rank is held).
 //!
 //! Which ranks are visible, and where each lies, depend only on the seed, the view and
 //! the ranks held, never on the path that led there: the pool's order of entries
@@ -25,18 +37,24 @@
 
 use std::ops::Range;
 
-use glam::{DVec3, DVec4, Vec4Swizzles};
+use glam::DVec3;
 use rayon::prelude::*;
 
 use super::lod::{LodError, ViewLod, fade};
+use super::lod_bounds::{BoundSet, Frustum, RegionBound};
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
+use crate::curve::LeafScratch;
 use crate::mesh::TriMesh;
 
 /// The pool cuts the surface into about this many bins, each with its own bound of a
 /// view's multiplier: finer bins bound more tightly (fewer ranks drawn that no view
 /// shows) and cost more per update (one bound per bin).
 pub const BINS: usize = 16384;
+
+/// The default draw-ahead fraction `a` (see the module docs): a bin that lacks ranks
+/// is filled to between `1 + a` and `1 + 2a` times its need.
+pub const DRAW_AHEAD: f64 = 1.0 / 32.0;
 
 /// What an [`LodPool::update`] changed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -57,21 +75,32 @@ pub struct LodPool {
     seed: u64,
     prefix: u32,
     budget: usize,
+    /// The draw-ahead fraction.
+    ahead: f64,
     sites: Vec<SampleSite>,
     ranks: Vec<u32>,
     /// The bins, in segment order and cell order within a segment.
     bins: Vec<Bin>,
+    /// Their bounds, as columns.
+    bounds: BoundSet,
     /// Per bin: every rank below it that falls in the bin is held.
     reach: Vec<u32>,
-    /// The ranks listed by an update, as runs of one bin: (bin, end entry).
+    /// Per bin, the rank the view of the current update needs.
+    needs: Vec<u32>,
+    /// The bins a parallel update draws in, in order.
+    todo: Vec<u32>,
+    /// The ranks listed by a sequential update, as runs of one bin: (bin, end entry).
     runs: Vec<(u32, u32)>,
-    /// Per chunk of [`BIN_CHUNK`] bins, the lists of a parallel update (kept, so that
-    /// updates stop allocating).
+    /// Per chunk of [`DRAW_CHUNK`] bins drawn in, the lists of a parallel update
+    /// (kept, so that updates stop allocating).
     lists: Vec<BinList>,
 }
 
-/// Bins per task of a parallel update.
-const BIN_CHUNK: usize = 64;
+/// Bins drawn in per task of a parallel update.
+const DRAW_CHUNK: usize = 16;
+
+/// Bins bounded per task of an update.
+const BOUND_CHUNK: usize = 2048;
 
 /// Ranks a bin may list beyond its share of a rank range (an estimate's slack: the
 /// cover's end intervals).
@@ -80,17 +109,15 @@ const COVER_SLACK: f64 = 24.0;
 /// One chunk's part of a parallel update.
 #[derive(Clone, Debug, Default)]
 struct BinList {
-    /// Each bin's needed rank.
-    needs: Vec<u32>,
     /// The ranks listed, bin after bin.
     ranks: Vec<u32>,
-    /// (bin, ranks listed) per bin that listed some.
-    runs: Vec<(u32, u32)>,
+    /// Their sites.
+    sites: Vec<SampleSite>,
     /// Each bin's reach after listing.
     reach: Vec<u32>,
 }
 
-/// A run of consecutive cells of one segment's curve, with a bound of its region.
+/// A run of consecutive cells of one segment's curve.
 #[derive(Clone, Debug)]
 struct Bin {
     /// Index into `Sampler::segments`.
@@ -99,147 +126,8 @@ struct Bin {
     leaves: Range<u32>,
     /// The bin's share of the total measure (of the sequence's values).
     share: f64,
-    bound: RegionBound,
     /// The dyadic intervals over the bin's values.
     cover: RankCover,
-}
-
-/// A sphere holding some faces and a cone holding their vertex normals (hence every
-/// normal interpolated on them), for an upper bound of a view's multiplier there.
-#[derive(Clone, Copy, Debug)]
-struct RegionBound {
-    centre: DVec3,
-    radius: f64,
-    /// Unit axis of the normal cone.
-    axis: DVec3,
-    /// Half-angle of the normal cone in radians (pi: no bound).
-    spread: f64,
-    /// Its cosine and sine.
-    spread_cos: f64,
-    spread_sin: f64,
-}
-
-/// A view made ready to bound many regions: its frustum planes with unit normals
-/// (world space), the depth's row and its gradient's length.
-struct Frustum<'a> {
-    view: &'a ViewLod,
-    planes: [DVec4; 6],
-    depth: DVec4,
-    depth_slope: f64,
-}
-
-impl<'a> Frustum<'a> {
-    fn new(view: &'a ViewLod) -> Self {
-        let m = view.clip_from_world;
-        let [x, y, z, w] = [m.row(0), m.row(1), m.row(2), m.row(3)];
-        // The planes w - x >= 0, w + x >= 0, ..., z >= 0, scaled to unit normals (a
-        // degenerate plane keeps its scale: it culls nothing).
-        let planes = [w - x, w + x, w - y, w + y, z, w - z].map(|p| {
-            let len = p.xyz().length();
-            if len > 0.0 { p / len } else { p }
-        });
-        Self {
-            view,
-            planes,
-            depth: w,
-            depth_slope: w.xyz().length(),
-        }
-    }
-}
-
-impl RegionBound {
-    /// The bound of the faces whose corners (vertex indices) `corners` lists.
-    fn new<I: Iterator<Item = usize>>(
-        mesh: &crate::mesh::TriMesh,
-        corners: impl Fn() -> I,
-    ) -> Self {
-        let (lo, hi) = corners().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), v| (lo.min(mesh.positions()[v]), hi.max(mesh.positions()[v])),
-        );
-        let centre = 0.5 * (lo + hi);
-        let radius = corners()
-            .map(|v| mesh.positions()[v].distance(centre))
-            .fold(0.0, f64::max);
-        let normals = mesh.vertex_normals();
-        let axis = corners()
-            .map(|v| normals[v])
-            .sum::<DVec3>()
-            .normalize_or_zero();
-        // The smallest cosine to the axis; a cone of half-angle under 90 degrees is
-        // convex, so it holds every normalised blend of its corner normals too.
-        let least = corners()
-            .map(|v| normals[v].dot(axis))
-            .fold(1.0f64, f64::min);
-        let spread = if axis != DVec3::ZERO && least > 1e-3 {
-            // A little slack for the f32 normals a renderer interpolates.
-            least.clamp(-1.0, 1.0).acos() + 1e-4
-        } else {
-            std::f64::consts::PI
-        };
-        Self {
-            centre,
-            radius,
-            axis,
-            spread,
-            spread_cos: spread.cos(),
-            spread_sin: spread.sin(),
-        }
-    }
-
-    /// An upper bound of the multiplier of `frustum`'s view over the region: 0 when
-    /// its sphere lies outside the frustum or (back faces culled) every normal faces
-    /// away; the view's clamp when the sphere reaches the eye's plane.
-    fn multiplier(&self, frustum: &Frustum) -> f64 {
-        let view = frustum.view;
-        let (c, r) = (self.centre, self.radius);
-        let at = DVec4::new(c.x, c.y, c.z, 1.0);
-        if frustum.planes.iter().any(|p| p.dot(at) < -r) {
-            return 0.0;
-        }
-        let nearest = frustum.depth.dot(at) - r * frustum.depth_slope;
-        if !(nearest > 0.0) {
-            return view.max;
-        }
-        let farthest = view.eye.distance(c) + r;
-        let area = view.focal_pixels * view.focal_pixels * self.cos_bound(view) * farthest
-            / (nearest * nearest * nearest);
-        (area / view.reference).min(view.max)
-    }
-
-    /// An upper bound of `|cos theta|` (or of `cos theta` when back faces are
-    /// culled, 0 when every normal faces away) over the region. Normals lie within
-    /// `spread` of the axis and directions to the eye within `seen` of the centre's
-    /// (at angle `off` from the axis), so a normal meets a direction to the eye at an
-    /// angle of at least `off - spread - seen` (front) and at most `off + spread +
-    /// seen` (its cosine's least value; the back's bound). Cosines of sums, without
-    /// trigonometric calls.
-    fn cos_bound(&self, view: &ViewLod) -> f64 {
-        let to_eye = view.eye - self.centre;
-        let d = to_eye.length();
-        if !(self.spread < std::f64::consts::FRAC_PI_2) || !(d > self.radius) {
-            return 1.0;
-        }
-        let (seen_sin, off_cos) = (self.radius / d, self.axis.dot(to_eye / d).clamp(-1.0, 1.0));
-        let seen_cos = (1.0 - seen_sin * seen_sin).max(0.0).sqrt();
-        let off_sin = (1.0 - off_cos * off_cos).max(0.0).sqrt();
-        // theta = spread + seen, in [0, pi).
-        let theta_cos = self.spread_cos * seen_cos - self.spread_sin * seen_sin;
-        let theta_sin = self.spread_sin * seen_cos + self.spread_cos * seen_sin;
-        // cos(off - theta) when off > theta, else 1.
-        let front = if off_cos >= theta_cos {
-            1.0
-        } else {
-            off_cos * theta_cos + off_sin * theta_sin
-        };
-        if view.cull_back_faces {
-            return front.max(0.0);
-        }
-        // The back: cos(pi - off - theta) = -cos(off + theta), 1 when off + theta >= pi.
-        let sum_cos = off_cos * theta_cos - off_sin * theta_sin;
-        let back = if -off_cos >= theta_cos { 1.0 } else { -sum_cos };
-        front.max(back).max(0.0)
-    }
 }
 
 /// The bound of the faces that cells `leaves` of segment `segment` overlap, with the
@@ -276,18 +164,25 @@ impl LodPool {
                 expected_faces: rest.face_count(),
             });
         }
-        self.bins.par_iter_mut().for_each(|bin| {
-            let leaves = bin.leaves.start as usize..bin.leaves.end as usize;
-            bin.bound = bin_bound(sampler, mesh, bin.segment as usize, leaves);
-        });
+        let bounds: Vec<RegionBound> = self
+            .bins
+            .par_iter()
+            .map(|bin| {
+                let leaves = bin.leaves.start as usize..bin.leaves.end as usize;
+                bin_bound(sampler, mesh, bin.segment as usize, leaves)
+            })
+            .collect();
+        for (i, bound) in bounds.iter().enumerate() {
+            self.bounds.set(i, bound);
+        }
         Ok(())
     }
 
     /// The pool of `sampler`'s progressive sequence for `seed` holding ranks
-    /// `0..prefix`, with room for `budget` more ranks drawn per segment. Memory:
-    /// 20 bytes per entry. Room for `min(budget, prefix)` more entries is reserved up
-    /// front, and the pool grows geometrically beyond, so that updates soon stop
-    /// allocating.
+    /// `0..prefix`, with room for `budget` more ranks drawn per segment, drawing ahead
+    /// by [`DRAW_AHEAD`]. Memory: 20 bytes per entry. Room for `min(budget, prefix)`
+    /// more entries is reserved up front, and the pool grows geometrically beyond, so
+    /// that updates soon stop allocating.
     pub fn new(sampler: &Sampler, seed: u64, prefix: u32, budget: usize) -> Self {
         let capacity = prefix as usize + budget.min(prefix as usize);
         let mut sites = Vec::with_capacity(capacity);
@@ -295,7 +190,7 @@ impl LodPool {
         sampler.progressive_sites_into(seed, 0, &mut sites);
         let mut ranks = Vec::with_capacity(capacity);
         ranks.extend(0..prefix);
-        let bins: Vec<Bin> = sampler
+        let made: Vec<(Bin, RegionBound)> = sampler
             .segments()
             .par_iter()
             .enumerate()
@@ -313,28 +208,53 @@ impl LodPool {
                 }
                 runs.into_iter().map(move |leaves| {
                     let bound = bin_bound(sampler, sampler.mesh(), i, leaves.clone());
-                    Bin {
+                    let bin = Bin {
                         segment: i as u32,
                         share: (cumulative[leaves.end] - cumulative[leaves.start])
                             / sampler.total_measure(),
                         leaves: leaves.start as u32..leaves.end as u32,
-                        bound,
                         cover: sampler.progressive_cover(seed, i, leaves),
-                    }
+                    };
+                    (bin, bound)
                 })
             })
             .collect();
+        let mut bounds = BoundSet::default();
+        for (_, bound) in &made {
+            bounds.push(bound);
+        }
+        let bins: Vec<Bin> = made.into_iter().map(|(bin, _)| bin).collect();
         Self {
             seed,
             prefix,
             budget,
+            ahead: DRAW_AHEAD,
             sites,
             ranks,
             reach: vec![prefix; bins.len()],
+            needs: vec![0; bins.len()],
             bins,
+            bounds,
+            todo: Vec::new(),
             runs: Vec::new(),
             lists: Vec::new(),
         }
+    }
+
+    /// The same pool drawing ahead by `fraction` (see the module docs; 0: a bin is
+    /// filled to its need exactly). Panics unless `fraction` is in `[0, 1]`.
+    pub fn with_draw_ahead(mut self, fraction: f64) -> Self {
+        assert!(
+            (0.0..=1.0).contains(&fraction),
+            "draw-ahead fraction {fraction} out of [0, 1]"
+        );
+        self.ahead = fraction;
+        self
+    }
+
+    /// The draw-ahead fraction.
+    pub fn draw_ahead(&self) -> f64 {
+        self.ahead
     }
 
     /// The seed of the sequence.
@@ -382,40 +302,65 @@ impl LodPool {
         )
     }
 
+    /// The rank below which bin `bin` holds every rank that falls in it.
+    pub fn reach(&self, bin: usize) -> u32 {
+        self.reach[bin]
+    }
+
     /// An upper bound of `view`'s multiplier over bin `bin`, from a sphere around the
     /// faces its cells overlap and a cone around their normals: 0 when the sphere lies
     /// outside the frustum or (back faces culled) every normal faces away; `view.max`
     /// when the sphere reaches the eye's plane.
     pub fn bound(&self, bin: usize, view: &ViewLod) -> f64 {
-        self.bins[bin].bound.multiplier(&Frustum::new(view))
+        self.bounds.multiplier(bin, &Frustum::new(view))
     }
 
-    /// The rank bin `bin` needs under `frustum` with base count `base`.
-    fn need(&self, bin: usize, frustum: &Frustum, base: f64) -> u32 {
-        let bound = self.bins[bin].bound.multiplier(frustum);
-        (base * bound).ceil().min(f64::from(u32::MAX)) as u32
+    /// Writes each bin's needed rank under `view` with base count `base` into `out`.
+    fn needs_into(&self, view: &ViewLod, base: f64, out: &mut Vec<u32>) {
+        let frustum = Frustum::new(view);
+        out.resize(self.bins.len(), 0);
+        out.par_chunks_mut(BOUND_CHUNK)
+            .enumerate()
+            .for_each(|(c, dst)| {
+                self.bounds.needs_into(&frustum, base, c * BOUND_CHUNK, dst);
+            });
+    }
+
+    /// The rank bin `bin` is filled to when it needs `need`: past it by the
+    /// draw-ahead, scaled by a factor in `[1, 2)` fixed per bin.
+    fn ahead_of(&self, bin: usize, need: u32) -> u32 {
+        // The bin's factor from the top bits of a multiplicative hash of its index.
+        let jitter = f64::from((bin as u32).wrapping_mul(0x9e37_79b9) >> 8) / 16_777_216.0;
+        let more = f64::from(need) * self.ahead * (1.0 + jitter);
+        (f64::from(need) + more).min(f64::from(u32::MAX)) as u32
     }
 
     /// Whether every rank visible under `view` with base count `base` is held.
     pub fn complete(&self, view: &ViewLod, base: f64) -> bool {
-        let frustum = Frustum::new(view);
-        (0..self.reach.len()).all(|s| self.reach[s] >= self.need(s, &frustum, base))
+        let mut needs = Vec::new();
+        self.needs_into(view, base, &mut needs);
+        needs
+            .iter()
+            .zip(&self.reach)
+            .all(|(need, reach)| reach >= need)
     }
 
-    /// Draws the ranks `view` with base count `base` needs and the pool lacks. Cost in
-    /// proportion to the segments plus the ranks drawn; no allocation while the
-    /// extension stays within its budget.
+    /// Draws the ranks `view` with base count `base` needs and the pool lacks (and,
+    /// in bins that lack some, the draw-ahead). Cost in proportion to the bins plus the
+    /// ranks drawn; no allocation while the extension stays within its budget.
     pub fn update(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> PoolChange {
         let start = self.sites.len();
         self.runs.clear();
-        if self.extend(sampler, view, base) {
+        let mut needs = std::mem::take(&mut self.needs);
+        self.needs_into(view, base, &mut needs);
+        self.needs = needs;
+        if self.extend(sampler) {
             return self.finish(sampler, start);
         }
         // The budget ran out. Rebuild if the extension holds ranks the view does not
-        // need; otherwise keep what is there.
-        let frustum = Frustum::new(view);
+        // need, even drawing ahead; otherwise keep what is there.
         let stale = (0..self.reach.len())
-            .any(|s| self.reach[s] > self.prefix.max(self.need(s, &frustum, base)));
+            .any(|b| self.reach[b] > self.prefix.max(self.ahead_of(b, self.needs[b])));
         if !stale {
             return self.finish(sampler, start);
         }
@@ -423,101 +368,94 @@ impl LodPool {
         self.ranks.truncate(self.prefix as usize);
         self.reach.fill(self.prefix);
         self.runs.clear();
-        self.extend(sampler, view, base);
+        self.extend(sampler);
         self.finish(sampler, self.prefix as usize);
         PoolChange::Rebuilt
     }
 
-    /// Lists the missing ranks of every bin in order; false when the budget ran out
-    /// first.
-    fn extend(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> bool {
-        if self.extend_parallel(sampler, view, base) {
+    /// Lists the missing ranks of every bin in order (with their sites when the
+    /// parallel pass takes them, with [`finish`](Self::finish) to place them
+    /// otherwise); false when the budget ran out first.
+    fn extend(&mut self, sampler: &Sampler) -> bool {
+        if self.extend_parallel(sampler) {
             return true;
         }
-        let frustum = Frustum::new(view);
-        for s in 0..self.reach.len() {
-            let need = self.need(s, &frustum, base);
-            if need <= self.reach[s] {
+        // Within the budget only: every bin up to its need, in order.
+        for b in 0..self.reach.len() {
+            let need = self.needs[b];
+            if need <= self.reach[b] {
                 continue;
             }
             let listed = self.ranks.len();
             let room = self.budget - (listed - self.prefix as usize);
-            self.reach[s] = sampler.progressive_ranks_in_cover(
-                &self.bins[s].cover,
-                self.reach[s],
+            self.reach[b] = sampler.progressive_ranks_in_cover(
+                &self.bins[b].cover,
+                self.reach[b],
                 need,
                 room,
                 &mut self.ranks,
             );
             if self.ranks.len() > listed {
-                self.runs.push((s as u32, self.ranks.len() as u32));
+                self.runs.push((b as u32, self.ranks.len() as u32));
             }
-            if self.reach[s] < need {
+            if self.reach[b] < need {
                 return false;
             }
         }
         true
     }
 
-    /// [`extend`](Self::extend) over fixed chunks of bins in parallel, when the ranks
-    /// expected fit the budget twice over: each chunk lists into its own reused list,
-    /// and the lists are appended in chunk order, so the result is the sequential one.
-    /// False (nothing changed) when they might not fit.
-    fn extend_parallel(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> bool {
+    /// [`extend`](Self::extend) with draw-ahead, over fixed chunks of the bins that
+    /// lack ranks, in parallel, when the ranks expected fit the budget twice over:
+    /// each chunk lists its ranks and places them into its own reused lists, and the
+    /// lists are appended in chunk order, so the result is the same for any thread
+    /// count. False (nothing changed) when they might not fit.
+    fn extend_parallel(&mut self, sampler: &Sampler) -> bool {
         let room = self.budget - (self.ranks.len() - self.prefix as usize);
-        let chunks = self.bins.len().div_ceil(BIN_CHUNK);
-        let mut lists = std::mem::take(&mut self.lists);
-        lists.resize_with(chunks, Default::default);
-        let this = &*self;
-        let (bins, reach) = (&this.bins, &this.reach);
-        let frustum = Frustum::new(view);
-        // The ranks a bin lacks, and how many of them it should hold.
-        let expected: f64 = lists
-            .par_iter_mut()
-            .enumerate()
-            .map(|(c, list)| {
-                list.needs.clear();
-                let mut expected = 0.0;
-                for s in c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(bins.len()) {
-                    let need = this.need(s, &frustum, base);
-                    list.needs.push(need);
-                    if need > reach[s] {
-                        expected += f64::from(need - reach[s]) * bins[s].share + COVER_SLACK;
-                    }
-                }
-                expected
-            })
-            .sum();
+        self.todo.clear();
+        let mut expected = 0.0;
+        for b in 0..self.bins.len() {
+            if self.needs[b] > self.reach[b] {
+                let target = self.ahead_of(b, self.needs[b]);
+                expected += f64::from(target - self.reach[b]) * self.bins[b].share + COVER_SLACK;
+                self.todo.push(b as u32);
+            }
+        }
         if expected * 2.0 > room as f64 {
-            self.lists = lists;
             return false;
         }
-        let total: usize = lists
+        let chunks = self.todo.len().div_ceil(DRAW_CHUNK);
+        let mut lists = std::mem::take(&mut self.lists);
+        if lists.len() < chunks {
+            lists.resize_with(chunks, Default::default);
+        }
+        let this = &*self;
+        let total: usize = lists[..chunks]
             .par_iter_mut()
-            .enumerate()
-            .map(|(c, list)| {
+            .zip(this.todo.par_chunks(DRAW_CHUNK))
+            .map(|(list, todo)| {
                 list.ranks.clear();
-                list.runs.clear();
+                list.sites.clear();
                 list.reach.clear();
-                for (i, s) in (c * BIN_CHUNK..((c + 1) * BIN_CHUNK).min(bins.len())).enumerate() {
-                    let need = list.needs[i];
-                    let before = list.ranks.len();
-                    let now = if need > reach[s] {
-                        sampler.progressive_ranks_in_cover(
-                            &bins[s].cover,
-                            reach[s],
-                            need,
-                            usize::MAX,
-                            &mut list.ranks,
-                        )
-                    } else {
-                        reach[s]
-                    };
-                    list.reach.push(now);
-                    if list.ranks.len() > before {
-                        list.runs
-                            .push((s as u32, (list.ranks.len() - before) as u32));
-                    }
+                let mut scratch = LeafScratch::default();
+                for &b in todo {
+                    let (b, first) = (b as usize, list.ranks.len());
+                    let cover = &this.bins[b].cover;
+                    let target = this.ahead_of(b, this.needs[b]);
+                    list.reach.push(sampler.progressive_ranks_in_cover(
+                        cover,
+                        this.reach[b],
+                        target,
+                        usize::MAX,
+                        &mut list.ranks,
+                    ));
+                    list.sites.resize(list.ranks.len(), SampleSite::default());
+                    sampler.progressive_cover_sites_with(
+                        cover,
+                        &list.ranks[first..],
+                        &mut list.sites[first..],
+                        &mut scratch,
+                    );
                 }
                 list.ranks.len()
             })
@@ -527,23 +465,21 @@ impl LodPool {
             self.lists = lists;
             return false;
         }
-        for (c, list) in lists.iter().enumerate() {
-            let first = c * BIN_CHUNK;
-            self.reach[first..first + list.reach.len()].copy_from_slice(&list.reach);
-            let mut end = self.ranks.len() as u32;
-            for &(bin, count) in &list.runs {
-                end += count;
-                self.runs.push((bin, end));
+        for (list, todo) in lists.iter().zip(self.todo.chunks(DRAW_CHUNK)) {
+            for (&b, &reach) in todo.iter().zip(&list.reach) {
+                self.reach[b as usize] = reach;
             }
             self.ranks.extend_from_slice(&list.ranks);
+            self.sites.extend_from_slice(&list.sites);
         }
         self.lists = lists;
         true
     }
 
-    /// Computes the sites of the ranks listed from entry `start` on.
+    /// Places the ranks a sequential pass listed (the entries past the sites), and
+    /// says what changed from entry `start` on.
     fn finish(&mut self, sampler: &Sampler, start: usize) -> PoolChange {
-        let end = self.ranks.len();
+        let (placed, end) = (self.sites.len(), self.ranks.len());
         if end == start {
             return PoolChange::Unchanged;
         }
@@ -551,20 +487,22 @@ impl LodPool {
         let (runs, bins, ranks) = (&self.runs, &self.bins, &self.ranks);
         // Fixed chunks of entries, each split at the bins' runs: a bin's cells are
         // searched alone, and the work split does not depend on the thread count.
-        self.sites[start..]
+        self.sites[placed..]
             .par_chunks_mut(1024)
             .enumerate()
             .for_each(|(c, dst)| {
-                let (first, last) = (start + c * 1024, start + c * 1024 + dst.len());
+                let (first, last) = (placed + c * 1024, placed + c * 1024 + dst.len());
                 let mut run = runs.partition_point(|&(_, end)| end as usize <= first);
                 let mut at = first;
+                let mut scratch = LeafScratch::default();
                 while at < last {
                     let (bin, end) = runs[run];
                     let stop = (end as usize).min(last);
-                    sampler.progressive_cover_sites_of(
+                    sampler.progressive_cover_sites_with(
                         &bins[bin as usize].cover,
                         &ranks[at..stop],
                         &mut dst[at - first..stop - first],
+                        &mut scratch,
                     );
                     at = stop;
                     run += 1;
@@ -820,7 +758,8 @@ mod tests {
         let v = view_at(DVec3::new(1.0, 0.2, 1.3), DVec3::X, 30.0);
         // A roomy budget takes the parallel path; one that the ranks exactly fill is
         // refused by its estimate and takes the sequential one.
-        let mut roomy = LodPool::new(&s, 4, 10_000, 10_000_000);
+        // Without draw-ahead: the sequential pass, which spends a budget, has none.
+        let mut roomy = LodPool::new(&s, 4, 10_000, 10_000_000).with_draw_ahead(0.0);
         roomy.update(&s, &v, 10_000.0);
         let added = roomy.len() - 10_000;
         assert!(added > 1000, "{added}");
@@ -829,6 +768,67 @@ mod tests {
         assert!(tight.complete(&v, 10_000.0));
         assert_eq!(tight.ranks(), roomy.ranks());
         assert_eq!(tight.sites(), roomy.sites());
+    }
+
+    #[test]
+    fn drawing_ahead_holds_more_ranks_refills_less_and_shows_the_same_samples() {
+        let s = torus_sampler();
+        let (seed, base) = (5, 20_000.0);
+        assert_eq!(LodPool::new(&s, seed, 0, 0).draw_ahead(), DRAW_AHEAD);
+        let mut exact = LodPool::new(&s, seed, 20_000, 2_000_000).with_draw_ahead(0.0);
+        let mut ahead = LodPool::new(&s, seed, 20_000, 2_000_000).with_draw_ahead(0.25);
+        // Bins whose reach an update raised, summed over the updates.
+        let mut refills = [0, 0];
+        let mut v = view(DVec3::ZERO, 10.0);
+        // A dolly in small steps.
+        for t in 0..8 {
+            v = view(DVec3::new(0.3, 0.1, 4.0 * 0.97f64.powi(t)), 10.0);
+            for (pool, count) in [&mut exact, &mut ahead].into_iter().zip(&mut refills) {
+                let before: Vec<u32> = (0..pool.bins()).map(|b| pool.reach(b)).collect();
+                pool.update(&s, &v, base);
+                assert!(pool.complete(&v, base), "step {t}");
+                *count += (0..pool.bins())
+                    .filter(|&b| pool.reach(b) > before[b])
+                    .count();
+            }
+            assert!((0..ahead.bins()).all(|b| ahead.reach(b) >= exact.reach(b)));
+            assert_eq!(
+                held_visible(&ahead, &s, &v, base),
+                held_visible(&exact, &s, &v, base),
+                "step {t}"
+            );
+        }
+        assert!(refills[1] * 2 < refills[0], "{refills:?}");
+        assert!(ahead.len() > exact.len());
+        let end = ahead.ranks().iter().copied().max().unwrap_or(0) + 1;
+        assert_eq!(
+            held_visible(&ahead, &s, &v, base),
+            scan(&s, seed, end, &v, base)
+        );
+        // Each rank once, and every rank below a bin's reach that falls in it held:
+        // a superset of the exact pool's ranks.
+        let mut held = ahead.ranks().to_vec();
+        held.sort_unstable();
+        held.dedup();
+        assert_eq!(held.len(), ahead.len());
+        assert!(exact.ranks().iter().all(|k| held.binary_search(k).is_ok()));
+        for b in (0..ahead.bins()).step_by(5) {
+            let (segment, leaves) = ahead.bin(b);
+            let mut listed = Vec::new();
+            s.progressive_ranks_in_leaves(
+                seed,
+                segment,
+                leaves,
+                0,
+                ahead.reach(b),
+                usize::MAX,
+                &mut listed,
+            );
+            assert!(
+                listed.iter().all(|k| held.binary_search(k).is_ok()),
+                "bin {b}"
+            );
+        }
     }
 
     #[test]

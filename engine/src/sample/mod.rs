@@ -11,13 +11,14 @@
 mod chains;
 mod faces;
 pub mod lod;
+mod lod_bounds;
 mod lod_pool;
 pub mod progressive;
 mod sampler;
 mod stratified;
 mod types;
 
-pub use lod_pool::{LodPool, PoolChange};
+pub use lod_pool::{DRAW_AHEAD, LodPool, PoolChange};
 pub use sampler::{SampleError, Sampler, SegmentSampling};
 pub use stratified::{allocate, stratified_value};
 pub use types::{Sample, SampleSite};

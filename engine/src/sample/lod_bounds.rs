@@ -1,0 +1,264 @@
+//! Upper bounds of a view's multiplier over regions of a mesh, for the level-of-detail
+//! pool ([`LodPool`](super::LodPool)): a sphere around a region's faces and a cone
+//! around their normals ([`RegionBound`]), and the same bounds stored as columns
+//! ([`BoundSet`]) so that one view is checked against thousands of them in a loop
+//! without branches, which the compiler turns into vector code.
+//!
+//! Input: a mesh and groups of its vertices; a [`ViewLod`]. Output: per region, an
+//! upper bound of [`ViewLod::multiplier`] over every point and interpolated normal of
+//! its faces, and the rank `ceil(N bound)` a base count `N` needs there. Cost: O(1)
+//! per region and view, no trigonometric call.
+
+use glam::{DVec3, DVec4, Vec4Swizzles};
+
+use super::lod::ViewLod;
+use crate::mesh::TriMesh;
+
+/// A sphere holding some faces and a cone holding their vertex normals (hence every
+/// normal interpolated on them), for an upper bound of a view's multiplier there.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct RegionBound {
+    centre: DVec3,
+    radius: f64,
+    /// Unit axis of the normal cone.
+    axis: DVec3,
+    /// Half-angle of the normal cone in radians (pi: no bound).
+    spread: f64,
+    /// Its cosine and sine.
+    spread_cos: f64,
+    spread_sin: f64,
+}
+
+/// A view made ready to bound many regions: its frustum planes with unit normals
+/// (world space), the depth's row and its gradient's length.
+pub(super) struct Frustum<'a> {
+    view: &'a ViewLod,
+    planes: [DVec4; 6],
+    depth: DVec4,
+    depth_slope: f64,
+}
+
+impl<'a> Frustum<'a> {
+    /// The frustum of `view`.
+    pub(super) fn new(view: &'a ViewLod) -> Self {
+        let m = view.clip_from_world;
+        let [x, y, z, w] = [m.row(0), m.row(1), m.row(2), m.row(3)];
+        // The planes w - x >= 0, w + x >= 0, ..., z >= 0, scaled to unit normals (a
+        // degenerate plane keeps its scale: it culls nothing).
+        let planes = [w - x, w + x, w - y, w + y, z, w - z].map(|p| {
+            let len = p.xyz().length();
+            if len > 0.0 { p / len } else { p }
+        });
+        Self {
+            view,
+            planes,
+            depth: w,
+            depth_slope: w.xyz().length(),
+        }
+    }
+}
+
+impl RegionBound {
+    /// The bound of the faces whose corners (vertex indices) `corners` lists.
+    pub(super) fn new<I: Iterator<Item = usize>>(mesh: &TriMesh, corners: impl Fn() -> I) -> Self {
+        let (lo, hi) = corners().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| (lo.min(mesh.positions()[v]), hi.max(mesh.positions()[v])),
+        );
+        let centre = 0.5 * (lo + hi);
+        let radius = corners()
+            .map(|v| mesh.positions()[v].distance(centre))
+            .fold(0.0, f64::max);
+        let normals = mesh.vertex_normals();
+        let axis = corners()
+            .map(|v| normals[v])
+            .sum::<DVec3>()
+            .normalize_or_zero();
+        // The smallest cosine to the axis; a cone of half-angle under 90 degrees is
+        // convex, so it holds every normalised blend of its corner normals too.
+        let least = corners()
+            .map(|v| normals[v].dot(axis))
+            .fold(1.0f64, f64::min);
+        let spread = if axis != DVec3::ZERO && least > 1e-3 {
+            // A little slack for the f32 normals a renderer interpolates.
+            least.clamp(-1.0, 1.0).acos() + 1e-4
+        } else {
+            std::f64::consts::PI
+        };
+        Self {
+            centre,
+            radius,
+            axis,
+            spread,
+            spread_cos: spread.cos(),
+            spread_sin: spread.sin(),
+        }
+    }
+}
+
+/// [`RegionBound`]s as columns, one entry per region.
+#[derive(Clone, Debug, Default)]
+pub(super) struct BoundSet {
+    centre: [Vec<f64>; 3],
+    radius: Vec<f64>,
+    axis: [Vec<f64>; 3],
+    /// Whether the cone's half-angle is under 90 degrees (else it bounds nothing).
+    narrow: Vec<bool>,
+    spread_cos: Vec<f64>,
+    spread_sin: Vec<f64>,
+}
+
+impl BoundSet {
+    /// An upper bound of the multiplier of `frustum`'s view over region `i`: 0 when
+    /// its sphere lies outside the frustum or (back faces culled) every normal faces
+    /// away; the view's clamp when the sphere reaches the eye's plane.
+    pub(super) fn multiplier(&self, i: usize, frustum: &Frustum) -> f64 {
+        let mut out = [0.0];
+        self.multipliers_into(frustum, i, &mut out);
+        out[0]
+    }
+
+    /// Appends `bound`.
+    pub(super) fn push(&mut self, bound: &RegionBound) {
+        for k in 0..3 {
+            self.centre[k].push(bound.centre[k]);
+            self.axis[k].push(bound.axis[k]);
+        }
+        self.radius.push(bound.radius);
+        self.narrow.push(bound.spread < std::f64::consts::FRAC_PI_2);
+        self.spread_cos.push(bound.spread_cos);
+        self.spread_sin.push(bound.spread_sin);
+    }
+
+    /// Replaces region `i`'s bound with `bound`.
+    pub(super) fn set(&mut self, i: usize, bound: &RegionBound) {
+        for k in 0..3 {
+            self.centre[k][i] = bound.centre[k];
+            self.axis[k][i] = bound.axis[k];
+        }
+        self.radius[i] = bound.radius;
+        self.narrow[i] = bound.spread < std::f64::consts::FRAC_PI_2;
+        self.spread_cos[i] = bound.spread_cos;
+        self.spread_sin[i] = bound.spread_sin;
+    }
+
+    /// Writes into `out` the rank `ceil(base * bound)` each region from `first` on
+    /// needs under `frustum` (saturated at `u32::MAX`), one per slot of `out`.
+    pub(super) fn needs_into(&self, frustum: &Frustum, base: f64, first: usize, out: &mut [u32]) {
+        let mut bounds = [0.0; 64];
+        for (c, dst) in out.chunks_mut(bounds.len()).enumerate() {
+            let bounds = &mut bounds[..dst.len()];
+            self.multipliers_into(frustum, first + c * 64, bounds);
+            for (slot, &b) in dst.iter_mut().zip(bounds.iter()) {
+                // `as` saturates: u32::MAX for a bound past it.
+                *slot = (base * b).ceil() as u32;
+            }
+        }
+    }
+
+    /// Writes into `out` the upper bound of the multiplier of `frustum`'s view over
+    /// each region from `first` on, with the loop compiled for x86-64-v3 (four lanes
+    /// of AVX) where the CPU has it: the same operations, so the same bits (nothing
+    /// fused, no approximate instruction).
+    fn multipliers_into(&self, frustum: &Frustum, first: usize, out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has every feature the function is compiled with.
+            #[allow(unsafe_code)]
+            unsafe {
+                self.multipliers_into_v3(frustum, first, out);
+            }
+            return;
+        }
+        self.multipliers_body(frustum, first, out);
+    }
+
+    /// [`multipliers_body`](Self::multipliers_body) compiled with the x86-64-v3
+    /// features.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    fn multipliers_into_v3(&self, frustum: &Frustum, first: usize, out: &mut [f64]) {
+        self.multipliers_body(frustum, first, out);
+    }
+
+    /// The bounds: [`BoundSet::multiplier`]'s cases, computed for all and selected, so
+    /// that the loop has no branch and vectorizes. Always inlined, so that each
+    /// caller's target features apply to it.
+    ///
+    /// The angle bound (back faces culled or not): normals lie within `spread` of the
+    /// axis and directions to the eye within `seen` of the centre's (at angle `off`
+    /// from the axis), so a normal meets a direction to the eye at an angle of at least
+    /// `off - spread - seen` (front) and at most `off + spread + seen` (its cosine's
+    /// least value; the back's bound). Cosines of sums, without trigonometric calls.
+    #[inline(always)]
+    fn multipliers_body(&self, frustum: &Frustum, first: usize, out: &mut [f64]) {
+        let view = frustum.view;
+        let n = out.len();
+        // Every column cut to `n` entries, so that the loop needs no bounds check.
+        fn cut<T>(column: &[T], first: usize, n: usize) -> &[T] {
+            &column[first..first + n]
+        }
+        let [cx, cy, cz] = self.centre.each_ref().map(|c| cut(c, first, n));
+        let [ax, ay, az] = self.axis.each_ref().map(|a| cut(a, first, n));
+        let (radius, narrow) = (cut(&self.radius, first, n), cut(&self.narrow, first, n));
+        let (sc, ss) = (
+            cut(&self.spread_cos, first, n),
+            cut(&self.spread_sin, first, n),
+        );
+        let planes = frustum.planes.map(|p| p.to_array());
+        let (w, eye) = (frustum.depth.to_array(), view.eye.to_array());
+        let (slope, max, cull) = (frustum.depth_slope, view.max, view.cull_back_faces);
+        let scale = view.focal_pixels * view.focal_pixels / view.reference;
+        // Selects rather than `f64::min`/`max`, whose NaN rules cost blends.
+        let lesser = |a: f64, b: f64| if a < b { a } else { b };
+        let greater = |a: f64, b: f64| if a > b { a } else { b };
+        for i in 0..n {
+            let (x, y, z, r) = (cx[i], cy[i], cz[i], radius[i]);
+            let plane = |q: [f64; 4]| q[0] * x + q[1] * y + q[2] * z + q[3];
+            // Outside the frustum: some plane has the whole sphere on its far side.
+            let inside = planes
+                .iter()
+                .fold(f64::INFINITY, |m, &q| lesser(m, plane(q) + r));
+            let nearest = plane(w) - r * slope;
+            let (ex, ey, ez) = (eye[0] - x, eye[1] - y, eye[2] - z);
+            let d = (ex * ex + ey * ey + ez * ez).sqrt();
+            let seen_sin = r / d;
+            let off_cos = greater(
+                lesser((ax[i] * ex + ay[i] * ey + az[i] * ez) / d, 1.0),
+                -1.0,
+            );
+            let seen_cos = greater(1.0 - seen_sin * seen_sin, 0.0).sqrt();
+            let off_sin = greater(1.0 - off_cos * off_cos, 0.0).sqrt();
+            // theta = spread + seen, in [0, pi).
+            let theta_cos = sc[i] * seen_cos - ss[i] * seen_sin;
+            let theta_sin = ss[i] * seen_cos + sc[i] * seen_sin;
+            // cos(off - theta) when off > theta, else 1.
+            let front = if off_cos >= theta_cos {
+                1.0
+            } else {
+                off_cos * theta_cos + off_sin * theta_sin
+            };
+            // The back: cos(pi - off - theta) = -cos(off + theta), 1 when off + theta
+            // >= pi.
+            let back = if -off_cos >= theta_cos {
+                1.0
+            } else {
+                -(off_cos * theta_cos - off_sin * theta_sin)
+            };
+            let facing = if cull { front } else { greater(front, back) };
+            let cos = if narrow[i] && d > r {
+                greater(facing, 0.0)
+            } else {
+                1.0
+            };
+            let area = scale * cos * (d + r) / (nearest * nearest * nearest);
+            let bound = if nearest > 0.0 {
+                lesser(area, max)
+            } else {
+                max
+            };
+            out[i] = if inside < 0.0 { 0.0 } else { bound };
+        }
+    }
+}
