@@ -157,13 +157,12 @@ impl BoundSet {
     }
 
     /// Writes into `out` the upper bound of the multiplier of `frustum`'s view over
-    /// each region from `first` on, with the loop compiled for x86-64-v3 (four lanes
-    /// of AVX) where the CPU has it: the same operations, so the same bits (nothing
-    /// fused, no approximate instruction).
+    /// each region from `first` on, with the loop compiled for AVX2 (four lanes) where
+    /// the CPU has it: the same operations, so the same bits (nothing fused, no
+    /// approximate instruction).
     fn multipliers_into(&self, frustum: &Frustum, first: usize, out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has every feature the function is compiled with.
             #[allow(unsafe_code)]
             unsafe {
@@ -174,10 +173,10 @@ impl BoundSet {
         self.multipliers_body(frustum, first, out);
     }
 
-    /// [`multipliers_body`](Self::multipliers_body) compiled with the x86-64-v3
-    /// features.
+    /// [`multipliers_body`](Self::multipliers_body) compiled with AVX2 (AVX's 256-bit
+    /// registers are what the loop needs; no fused multiply-add is enabled).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+    #[target_feature(enable = "avx,avx2")]
     fn multipliers_into_v3(&self, frustum: &Frustum, first: usize, out: &mut [f64]) {
         self.multipliers_body(frustum, first, out);
     }
