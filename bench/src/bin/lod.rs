@@ -23,6 +23,9 @@
 //! of the pool receives per frame (20 per new entry: site and rank). The visible sets
 //! are computed on the CPU (`LodPool::fades_into`), outside the timing.
 //!
+//! `LOD_DRAW_AHEAD=a` sets the pool's draw-ahead fraction (default [`DRAW_AHEAD`]),
+//! to compare with and without it on one binary.
+//!
 //! For comparison, `stratified` redraws `N` and `1.01 N` samples in today's stratified
 //! order and counts the samples that kept their place.
 
@@ -30,7 +33,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use strata_engine::sample::lod::ViewLod;
-use strata_engine::sample::{LodPool, PoolChange, SampleSite, Sampler};
+use strata_engine::sample::{DRAW_AHEAD, LodPool, PoolChange, SampleSite, Sampler};
 use strata_systems::scene::Scene;
 
 const WIDTH: f64 = 1280.0;
@@ -160,11 +163,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.segments().len(),
     );
 
+    let ahead = match std::env::var("LOD_DRAW_AHEAD") {
+        Ok(a) => a.parse()?,
+        Err(_) => DRAW_AHEAD,
+    };
     let t = Instant::now();
     let budget = 8_000_000;
-    let prefix = LodPool::new(s, SEED, base as u32, budget);
+    let prefix = LodPool::new(s, SEED, base as u32, budget).with_draw_ahead(ahead);
     println!(
-        "Pool of ranks 0..{base:.0}: built in {:.0} ms ({:.1} MB of sites and ranks).\n",
+        "Pool of ranks 0..{base:.0}: built in {:.0} ms ({:.1} MB of sites and ranks); draw-ahead {ahead}.\n",
         t.elapsed().as_secs_f64() * 1e3,
         prefix.len() as f64 * 20.0 / 1e6
     );
