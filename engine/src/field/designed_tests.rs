@@ -443,11 +443,7 @@ fn designed_fields_are_bit_identical_across_runs_and_thread_counts() {
     let mesh = shapes::genus2(1.0, 2).expect("genus 2");
     let design = Design::default();
     let one = design.build(&mesh).expect("field");
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .expect("pool");
-    let three = pool.install(|| design.build(&mesh).expect("field"));
+    let three = crate::on_threads(3, || design.build(&mesh).expect("field"));
     assert_eq!(one, three);
 }
 
@@ -462,12 +458,6 @@ fn multigrid_designed_fields_are_bit_identical_across_thread_counts() {
         solver: crate::field::LinearSolver::Multigrid,
         ..Design::default()
     };
-    let build = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        pool.install(|| design.build(&mesh).expect("field"))
-    };
+    let build = |threads: usize| crate::on_threads(threads, || design.build(&mesh).expect("field"));
     assert_eq!(build(1), build(3));
 }

@@ -344,11 +344,7 @@ fn parallel_products_equal_one_thread_bit_for_bit() {
     }
     let x = rhs(n, c64::new);
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        pool.install(|| {
+        crate::on_threads(threads, || {
             let p = a.permuted(&order, &position);
             let product = p.matmul(&a.adjoint()).matmul(&p);
             let mut y = vec![c64::new(0.0, 0.0); n];

@@ -482,11 +482,7 @@ mod tests {
         let context = SplitContext::new(&mesh, &field, &[], &options);
         let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("pool");
-            pool.install(|| {
+            crate::on_threads(threads, || {
                 parameterize_segment_with_splitting(&mesh, &field, &context, &faces, &options)
             })
             .expect("split")
