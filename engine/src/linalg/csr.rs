@@ -19,11 +19,16 @@ pub const PARALLEL_ROWS: usize = 32_768;
 /// Rows per block of a parallel pass, at least.
 const MIN_BLOCK_ROWS: usize = 4096;
 
-/// The rows `0..rows` cut into consecutive blocks for a parallel pass: a few per thread
-/// so that work stealing can even out uneven rows. The results never depend on the cut.
-fn row_blocks(rows: usize) -> Vec<Range<usize>> {
+/// Rows per block of a parallel pass over `rows` rows: a few blocks per thread so that
+/// work stealing can even out uneven rows. The results never depend on the cut.
+fn block_rows(rows: usize) -> usize {
     let blocks = 4 * rayon::current_num_threads().max(1);
-    let size = rows.div_ceil(blocks).max(MIN_BLOCK_ROWS);
+    rows.div_ceil(blocks).max(MIN_BLOCK_ROWS)
+}
+
+/// The rows `0..rows` cut into consecutive blocks of [`block_rows`] rows.
+fn row_blocks(rows: usize) -> Vec<Range<usize>> {
+    let size = block_rows(rows);
     (0..rows)
         .step_by(size)
         .map(|start| start..(start + size).min(rows))
@@ -156,7 +161,7 @@ impl<S: Scalar> Csr<S> {
         if self.rows < PARALLEL_ROWS {
             rows_from(0, y);
         } else {
-            let size = row_blocks(self.rows)[0].len();
+            let size = block_rows(self.rows);
             y.par_chunks_mut(size)
                 .enumerate()
                 .for_each(|(b, out)| rows_from(b * size, out));
