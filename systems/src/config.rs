@@ -80,6 +80,10 @@ pub struct SurfaceConfig {
     /// larger makes fewer, more distorted charts. Range (0, pi]; default: the
     /// engine's, 60 degrees.
     pub chart_angle: f64,
+    /// Whether neighbouring pieces of a split segment are merged back where their
+    /// union parameterizes validly: fewer, larger segments. Default: the engine's,
+    /// true.
+    pub merge_pieces: bool,
 }
 
 impl Default for SurfaceConfig {
@@ -90,6 +94,7 @@ impl Default for SurfaceConfig {
             angle_criterion: engine.angle_criterion,
             isotropy_threshold: engine.isotropy_threshold,
             chart_angle: engine.chart_angle,
+            merge_pieces: engine.merge_pieces,
         }
     }
 }
@@ -326,6 +331,7 @@ impl SceneConfig {
             angle_criterion: self.surface.angle_criterion,
             isotropy_threshold: self.surface.isotropy_threshold,
             chart_angle: self.surface.chart_angle,
+            merge_pieces: self.surface.merge_pieces,
         }
     }
 
@@ -389,7 +395,7 @@ mod tests {
             segment: (beta: 0.5, sigma: 2.0, seed: 11),
             param: (gamma: 0.25, isotropy_threshold: 1.5, max_stretch: 2.5),
             curve: (max_cell_share: 0.001, boundary_level: 9, max_level: 18, leaf_levels: 10),
-            surface: (min_segment_faces: 5, angle_criterion: Max, isotropy_threshold: 1.3, chart_angle: 0.5),
+            surface: (min_segment_faces: 5, angle_criterion: Max, isotropy_threshold: 1.3, chart_angle: 0.5, merge_pieces: false),
         )"#;
         let s = SceneConfig::from_ron(text, Path::new("all.ron")).expect("valid");
         let want = SurfaceOptions {
@@ -413,13 +419,14 @@ mod tests {
             angle_criterion: AngleCriterion::Max,
             isotropy_threshold: 1.3,
             chart_angle: 0.5,
+            merge_pieces: false,
         };
         assert_eq!(s.surface_options(), want);
         // Every value above differs from its default, so none was taken from there.
         let d = SurfaceOptions::default();
         assert!(d.segment.beta != 0.5 && d.segment.sigma != 2.0 && d.segment.seed != 11);
         assert!(d.param.gamma != 0.25 && d.param.isotropy_threshold != 1.5);
-        assert!(d.param.max_stretch != 2.5 && d.chart_angle != 0.5);
+        assert!(d.param.max_stretch != 2.5 && d.chart_angle != 0.5 && d.merge_pieces);
         assert!(d.curve.max_cell_share != 0.001 && d.curve.boundary_level != 9);
         assert!(d.curve.max_level != 18 && d.curve.leaf_levels != 10);
         assert!(d.min_segment_faces != 5 && d.angle_criterion != AngleCriterion::Max);

@@ -35,6 +35,8 @@ pub struct SurfaceSummary {
     pub segments: usize,
     /// Splits of invalid segments.
     pub splits: usize,
+    /// Merges of neighbouring pieces back into one valid segment.
+    pub merges: usize,
     /// Segments with the isotropic fallback.
     pub isotropic_segments: usize,
     /// Singularities found.
@@ -77,6 +79,7 @@ impl Scene {
             segments_before_split: pre.report.segments_before_split,
             segments: pre.report.segments,
             splits: pre.report.splits,
+            merges: pre.report.merges,
             isotropic_segments: pre.report.isotropic_segments,
             singularities: pre.segmentation.singularities.len(),
         });

@@ -65,7 +65,7 @@ impl SurfaceOptions {
     /// A stable key of the settings that a segment's parameterization with splitting
     /// ([`parameterize_segment_with_splitting`](super::parameterize_segment_with_splitting)
     /// and its [`SplitContext`](super::SplitContext)) reads: the parameterization
-    /// settings, `min_segment_faces`, `angle_criterion` and the walk's `sigma`. Settings
+    /// settings, `min_segment_faces`, `angle_criterion`, `merge_pieces` and the walk's `sigma`. Settings
     /// it does not read (seeding, cells, isotropic charts) do not change the key.
     ///
     /// ```
@@ -86,6 +86,7 @@ impl SurfaceOptions {
             angle_criterion,
             isotropy_threshold: _,
             chart_angle: _,
+            merge_pieces,
         } = self;
         let SegmentOptions {
             beta: _,
@@ -107,6 +108,7 @@ impl SurfaceOptions {
             .float(*max_stretch)
             .word(*min_segment_faces as u64)
             .word(criterion)
+            .word(u64::from(*merge_pieces))
             .float(*sigma)
             .finish()
     }
@@ -120,7 +122,8 @@ mod tests {
     fn every_setting_read_changes_the_key_and_no_other_does() {
         let base = SurfaceOptions::default();
         let key = base.parameterization_key();
-        let read: [fn(&mut SurfaceOptions); 6] = [
+        let read: [fn(&mut SurfaceOptions); 7] = [
+            |o| o.merge_pieces = !o.merge_pieces,
             |o| o.param.gamma *= 0.5,
             |o| o.param.isotropy_threshold += 0.01,
             |o| o.param.max_stretch += 0.1,

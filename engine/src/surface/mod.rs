@@ -22,6 +22,7 @@ mod build_control;
 mod cells;
 pub mod incremental;
 mod key;
+pub mod merge;
 pub mod refine;
 mod segmentation;
 
@@ -88,6 +89,10 @@ pub struct SurfaceOptions {
     /// larger makes fewer, more distorted charts. Range (0, pi]; default
     /// [`CHART_NORMAL_ANGLE`](crate::segment::CHART_NORMAL_ANGLE) (60 degrees).
     pub chart_angle: f64,
+    /// Whether neighbouring pieces of a split segment are merged back where their union
+    /// parameterizes validly ([`merge`]): fewer, larger segments for a few small extra
+    /// factorizations. Default true.
+    pub merge_pieces: bool,
 }
 
 /// The angle that the validity test compares with `gamma`.
@@ -111,6 +116,7 @@ impl Default for SurfaceOptions {
             angle_criterion: AngleCriterion::Mean,
             isotropy_threshold: crate::segment::seeds::ISOTROPY_THRESHOLD,
             chart_angle: crate::segment::CHART_NORMAL_ANGLE,
+            merge_pieces: true,
         }
     }
 }
@@ -203,6 +209,9 @@ pub struct SurfaceReport {
     pub segments: usize,
     /// Segments split because their parameterization was invalid.
     pub splits: usize,
+    /// Pairs of neighbouring pieces of a split segment merged back because their union
+    /// is valid ([`merge`]).
+    pub merges: usize,
     /// Final segments parameterized with the isotropic fallback frame: those whose
     /// field is isotropic (mean spacing ratio under `isotropy_threshold`), those no
     /// split made valid with the field's frame, and single faces (also counted in

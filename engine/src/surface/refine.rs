@@ -16,6 +16,9 @@
 //! `isotropic_fallback`; it is sampled with the right density but without
 //! anisotropy); a piece for which even that flips is halved again, down to single
 //! triangles, which are always valid. So every face ends in a parameterized piece.
+//! Finally neighbouring pieces whose union is valid are merged back
+//! ([`merge`](super::merge); `SurfaceOptions::merge_pieces`), since halving goes past
+//! where the segment becomes valid.
 //!
 //! Cost: one sparse factorization per parameterization, one random walk per split;
 //! segments in parallel with rayon, and within a segment each piece as soon as its
@@ -27,6 +30,7 @@ use std::sync::{Mutex, OnceLock, PoisonError};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
+use super::merge::{MergeLimit, merge_pieces};
 use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
@@ -55,6 +59,7 @@ pub fn parameterize_with_splitting(
     for result in results {
         let (params, r) = result?;
         report.splits += r.splits;
+        report.merges += r.merges;
         report.single_face_segments += r.single_face_segments;
         accepted.extend(params);
     }
@@ -189,6 +194,17 @@ pub fn parameterize_segment_with_splitting(
         }
         small = again;
     }
+    let (mut accepted, merges) = if options.merge_pieces {
+        let limit = MergeLimit::for_mesh(mesh.face_count());
+        merge_pieces(mesh, field, cut, accepted, options, limit)
+    } else {
+        (accepted, 0)
+    };
+    report.merges = merges;
+    report.single_face_segments = accepted
+        .iter()
+        .filter(|p| p.faces.len() == 1 && p.report.isotropic_fallback)
+        .count();
     accepted.sort_by_key(lowest_face);
     Ok((accepted, report))
 }
@@ -285,7 +301,7 @@ impl Splitter<'_> {
 }
 
 /// The optional stricter angle test (the mean is part of `report.valid` already).
-fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
+pub(super) fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
     match options.angle_criterion {
         AngleCriterion::Mean => true,
         AngleCriterion::Max => {

@@ -145,8 +145,13 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
     );
     if let Some(s) = &scene.surface {
         println!(
-            "surface: {} singularities; {} segments after segmentation, {} after {} splits of invalid ones ({} with the isotropic fallback)",
-            s.singularities, s.segments_before_split, s.segments, s.splits, s.isotropic_segments
+            "surface: {} singularities; {} segments after segmentation, {} after {} splits of invalid ones and {} merges of valid neighbours ({} with the isotropic fallback)",
+            s.singularities,
+            s.segments_before_split,
+            s.segments,
+            s.splits,
+            s.merges,
+            s.isotropic_segments
         );
     }
     if let Some(path) = &args.out {

@@ -135,9 +135,10 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         .filter(|s| s.isotropic_fallback)
         .count();
     println!(
-        "parameterization: {} segments after {} splits ({} isotropic charts, {} field-aligned), {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
+        "parameterization: {} segments after {} splits and {} merges ({} isotropic charts, {} field-aligned), {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
         report.segment_count,
         report.splits,
+        split.merges,
         report.charts,
         report.segment_count - report.charts,
         param_time.as_secs_f64()
