@@ -198,9 +198,68 @@ impl FaceSet {
     /// the same face when the lowest face reaches no other. `None` for an empty set.
     pub fn far_pair(&self, mesh: &TriMesh, cut: &[bool]) -> Option<[u32; 2]> {
         let start = self.lowest()?;
-        let a = self.hop_distances(mesh, cut, start).farthest;
-        let b = self.hop_distances(mesh, cut, a).farthest;
+        let places = self.places(mesh);
+        let a = self.local_hops(mesh, cut, &places, start).1;
+        let b = self.local_hops(mesh, cut, &places, a).1;
         Some([a, b])
+    }
+
+    /// Per face of the set, in the set's order, whether it is strictly nearer (in hops,
+    /// not crossing `cut`) to `b` than to `a`. Equal to comparing two
+    /// [`hop_distances`](Self::hop_distances), with arrays the size of the set.
+    pub fn nearer_to_second(&self, mesh: &TriMesh, cut: &[bool], a: u32, b: u32) -> Vec<bool> {
+        let places = self.places(mesh);
+        let (from_a, _) = self.local_hops(mesh, cut, &places, a);
+        let (from_b, _) = self.local_hops(mesh, cut, &places, b);
+        self.faces
+            .iter()
+            .map(|&f| {
+                // Every set face has a place.
+                let i = places.index(f).unwrap_or(0);
+                from_b[i] < from_a[i]
+            })
+            .collect()
+    }
+
+    /// The set's faces, ascending, with their places.
+    fn places(&self, mesh: &TriMesh) -> MaskFaces {
+        let mut sorted = self.faces.clone();
+        sorted.sort_unstable();
+        MaskFaces::from_sorted(sorted, mesh.face_count())
+    }
+
+    /// As [`hop_distances`](Self::hop_distances), but distances per place in `places`
+    /// (the set's faces, ascending) instead of per mesh face, and the farthest face.
+    fn local_hops(
+        &self,
+        mesh: &TriMesh,
+        cut: &[bool],
+        places: &MaskFaces,
+        start: u32,
+    ) -> (Vec<u32>, u32) {
+        let mut dist = vec![u32::MAX; places.faces().len()];
+        let Some(s) = places.index(start) else {
+            return (dist, start);
+        };
+        let mut queue = VecDeque::from([(start, s)]);
+        dist[s] = 0;
+        let mut last = start;
+        while let Some((f, i)) = queue.pop_front() {
+            last = f;
+            for (k, &g) in mesh.face_neighbors()[f as usize].iter().enumerate() {
+                let e = mesh.face_edges()[f as usize][k] as usize;
+                if g == NONE || cut[e] || !self.mask[g as usize] {
+                    continue;
+                }
+                if let Some(j) = places.index(g)
+                    && dist[j] == u32::MAX
+                {
+                    dist[j] = dist[i] + 1;
+                    queue.push_back((g, j));
+                }
+            }
+        }
+        (dist, last)
     }
 
     /// Per mesh face, `label(i)` for the `i`-th face of the set and `NONE` elsewhere.
@@ -527,6 +586,45 @@ mod tests {
             let top = f / 8 >= 2;
             let expected = [[0, 1, 2, NONE], [3, 4, 5, NONE]][usize::from(top)][(f / 2) % 4];
             assert_eq!(p, expected, "face {f}");
+        }
+    }
+
+    /// The set-sized sweeps agree with the per-mesh-face ones they replace: far pairs
+    /// from two sweeps of `hop_distances`, and the nearer of two faces from comparing
+    /// their distances, on small sets (searched places), large ones (a table) and the
+    /// whole mesh, with and without a cut.
+    #[test]
+    fn set_sized_sweeps_equal_the_mesh_sized_ones() {
+        let mesh = crate::mesh::shapes::sphere(1.0, 3).expect("sphere");
+        let n = mesh.face_count() as u32;
+        let p = mesh.positions();
+        let blocked: Vec<bool> = mesh
+            .edges()
+            .iter()
+            .map(|[a, b]| p[*a as usize].z.abs() < 0.3 && p[*b as usize].z.abs() < 0.3)
+            .collect();
+        let sets = [
+            (0..n).filter(|f| f % 7 < 3).rev().collect::<Vec<u32>>(),
+            (0..n / 20).collect(),
+            (0..n).rev().collect(),
+        ];
+        for cut in [no_cut(&mesh), blocked] {
+            for faces in &sets {
+                let set = FaceSet::new(&mesh, faces);
+                let start = set.lowest().expect("non-empty");
+                let a = set.hop_distances(&mesh, &cut, start).farthest;
+                let b = set.hop_distances(&mesh, &cut, a).farthest;
+                assert_eq!(set.far_pair(&mesh, &cut), Some([a, b]));
+                let (x, y) = (faces[0], faces[faces.len() / 2]);
+                let dx = set.hop_distances(&mesh, &cut, x).dist;
+                let dy = set.hop_distances(&mesh, &cut, y).dist;
+                let want: Vec<bool> = set
+                    .faces()
+                    .iter()
+                    .map(|&f| dy[f as usize] < dx[f as usize])
+                    .collect();
+                assert_eq!(set.nearer_to_second(&mesh, &cut, x, y), want);
+            }
         }
     }
 }

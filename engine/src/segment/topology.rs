@@ -45,6 +45,7 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use super::paths::UnionFind;
+use crate::mesh::face_set::MaskFaces;
 use crate::mesh::{NONE, TriMesh};
 
 /// `component_root` of vertices reached from the (pinched) boundary.
@@ -87,11 +88,12 @@ impl CutPatch {
         let mut faces = faces.to_vec();
         faces.sort_unstable();
         faces.dedup();
-        let mut local = vec![NONE; mesh.face_count()];
-        for (i, &f) in faces.iter().enumerate() {
-            local[f as usize] = i as u32;
-        }
-        let across: Vec<[u32; 3]> = faces
+        // Places by search or table, not a per-mesh-face array: a small patch of a
+        // large mesh costs in proportion to the patch (splitting tests every piece).
+        let places = MaskFaces::from_sorted(faces, mesh.face_count());
+        let local = |g: u32| places.index(g).map_or(NONE, |i| i as u32);
+        let across: Vec<[u32; 3]> = places
+            .faces()
             .iter()
             .map(|&f| {
                 mesh.face_edges()[f as usize].map(|e| {
@@ -101,10 +103,11 @@ impl CutPatch {
                     }
                     let [f0, f1] = mesh.edge_faces()[e];
                     let g = if f0 == f { f1 } else { f0 };
-                    if g == f { NONE } else { local[g as usize] }
+                    if g == f { NONE } else { local(g) }
                 })
             })
             .collect();
+        let faces = places.into_faces();
         let mut corners = UnionFind::new(3 * faces.len());
         for (lf, sides) in across.iter().enumerate() {
             let t = mesh.triangles()[faces[lf] as usize];

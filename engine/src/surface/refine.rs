@@ -381,13 +381,8 @@ fn halve(mesh: &TriMesh, cut: &[bool], set: &FaceSet) -> Vec<Vec<u32>> {
     if let Some([a, b]) = set.far_pair(mesh, cut)
         && a != b
     {
-        let from_a = set.hop_distances(mesh, cut, a).dist;
-        let from_b = set.hop_distances(mesh, cut, b).dist;
-        let faces = set.faces();
-        let labels = set.labels(|i| {
-            let f = faces[i] as usize;
-            (from_b[f] < from_a[f]) as u32
-        });
+        let nearer_b = set.nearer_to_second(mesh, cut, a, b);
+        let labels = set.labels(|i| u32::from(nearer_b[i]));
         let parts = set.parts(mesh, &labels, cut);
         if parts.len() > 1 {
             return parts;
