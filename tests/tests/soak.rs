@@ -64,6 +64,8 @@ fn in_child(test: &str, soak: impl FnOnce() -> SoakReport) {
         // is what a leak moves (bench README, "Soak").
         .env("MALLOC_MMAP_THRESHOLD_", "131072")
         .env("MALLOC_ARENA_MAX", "1")
+        // And each reading counts live pages only (see `strata_bench::soak::TRIM_ENV`).
+        .env(strata_bench::soak::TRIM_ENV, "1")
         .output()
         .expect("run the soak in a child process");
     let stdout = String::from_utf8_lossy(&out.stdout);
