@@ -154,7 +154,7 @@ fn status_field(name: &str) -> Option<u64> {
 }
 
 /// When this variable is set, every reading first returns the allocator's free pages to
-/// the system ([`trim_allocator`]), so that the resident set counts what is live and
+/// the system (glibc's `malloc_trim(0)`), so that the resident set counts what is live and
 /// not which freed pages glibc happens to keep. The test suite's bounded soak sets it:
 /// its two readings (one period apart) otherwise catch glibc holding a field rebuild's
 /// freed pages or not, a step of 2-3 MiB either way with no trend.
