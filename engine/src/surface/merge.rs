@@ -17,7 +17,7 @@
 //! bounded by a few small factorizations per piece. The result depends on the pieces
 //! alone, never on the thread count.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap};
 
 use rayon::prelude::*;
 
@@ -61,16 +61,18 @@ pub(crate) fn merge_pieces(
     }
     pieces.sort_by_key(lowest_face);
     let mut merges = 0;
-    // Pairs (by lowest faces, which identify a piece) that failed.
-    let mut failed: BTreeSet<(u32, u32)> = BTreeSet::new();
+    // Pairs that failed, each piece named by its lowest face and its size: a piece only
+    // grows, so a merged piece is never mistaken for the piece it grew from.
+    let mut failed: BTreeSet<PairKey> = BTreeSet::new();
+    let name = |p: &SegmentParam| (lowest_face(p), p.faces.len());
     loop {
         let pairs = adjacent_pairs(mesh, cut, &pieces);
-        let mut candidates: Vec<(usize, u32, u32, usize, usize)> = pairs
+        let mut candidates: Vec<(usize, PairKey, usize, usize)> = pairs
             .into_iter()
             .filter_map(|(i, j)| {
-                let key = (lowest_face(&pieces[i]), lowest_face(&pieces[j]));
+                let key = [name(&pieces[i]), name(&pieces[j])];
                 let size = pieces[i].faces.len() + pieces[j].faces.len();
-                (size <= limit.0 && !failed.contains(&key)).then_some((size, key.0, key.1, i, j))
+                (size <= limit.0 && !failed.contains(&key)).then_some((size, key, i, j))
             })
             .collect();
         if candidates.is_empty() {
@@ -79,16 +81,16 @@ pub(crate) fn merge_pieces(
         candidates.sort_unstable();
         let mut used = vec![false; pieces.len()];
         let mut round = Vec::new();
-        for &(_, a, b, i, j) in &candidates {
+        for &(_, key, i, j) in &candidates {
             if !used[i] && !used[j] {
                 used[i] = true;
                 used[j] = true;
-                round.push((a, b, i, j));
+                round.push((key, i, j));
             }
         }
         let unions: Vec<Option<SegmentParam>> = round
             .par_iter()
-            .map(|&(_, _, i, j)| {
+            .map(|&(_, i, j)| {
                 let faces: Vec<u32> = pieces[i]
                     .faces
                     .iter()
@@ -102,7 +104,7 @@ pub(crate) fn merge_pieces(
             .collect();
         let mut gone = vec![false; pieces.len()];
         let mut merged = Vec::new();
-        for (&(a, b, i, j), union) in round.iter().zip(unions) {
+        for (&(key, i, j), union) in round.iter().zip(unions) {
             match union {
                 Some(p) => {
                     gone[i] = true;
@@ -111,7 +113,7 @@ pub(crate) fn merge_pieces(
                     merges += 1;
                 }
                 None => {
-                    failed.insert((a, b));
+                    failed.insert(key);
                 }
             }
         }
@@ -130,6 +132,9 @@ pub(crate) fn merge_pieces(
     (pieces, merges)
 }
 
+/// A pair of pieces, each by its lowest face and its number of faces.
+type PairKey = [(u32, usize); 2];
+
 /// Whether a union may replace its pair: valid by the field's frame (or, if the union
 /// is nearly isotropic and used the fallback frame, valid by that frame's test).
 fn acceptable(p: &SegmentParam, options: &SurfaceOptions) -> bool {
@@ -145,7 +150,7 @@ fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<
             owner.insert(f, i as u32);
         }
     }
-    let mut pairs: BTreeMap<(usize, usize), ()> = BTreeMap::new();
+    let mut pairs: BTreeSet<(usize, usize)> = BTreeSet::new();
     for (i, p) in pieces.iter().enumerate() {
         for &f in &p.faces {
             for (k, &e) in mesh.face_edges()[f as usize].iter().enumerate() {
@@ -156,16 +161,18 @@ fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<
                 if let Some(&j) = owner.get(&g)
                     && j as usize > i
                 {
-                    pairs.insert((i, j as usize), ());
+                    pairs.insert((i, j as usize));
                 }
             }
         }
     }
-    pairs.into_keys().collect()
+    pairs.into_iter().collect()
 }
 
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeMap;
+
     use glam::DVec3;
 
     use super::*;
