@@ -267,6 +267,21 @@ impl SoakReport {
         )
     }
 
+    /// The lowest reading of the last quarter of the run over the warm-up baseline, in
+    /// KiB. Memory kept by the run raises every reading after it, the lowest too; a
+    /// transient (a build's buffers alive at the moment of one reading, an allocator
+    /// step) raises single readings only, so it moves the end point but not this.
+    pub fn floor_growth_kib(&self) -> i64 {
+        let n = self.readings.len();
+        let q = (n / 4).max(1);
+        let floor = self.readings[n.saturating_sub(q)..]
+            .iter()
+            .copied()
+            .min()
+            .unwrap_or(self.end.rss_kib);
+        floor as i64 - self.warm.rss_kib as i64
+    }
+
     /// Growth of the last quarter's peak over the first quarter's, in percent (see
     /// [`quarter_peaks_kib`](Self::quarter_peaks_kib)): the trend a leak makes,
     /// without the allocator's steps of a point-to-point comparison.

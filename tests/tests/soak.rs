@@ -78,15 +78,23 @@ fn in_child(test: &str, soak: impl FnOnce() -> SoakReport) {
     println!("{stdout}");
 }
 
-/// What must hold after the warm-up, whatever the soak.
+/// What must hold after the warm-up, whatever the soak. The resident set is judged by
+/// the lowest reading of the run's last quarter ([`SoakReport::floor_growth_kib`]), not
+/// by the last reading alone: the ECS soak once read +3.2 MiB at its end and +3.6 MiB
+/// at frame 1600 between readings back at the baseline (13.8-14.6 MiB), the buffers of
+/// a build in flight at the moment of a reading. A leak raises the floor with the
+/// rest: the 40 KiB per save that failed this test (+3.4 MiB at the end) stands about
+/// 2.5 MiB over the baseline where the last quarter starts.
 fn check(r: &SoakReport) {
     let allowed = allowed_growth_kib(r.warm.rss_kib);
     assert!(
-        r.growth_kib() <= allowed as i64,
-        "{}: resident set {} -> {} KiB, more than {allowed} KiB; by {}: {:?}",
+        r.floor_growth_kib() <= allowed as i64,
+        "{}: resident set {} -> {} KiB (lowest of the last quarter {:+} KiB), more than \
+         {allowed} KiB; by {}: {:?}",
         r.name,
         r.warm.rss_kib,
         r.end.rss_kib,
+        r.floor_growth_kib(),
         r.unit,
         r.trend
     );
