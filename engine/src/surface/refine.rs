@@ -11,7 +11,9 @@
 //! two most different directions, and both halves are parameterized again. A split
 //! whose parts are not discs or are badly unbalanced (an outlier direction next to a
 //! singularity seeds a region of a few faces) is redone from two faces far apart, so a
-//! segment needs about log2 of its size rounds, not one per outlier. Below
+//! segment needs about log2 of its size rounds, not one per outlier. Pieces of
+//! `WALK_SPLIT_FACES` (4096) faces or more skip the walk and are halved by hops
+//! straight away (the walk's split fails that test for most of them). Below
 //! `min_segment_faces` a segment is parameterized with an isotropic field (flagged
 //! `isotropic_fallback`; it is sampled with the right density but without
 //! anisotropy); a piece for which even that flips is halved again, down to single
@@ -317,8 +319,18 @@ pub(super) fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
 /// rounds instead of about log2 of its size.
 const MIN_SPLIT_SHARE: usize = 8;
 
+/// Pieces from this many faces are halved by hops ([`halve`]) without trying the
+/// walk. The walk's two point seeds rarely split a piece evenly: on the bunny and the
+/// bunny Loop-subdivided twice (constant 3:1 and smooth curvature-aligned fields), the
+/// paper's seeds gave a split that failed the test below for 88% of the pieces (85%
+/// from 20k faces; a part of a few dozen faces beside the rest, in every case
+/// printed), and the far pair for 85%, so most large pieces paid two walks (a sparse
+/// factorization each, about 70% of a split's time) and were then halved anyway. Halving them directly gives the same final piece counts within a
+/// few (bench/README.md, "Halving large pieces").
+const WALK_SPLIT_FACES: usize = 4096;
+
 /// Splits a segment in two by the random walk (section 5.2) and returns the connected
-/// parts.
+/// parts; a piece of [`WALK_SPLIT_FACES`] or more is halved by hops instead.
 ///
 /// The walk is first seeded at the segment's two most different face directions (as
 /// lines), as in the paper. If that split is unbalanced (a part under
@@ -338,6 +350,9 @@ fn split_in_two(
         return Ok(vec![faces.to_vec()]); // a single face: nothing to split
     }
     let set = FaceSet::new(mesh, faces);
+    if faces.len() >= WALK_SPLIT_FACES {
+        return Ok(halve(mesh, cut, &set));
+    }
     let good = |parts: &[Vec<u32>]| {
         parts.len() > 1
             && parts
@@ -510,6 +525,48 @@ mod tests {
         let (four, report4) = run(4);
         assert_eq!(report4, report);
         assert_eq!(four, one);
+    }
+
+    /// From `WALK_SPLIT_FACES` faces a piece is halved by hops: two discs of about half
+    /// the faces each, where the paper's seeds (one in the turned disc) would peel off
+    /// the disc alone.
+    #[test]
+    fn a_large_piece_is_halved_into_two_even_discs() {
+        let mesh = shapes::plane(1.0, 64).expect("plane");
+        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        assert!(faces.len() >= WALK_SPLIT_FACES);
+        let dirs: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .map(|p| {
+                let r = (p.truncate() - glam::DVec2::new(0.2, 0.3)).length();
+                if r < 0.05 { DVec3::Y } else { DVec3::X }
+            })
+            .collect();
+        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
+            .expect("field");
+        let context = SplitContext::new(&mesh, &field, &[], &SurfaceOptions::default());
+        let parts = split_in_two(
+            &mesh,
+            &context.frames,
+            &context.weights,
+            &context.cut,
+            &faces,
+        )
+        .expect("split");
+        assert_eq!(parts.len(), 2);
+        let mut covered: Vec<u32> = parts.concat();
+        covered.sort_unstable();
+        assert_eq!(covered, faces);
+        for p in &parts {
+            assert!(
+                p.len() * 5 >= faces.len() * 2,
+                "part of {} faces out of {}",
+                p.len(),
+                faces.len()
+            );
+            assert!(is_disc(&mesh, p, &context.cut));
+        }
     }
 
     #[test]
