@@ -34,7 +34,7 @@ use crate::param::{SegmentParam, parameterize};
 pub struct MergeLimit(pub usize);
 
 /// The share of the mesh the largest union tried may cover (see [`MergeLimit`]).
-pub const MERGE_SHARE: usize = 64;
+pub const MERGE_SHARE: usize = 32;
 /// The largest union tried on any mesh covers at least this many faces.
 pub const MERGE_MIN_FACES: usize = 2048;
 
