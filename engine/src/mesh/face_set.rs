@@ -31,7 +31,7 @@ pub(crate) struct MaskFaces {
 /// A mask of at least 1/`DENSE_SHARE` of the mesh gets a per-mesh-face table of places:
 /// filling it (one O(F) pass) costs less than the binary searches it saves, which
 /// miss the cache once the mask has hundreds of thousands of faces.
-const DENSE_SHARE: usize = 16;
+pub(crate) const DENSE_SHARE: usize = 16;
 
 /// How [`MaskFaces::index`] finds a face's place.
 #[derive(Clone, Debug)]

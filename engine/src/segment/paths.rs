@@ -25,6 +25,7 @@ use std::collections::BinaryHeap;
 
 use super::singularity::{LineFieldTransport, line_field_transport};
 use crate::field::{TensorField, eigen_in_plane};
+use crate::mesh::face_set::{DENSE_SHARE, MaskFaces};
 use crate::mesh::{NONE, TriMesh};
 
 /// Cost per unit length of an edge that runs exactly along a field line through a field
@@ -295,7 +296,10 @@ impl UnionFind {
 ///   rest of the topology.
 ///
 /// Cost: one Dijkstra over the mesh, O(E log E) for the links, one early-stopped
-/// Dijkstra per lone node.
+/// Dijkstra per lone node. A region of at least 1/16 of the mesh finds its vertices'
+/// places in a per-mesh-vertex table (`MaskFaces`), not by binary search, and lists
+/// its corners and edges by marking, not sorting (bunny subdivided twice, smooth
+/// field, one region of nearly the whole mesh: 1.1 s -> 0.35 s, the same edges).
 pub fn singularity_tree(
     mesh: &TriMesh,
     costs: &[f64],
@@ -326,24 +330,18 @@ pub fn singularity_tree(
     let faces: Vec<u32> = (0..mesh.face_count() as u32)
         .filter(|&f| region[f as usize])
         .collect();
-    let sorted_unique = |mut v: Vec<u32>| {
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
-    let verts = sorted_unique(
-        faces
-            .iter()
-            .flat_map(|&f| mesh.triangles()[f as usize])
-            .collect(),
+    let corners = faces.iter().flat_map(|&f| mesh.triangles()[f as usize]);
+    let places = MaskFaces::from_sorted(
+        distinct_ascending(corners, 3 * faces.len(), mesh.vertex_count()),
+        mesh.vertex_count(),
     );
-    let edges = sorted_unique(
-        faces
-            .iter()
-            .flat_map(|&f| mesh.face_edges()[f as usize])
-            .collect(),
+    let verts = places.faces();
+    let edges = distinct_ascending(
+        faces.iter().flat_map(|&f| mesh.face_edges()[f as usize]),
+        3 * faces.len(),
+        mesh.edge_count(),
     );
-    let at = |v: u32| verts.binary_search(&v).expect("a corner of a region face");
+    let at = |v: u32| places.index(v).expect("a corner of a region face");
     let vertices = Vertices {
         count: verts.len(),
         index: &at,
@@ -378,7 +376,7 @@ pub fn singularity_tree(
     for (i, &r) in reps.iter().enumerate().rev() {
         node_of_source[at(r)] = i as u32;
     }
-    let cell = nearest_source_node(mesh, &verts, &at, &cells, &node_of_source);
+    let cell = nearest_source_node(mesh, verts, &at, &cells, &node_of_source);
     let mut sets = UnionFind::new(k);
     let mut degree = vec![0usize; k];
     for (i, &r) in reps.iter().enumerate() {
@@ -430,6 +428,25 @@ pub fn singularity_tree(
     terminal.sort_unstable();
     terminal.dedup();
     forest_of(mesh, costs, &union, &terminal)
+}
+
+/// The distinct values of `ids` (about `expected` of them, each below `count`),
+/// ascending. A region of at least 1/[`DENSE_SHARE`] of the mesh marks them in a table
+/// of `count` flags and reads it in order; a smaller one sorts, so its cost stays in
+/// proportion to the region.
+fn distinct_ascending(ids: impl Iterator<Item = u32>, expected: usize, count: usize) -> Vec<u32> {
+    if expected * DENSE_SHARE >= count {
+        let mut seen = vec![false; count];
+        for id in ids {
+            seen[id as usize] = true;
+        }
+        (0..count as u32).filter(|&i| seen[i as usize]).collect()
+    } else {
+        let mut v: Vec<u32> = ids.collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
 }
 
 /// Per vertex of `verts` (entry `at(v)`), the node whose source its shortest path
@@ -538,6 +555,27 @@ mod tests {
     use crate::io::shared_mesh;
     use crate::mesh::shapes;
     use crate::segment::singularity::detect_singularities;
+
+    #[test]
+    fn distinct_ascending_is_the_same_by_table_and_by_sort() {
+        // Pseudo-random ids with repeats; `count` decides the strategy.
+        let ids: Vec<u32> = (0..3000u32).map(|i| (i * 7919) % 1000).collect();
+        let mut expected = ids.clone();
+        expected.sort_unstable();
+        expected.dedup();
+        assert_eq!(expected.len(), 1000);
+        // Dense: 3000 ids of 1000 possible values (a table).
+        assert_eq!(
+            distinct_ascending(ids.iter().copied(), 3000, 1000),
+            expected
+        );
+        // Sparse: the same ids among 10^6 possible values (a sort).
+        const { assert!(3000 * DENSE_SHARE < 1_000_000) };
+        assert_eq!(
+            distinct_ascending(ids.into_iter(), 3000, 1_000_000),
+            expected
+        );
+    }
 
     /// Unit direction of edge `e` from its first to its second vertex.
     fn edge_direction(mesh: &TriMesh, e: u32) -> DVec3 {
