@@ -267,6 +267,14 @@ impl SoakReport {
         )
     }
 
+    /// The lower of [`growth_kib`](Self::growth_kib) and
+    /// [`floor_growth_kib`](Self::floor_growth_kib): memory the run keeps raises both,
+    /// a transient at the end point or a build in flight through the last quarter
+    /// raises one.
+    pub fn kept_growth_kib(&self) -> i64 {
+        self.growth_kib().min(self.floor_growth_kib())
+    }
+
     /// The lowest reading of the last quarter of the run over the warm-up baseline, in
     /// KiB. Memory kept by the run raises every reading after it, the lowest too; a
     /// transient (a build's buffers alive at the moment of one reading, an allocator
@@ -622,6 +630,14 @@ pub fn ecs_soak(frames: usize, warm_up: usize, period: usize) -> Result<SoakRepo
                 buffer.samples.len()
             )
             .into());
+        }
+        // The baseline and the end are read with no build in flight: a build's
+        // buffers alive at one reading and not at the other are not memory the run
+        // keeps (the edits' rebuilds can outlast hundreds of sub-millisecond frames).
+        if (frame + 1 == warm_up || frame + 1 == frames)
+            && !strata_systems::ecs::settle(&mut world, &mut schedule, Duration::from_secs(600))
+        {
+            return Err(format!("frame {frame}: a build did not finish in 10 minutes").into());
         }
         recorder.after(frame + 1, entity_counts!(world))?;
     }
