@@ -345,14 +345,14 @@ fn split_in_two(
     cut: &[bool],
     faces: &[u32],
 ) -> Result<Vec<Vec<u32>>, SurfaceError> {
+    if faces.len() >= WALK_SPLIT_FACES {
+        return Ok(halve(mesh, cut, &FaceSet::new(mesh, faces)));
+    }
     let [a, b] = most_different_faces(frames, faces);
     if a == b {
         return Ok(vec![faces.to_vec()]); // a single face: nothing to split
     }
     let set = FaceSet::new(mesh, faces);
-    if faces.len() >= WALK_SPLIT_FACES {
-        return Ok(halve(mesh, cut, &set));
-    }
     let good = |parts: &[Vec<u32>]| {
         parts.len() > 1
             && parts
@@ -441,46 +441,63 @@ mod tests {
     use super::*;
     use crate::mesh::shapes;
 
+    /// The unit plane of `2 n^2` faces with a 3:1 field along x, turned by 90 degrees
+    /// inside the disc of `radius` about `centre`: its split context and all its faces.
+    fn turned_disc_plane(
+        n: u32,
+        centre: glam::DVec2,
+        radius: f64,
+    ) -> (TriMesh, SplitContext, Vec<u32>) {
+        let mesh = shapes::plane(1.0, n).expect("plane");
+        let dirs: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .map(|p| {
+                if (p.truncate() - centre).length() < radius {
+                    DVec3::Y
+                } else {
+                    DVec3::X
+                }
+            })
+            .collect();
+        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
+            .expect("field");
+        let context = SplitContext::new(&mesh, &field, &[], &SurfaceOptions::default());
+        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        (mesh, context, faces)
+    }
+
+    /// The walk's split of the whole mesh from the paper's seeds (the two most
+    /// different directions); asserts that it fails the split test, as the cases
+    /// below need.
+    fn assert_paper_split_fails(mesh: &TriMesh, context: &SplitContext, faces: &[u32]) {
+        let [a, b] = most_different_faces(&context.frames, faces);
+        let all = FaceSet::all(mesh);
+        let labels = random_walk(mesh, &context.weights, all.mask(), &[a, b]).expect("walk");
+        let paper = all.parts(mesh, &labels, &context.cut);
+        let smallest = paper.iter().map(Vec::len).min().unwrap_or(0);
+        assert!(
+            smallest * MIN_SPLIT_SHARE < faces.len()
+                || paper.iter().any(|p| !is_disc(mesh, p, &context.cut)),
+            "the case must exercise the fallback: parts {:?}",
+            paper.iter().map(Vec::len).collect::<Vec<_>>()
+        );
+    }
+
+    fn split_all(mesh: &TriMesh, context: &SplitContext, faces: &[u32]) -> Vec<Vec<u32>> {
+        split_in_two(mesh, &context.frames, &context.weights, &context.cut, faces).expect("split")
+    }
+
     /// A plane whose field is constant except in a small disc in the middle, where it
     /// is turned by 90 degrees: the paper's seeds (the two most different directions)
     /// include a face of that disc, and the walk gives that seed just the disc, a hole
     /// in the rest of the plane. The split must still give discs of balanced size.
     #[test]
     fn an_outlier_direction_does_not_peel_a_hole_out_of_the_segment() {
-        let mesh = shapes::plane(1.0, 16).expect("plane");
-        let dirs: Vec<DVec3> = mesh
-            .positions()
-            .iter()
-            .map(|p| {
-                let r = (p.truncate() - glam::DVec2::splat(0.5)).length();
-                if r < 0.1 { DVec3::Y } else { DVec3::X }
-            })
-            .collect();
-        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
-            .expect("field");
-        let options = SurfaceOptions::default();
-        let context = SplitContext::new(&mesh, &field, &[], &options);
-        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
-        // The paper's seeds alone: one seed region is a small island.
-        let [a, b] = most_different_faces(&context.frames, &faces);
-        let all = FaceSet::all(&mesh);
-        let labels = random_walk(&mesh, &context.weights, all.mask(), &[a, b]).expect("walk");
-        let paper = all.parts(&mesh, &labels, &context.cut);
-        let smallest = paper.iter().map(Vec::len).min().unwrap_or(0);
-        assert!(
-            smallest * MIN_SPLIT_SHARE < faces.len()
-                || paper.iter().any(|p| !is_disc(&mesh, p, &context.cut)),
-            "the case must exercise the fallback: parts {:?}",
-            paper.iter().map(Vec::len).collect::<Vec<_>>()
-        );
-        let parts = split_in_two(
-            &mesh,
-            &context.frames,
-            &context.weights,
-            &context.cut,
-            &faces,
-        )
-        .expect("split");
+        let (mesh, context, faces) = turned_disc_plane(16, glam::DVec2::splat(0.5), 0.1);
+        assert!(faces.len() < WALK_SPLIT_FACES, "the walk must be tried");
+        assert_paper_split_fails(&mesh, &context, &faces);
+        let parts = split_all(&mesh, &context, &faces);
         assert!(parts.len() >= 2);
         assert_eq!(parts.iter().map(Vec::len).sum::<usize>(), faces.len());
         for p in &parts {
@@ -528,32 +545,14 @@ mod tests {
     }
 
     /// From `WALK_SPLIT_FACES` faces a piece is halved by hops: two discs of about half
-    /// the faces each, where the paper's seeds (one in the turned disc) would peel off
-    /// the disc alone.
+    /// the faces each, where the paper's seeds (one in the turned disc) fail the split
+    /// test.
     #[test]
     fn a_large_piece_is_halved_into_two_even_discs() {
-        let mesh = shapes::plane(1.0, 64).expect("plane");
-        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
+        let (mesh, context, faces) = turned_disc_plane(64, glam::DVec2::new(0.2, 0.3), 0.05);
         assert!(faces.len() >= WALK_SPLIT_FACES);
-        let dirs: Vec<DVec3> = mesh
-            .positions()
-            .iter()
-            .map(|p| {
-                let r = (p.truncate() - glam::DVec2::new(0.2, 0.3)).length();
-                if r < 0.05 { DVec3::Y } else { DVec3::X }
-            })
-            .collect();
-        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
-            .expect("field");
-        let context = SplitContext::new(&mesh, &field, &[], &SurfaceOptions::default());
-        let parts = split_in_two(
-            &mesh,
-            &context.frames,
-            &context.weights,
-            &context.cut,
-            &faces,
-        )
-        .expect("split");
+        assert_paper_split_fails(&mesh, &context, &faces);
+        let parts = split_all(&mesh, &context, &faces);
         assert_eq!(parts.len(), 2);
         let mut covered: Vec<u32> = parts.concat();
         covered.sort_unstable();
