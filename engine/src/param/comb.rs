@@ -8,7 +8,7 @@ use faer::Mat;
 use faer::sparse::{SparseColMat, Triplet};
 use glam::DVec3;
 
-use crate::field::{TensorField, eigen_in_plane, tangent_frame};
+use crate::field::{Eigen2, TensorField, eigen_in_plane, tangent_frame};
 use crate::mesh::{NONE, TriMesh};
 
 use super::patch::Patch;
@@ -47,6 +47,16 @@ fn side_direction(mesh: &TriMesh, patch: &Patch, f: usize, k: usize) -> DVec3 {
     (p[t[(k + 1) % 3] as usize] - p[t[k] as usize]).normalize()
 }
 
+/// The field's decomposition on mesh face `f` as the frames use it: the mean of its
+/// corners' tensors, in the face's plane.
+pub(crate) fn face_eigen(mesh: &TriMesh, field: &TensorField, f: u32) -> Eigen2 {
+    let tensors = field.tensors();
+    let t = mesh.triangles()[f as usize];
+    let mean =
+        (tensors[t[0] as usize] + tensors[t[1] as usize] + tensors[t[2] as usize]) * (1.0 / 3.0);
+    eigen_in_plane(&mean, mesh.face_normals()[f as usize])
+}
+
 /// Computes the per-face frames of the segment.
 pub(crate) fn frames(
     mesh: &TriMesh,
@@ -54,19 +64,22 @@ pub(crate) fn frames(
     patch: &Patch,
     options: &ParamOptions,
 ) -> Result<Frames, ParamError> {
-    let normals = mesh.face_normals();
-    let areas = mesh.face_areas();
-    let tensors = field.tensors();
-    let eigen: Vec<_> = patch
+    let eigen = patch
         .faces
         .iter()
-        .map(|&f| {
-            let t = mesh.triangles()[f as usize];
-            let mean = (tensors[t[0] as usize] + tensors[t[1] as usize] + tensors[t[2] as usize])
-                * (1.0 / 3.0);
-            eigen_in_plane(&mean, normals[f as usize])
-        })
+        .map(|&f| face_eigen(mesh, field, f))
         .collect();
+    frames_from(mesh, eigen, patch, options)
+}
+
+/// [`frames`] from the decomposition of each patch face (in the patch's face order).
+pub(crate) fn frames_from(
+    mesh: &TriMesh,
+    eigen: Vec<Eigen2>,
+    patch: &Patch,
+    options: &ParamOptions,
+) -> Result<Frames, ParamError> {
+    let areas = mesh.face_areas();
     let total_area: f64 = patch.faces.iter().map(|&f| areas[f as usize]).sum();
     let mean_anisotropy = patch
         .faces

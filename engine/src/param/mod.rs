@@ -45,12 +45,14 @@
 //! robust geometric predicates" (the orientation predicate).
 
 mod comb;
+mod face_tensors;
 mod patch;
 pub mod predicates;
 mod solve;
 mod spd;
 mod validity;
 
+pub use face_tensors::FaceTensors;
 pub use validity::{boundary_edges, boundary_overlaps, count_flipped};
 
 use glam::DVec2;
@@ -334,8 +336,39 @@ pub fn parameterize(
     options.validate()?;
     let patch = patch::Patch::build(mesh, faces, cut)?;
     let frames = comb::frames(mesh, field, &patch, options)?;
-    let uv = solve::solve(mesh, &patch, &frames)?;
-    let report = validity::report(mesh, &patch, &frames, &uv, options);
+    finish(mesh, patch, &frames, options)
+}
+
+/// [`parameterize`] with the field's decomposition per face made once for the mesh
+/// ([`FaceTensors`]): for callers that parameterize many overlapping face sets of one
+/// mesh (splitting, merging). The result is bit for bit [`parameterize`]'s.
+pub fn parameterize_with(
+    mesh: &TriMesh,
+    tensors: &FaceTensors,
+    faces: &[u32],
+    cut: &[bool],
+    options: &ParamOptions,
+) -> Result<SegmentParam, ParamError> {
+    options.validate()?;
+    let patch = patch::Patch::build(mesh, faces, cut)?;
+    let eigen = patch
+        .faces
+        .iter()
+        .map(|&f| tensors.eigen(mesh, f))
+        .collect();
+    let frames = comb::frames_from(mesh, eigen, &patch, options)?;
+    finish(mesh, patch, &frames, options)
+}
+
+/// The solve and the validity report of a patch with its frames.
+fn finish(
+    mesh: &TriMesh,
+    patch: patch::Patch,
+    frames: &comb::Frames,
+    options: &ParamOptions,
+) -> Result<SegmentParam, ParamError> {
+    let uv = solve::solve(mesh, &patch, frames)?;
+    let report = validity::report(mesh, &patch, frames, &uv, options);
     Ok(SegmentParam {
         uv,
         local_to_mesh: patch.local_to_mesh,

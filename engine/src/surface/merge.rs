@@ -23,9 +23,8 @@ use rayon::prelude::*;
 
 use super::SurfaceOptions;
 use super::refine::lowest_face;
-use crate::field::TensorField;
 use crate::mesh::{NONE, TriMesh};
-use crate::param::{SegmentParam, parameterize};
+use crate::param::{FaceTensors, SegmentParam, parameterize_with};
 
 /// Unions larger than this many faces are not tried: `max(MERGE_MIN_FACES, faces /
 /// MERGE_SHARE)` for a mesh of `faces` faces, so the largest merge attempted covers
@@ -50,7 +49,7 @@ impl MergeLimit {
 /// ordered by their lowest face, and the number of merges.
 pub(crate) fn merge_pieces(
     mesh: &TriMesh,
-    field: &TensorField,
+    tensors: &FaceTensors,
     cut: &[bool],
     mut pieces: Vec<SegmentParam>,
     options: &SurfaceOptions,
@@ -97,7 +96,7 @@ pub(crate) fn merge_pieces(
                     .chain(&pieces[j].faces)
                     .copied()
                     .collect();
-                parameterize(mesh, field, &faces, cut, &options.param)
+                parameterize_with(mesh, tensors, &faces, cut, &options.param)
                     .ok()
                     .filter(|p| acceptable(p, options))
             })
@@ -171,6 +170,8 @@ fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<
 
 #[cfg(test)]
 mod tests {
+    use crate::field::TensorField;
+    use crate::param::parameterize;
     use std::collections::BTreeMap;
 
     use glam::DVec3;
@@ -227,7 +228,14 @@ mod tests {
         let pieces = valid_pieces(&mesh, &field, &cut, &parts);
         let options = SurfaceOptions::default();
         let limit = MergeLimit(mesh.face_count());
-        let (merged, merges) = merge_pieces(&mesh, &field, &cut, pieces, &options, limit);
+        let (merged, merges) = merge_pieces(
+            &mesh,
+            &FaceTensors::new(&mesh, &field),
+            &cut,
+            pieces,
+            &options,
+            limit,
+        );
         assert_eq!(merges, 3);
         assert_eq!(merged.len(), 1);
         assert!(merged[0].report.valid);
@@ -248,7 +256,14 @@ mod tests {
         let smallest_union = mesh.face_count() / 2;
         let options = SurfaceOptions::default();
         let limit = MergeLimit(smallest_union - 1);
-        let (merged, merges) = merge_pieces(&mesh, &field, &cut, pieces.clone(), &options, limit);
+        let (merged, merges) = merge_pieces(
+            &mesh,
+            &FaceTensors::new(&mesh, &field),
+            &cut,
+            pieces.clone(),
+            &options,
+            limit,
+        );
         assert_eq!((merges, merged.len()), (0, 4));
         let mut sorted = pieces.clone();
         sorted.sort_by_key(lowest_face);
@@ -256,7 +271,7 @@ mod tests {
         // At exactly the size of two quadrants, pairs merge but not all four.
         let (merged, merges) = merge_pieces(
             &mesh,
-            &field,
+            &FaceTensors::new(&mesh, &field),
             &cut,
             pieces,
             &options,
@@ -277,7 +292,14 @@ mod tests {
         let pieces = valid_pieces(&mesh, &field, &cut, &parts);
         let options = SurfaceOptions::default();
         let limit = MergeLimit(mesh.face_count());
-        let (merged, merges) = merge_pieces(&mesh, &field, &cut, pieces.clone(), &options, limit);
+        let (merged, merges) = merge_pieces(
+            &mesh,
+            &FaceTensors::new(&mesh, &field),
+            &cut,
+            pieces.clone(),
+            &options,
+            limit,
+        );
         assert_eq!((merges, merged.len()), (0, 2));
         let mut sorted = pieces;
         sorted.sort_by_key(lowest_face);

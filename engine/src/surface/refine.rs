@@ -36,7 +36,7 @@ use super::merge::{MergeLimit, merge_pieces};
 use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
-use crate::param::{SegmentParam, parameterize, parameterize_all};
+use crate::param::{FaceTensors, SegmentParam, parameterize_all, parameterize_with};
 use crate::segment::{
     FaceField, SegmentError, Segmentation, face_frames, is_disc, random_walk, walk_weights,
 };
@@ -90,6 +90,7 @@ pub struct SplitContext {
     cut: Vec<bool>,
     frames: FaceField,
     weights: Vec<f64>,
+    tensors: FaceTensors,
     isotropic: OnceLock<TensorField>,
 }
 
@@ -114,6 +115,7 @@ impl SplitContext {
             cut,
             frames,
             weights,
+            tensors: FaceTensors::new(mesh, field),
             isotropic: OnceLock::new(),
         }
     }
@@ -158,7 +160,6 @@ pub fn parameterize_segment_with_splitting(
     let cut = &context.cut;
     let splitter = Splitter {
         mesh,
-        field,
         context,
         options,
     };
@@ -198,7 +199,7 @@ pub fn parameterize_segment_with_splitting(
     }
     let (mut accepted, merges) = if options.merge_pieces {
         let limit = MergeLimit::for_mesh(mesh.face_count());
-        merge_pieces(mesh, field, cut, accepted, options, limit)
+        merge_pieces(mesh, &context.tensors, cut, accepted, options, limit)
     } else {
         (accepted, 0)
     };
@@ -226,7 +227,6 @@ struct Pieces {
 /// outcome depends on its faces alone, so the pieces do not depend on the threads.
 struct Splitter<'a> {
     mesh: &'a TriMesh,
-    field: &'a TensorField,
     context: &'a SplitContext,
     options: &'a SurfaceOptions,
 }
@@ -290,7 +290,13 @@ impl Splitter<'_> {
     /// to split, split in two otherwise.
     fn outcome(&self, faces: Vec<u32>) -> Result<Outcome, SurfaceError> {
         let (cut, options) = (&self.context.cut, self.options);
-        match parameterize(self.mesh, self.field, &faces, cut, &options.param) {
+        match parameterize_with(
+            self.mesh,
+            &self.context.tensors,
+            &faces,
+            cut,
+            &options.param,
+        ) {
             Ok(p) if p.report.valid && angle_ok(&p, options) => return Ok(Outcome::Accepted(p)),
             _ if faces.len() < options.min_segment_faces.max(2) => {
                 return Ok(Outcome::Small(faces));
