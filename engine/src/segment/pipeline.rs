@@ -7,7 +7,7 @@ use super::seeds::{face_frames, place_seeds_sized};
 use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, is_disc, patch_topology};
 use super::walk::{random_walk, walk_weights};
-use super::{Segment, SegmentError, SegmentOptions, Segmentation};
+use super::{Segment, SegmentError, SegmentOptions, Segmentation, singularity_clusters};
 use crate::field::TensorField;
 use crate::mesh::{FaceSet, NONE, TriMesh, connected_parts, group_by_label};
 
@@ -21,7 +21,11 @@ const MAX_SPLIT_ROUNDS: usize = 24;
 /// 2. For each segment holding singular faces, the minimum spanning tree of
 ///    field-following paths between its singularities (or from a lone one to the
 ///    segment boundary) becomes a cut the walk may not cross, and the segment is
-///    re-segmented.
+///    re-segmented. Only faces of clusters the field winds around count
+///    ([`singularity_clusters`](super::singularity_clusters) with a non-zero index): a
+///    dipole (a `+1/2` face touching a `-1/2` face) has no winding around it, so a
+///    segment may hold it and still comb consistently around it, and cutting to it
+///    only fragments the segment (bench/README.md, "Trees to net singularities only").
 /// 3. Every segment that is not a disc is cut along field-following paths (4.2); a
 ///    segment that still is not a disc is split in two by the walk, until all are.
 ///
@@ -77,18 +81,18 @@ pub(crate) fn segment_sized(
     let mut labels = connected_parts(mesh, &walked, &cut);
 
     // 2. Singularities on segment boundaries.
-    let singular_faces: Vec<u32> = singularities.iter().map(|s| s.face).collect();
-    let singular = FaceSet::new(mesh, &singular_faces);
-    if !singularities.is_empty() {
+    let net_faces: Vec<u32> = singularity_clusters(mesh, &singularities)
+        .into_iter()
+        .filter(|c| c.is_singular())
+        .flat_map(|c| c.faces)
+        .collect();
+    let net = FaceSet::new(mesh, &net_faces);
+    if !net_faces.is_empty() {
         let groups = group_by_label(&labels, 0..f_count as u32);
         let trees: Vec<Vec<u32>> = groups
             .par_iter()
             .map(|faces| {
-                let sing: Vec<u32> = faces
-                    .iter()
-                    .copied()
-                    .filter(|&f| singular.contains(f))
-                    .collect();
+                let sing: Vec<u32> = faces.iter().copied().filter(|&f| net.contains(f)).collect();
                 if sing.is_empty() {
                     return Vec::new();
                 }
@@ -201,6 +205,8 @@ pub(crate) fn segment_sized(
     }
 
     // Output, segments numbered by their lowest face.
+    let all_singular: Vec<u32> = singularities.iter().map(|s| s.face).collect();
+    let singular = FaceSet::new(mesh, &all_singular);
     let groups = group_by_label(&labels, 0..f_count as u32);
     let mut face_segment = vec![0u32; f_count];
     let segments: Vec<Segment> = groups
@@ -235,4 +241,105 @@ pub(crate) fn segment_sized(
         singularities,
         cut_edges,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::{DVec2, DVec3};
+
+    use super::*;
+    use crate::mesh::shapes;
+    use crate::segment::{detect_singularities, singularity_clusters};
+
+    /// A plane's 3:1 field turning by `+1/2` around each `a` and `-1/2` around each `b`
+    /// of `pairs` (`theta = sum (arg(p - a) - arg(p - b)) / 2`).
+    fn pairs_field(mesh: &TriMesh, pairs: &[(DVec2, DVec2)]) -> TensorField {
+        let arg = |p: DVec2, c: DVec2| (p.y - c.y).atan2(p.x - c.x);
+        let dirs: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .map(|p| {
+                let p = p.truncate();
+                let t: f64 = pairs
+                    .iter()
+                    .map(|&(a, b)| 0.5 * (arg(p, a) - arg(p, b)))
+                    .sum();
+                DVec3::new(t.cos(), t.sin(), 0.0)
+            })
+            .collect();
+        TensorField::from_frames(mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
+            .expect("valid field")
+    }
+
+    fn barycentre(mesh: &TriMesh, f: u32) -> DVec2 {
+        (mesh.face_positions(f).iter().sum::<DVec3>() / 3.0).truncate()
+    }
+
+    /// The barycentres of the face nearest `at` and of a face sharing one vertex with
+    /// it, chosen so that the pair is detected as one dipole (two touching singular
+    /// faces of opposite index).
+    fn dipole_near(mesh: &TriMesh, at: DVec2) -> (DVec2, DVec2) {
+        let d = |g: u32| barycentre(mesh, g).distance(at);
+        let f = (0..mesh.face_count() as u32)
+            .min_by(|&x, &y| d(x).total_cmp(&d(y)))
+            .expect("faces");
+        let tf = mesh.triangles()[f as usize];
+        let shares_vertex = |g: u32| {
+            let tg = mesh.triangles()[g as usize];
+            tg.iter().filter(|v| tf.contains(v)).count() == 1
+        };
+        (0..mesh.face_count() as u32)
+            .filter(|&g| shares_vertex(g))
+            .map(|g| (barycentre(mesh, f), barycentre(mesh, g)))
+            .find(|&pair| {
+                let found = detect_singularities(mesh, &pairs_field(mesh, &[pair]));
+                let clusters = singularity_clusters(mesh, &found);
+                found.len() == 2 && clusters.len() == 1 && !clusters[0].is_singular()
+            })
+            .expect("a face whose pair with the nearest is a dipole")
+    }
+
+    #[test]
+    fn dipoles_stay_inside_segments_and_net_singularities_reach_a_border() {
+        let mesh = shapes::plane(1.0, 24).expect("plane");
+        let options = SegmentOptions::default();
+        // Two dipoles apart: a tree between them would cut the plane for nothing.
+        let dipoles = [
+            dipole_near(&mesh, DVec2::new(0.3, 0.5)),
+            dipole_near(&mesh, DVec2::new(0.7, 0.5)),
+        ];
+        let seg = segment(&mesh, &pairs_field(&mesh, &dipoles), &options).expect("segment");
+        let clusters = singularity_clusters(&mesh, &seg.singularities);
+        assert_eq!(seg.singularities.len(), 4, "{:?}", seg.singularities);
+        assert!(clusters.iter().all(|c| !c.is_singular()), "{clusters:?}");
+        assert!(
+            seg.cut_edges.is_empty(),
+            "no tree to a dipole: {:?}",
+            seg.cut_edges
+        );
+        for s in &seg.singularities {
+            assert!(seg.segments[seg.face_segment[s.face as usize] as usize].has_singular_face);
+        }
+
+        // Two net singularities apart: each lies on a segment's border or a cut.
+        let pair = [(DVec2::new(0.3, 0.5), DVec2::new(0.7, 0.5))];
+        let seg = segment(&mesh, &pairs_field(&mesh, &pair), &options).expect("segment");
+        let clusters = singularity_clusters(&mesh, &seg.singularities);
+        assert_eq!(clusters.iter().filter(|c| c.is_singular()).count(), 2);
+        for c in clusters.iter().filter(|c| c.is_singular()) {
+            for &face in &c.faces {
+                let id = seg.face_segment[face as usize];
+                let on_border = mesh.face_edges()[face as usize].iter().any(|&e| {
+                    seg.cut_edges.contains(&e)
+                        || mesh.edge_faces()[e as usize]
+                            .iter()
+                            .any(|&h| h != NONE && seg.face_segment[h as usize] != id)
+                });
+                assert!(
+                    on_border,
+                    "net singular face {face} lies inside its segment"
+                );
+            }
+        }
+    }
 }
