@@ -23,7 +23,9 @@ struct FaceEigen {
     l: [f64; 2],
 }
 
-/// The field's decomposition on every face of one mesh (see the [module docs](self)).
+/// The field's decomposition on every face of one mesh: per face, the major direction
+/// and both eigenvalues of the mean of its corners' tensors in the face's plane, the
+/// numbers [`parameterize`](super::parameterize) computes for its own faces.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FaceTensors {
     faces: Vec<FaceEigen>,
