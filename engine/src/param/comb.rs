@@ -57,23 +57,9 @@ pub(crate) fn face_eigen(mesh: &TriMesh, field: &TensorField, f: u32) -> Eigen2 
     eigen_in_plane(&mean, mesh.face_normals()[f as usize])
 }
 
-/// Computes the per-face frames of the segment.
+/// Computes the per-face frames of the segment from the field's decomposition on each
+/// patch face (`eigen`, in the patch's face order; see [`face_eigen`]).
 pub(crate) fn frames(
-    mesh: &TriMesh,
-    field: &TensorField,
-    patch: &Patch,
-    options: &ParamOptions,
-) -> Result<Frames, ParamError> {
-    let eigen = patch
-        .faces
-        .iter()
-        .map(|&f| face_eigen(mesh, field, f))
-        .collect();
-    frames_from(mesh, eigen, patch, options)
-}
-
-/// [`frames`] from the decomposition of each patch face (in the patch's face order).
-pub(crate) fn frames_from(
     mesh: &TriMesh,
     eigen: Vec<Eigen2>,
     patch: &Patch,

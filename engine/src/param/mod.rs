@@ -58,7 +58,7 @@ pub use validity::{boundary_edges, boundary_overlaps, count_flipped};
 use glam::DVec2;
 use rayon::prelude::*;
 
-use crate::field::TensorField;
+use crate::field::{Eigen2, TensorField};
 use crate::mesh::TriMesh;
 
 /// Settings of the parameterization.
@@ -333,10 +333,9 @@ pub fn parameterize(
     cut: &[bool],
     options: &ParamOptions,
 ) -> Result<SegmentParam, ParamError> {
-    options.validate()?;
-    let patch = patch::Patch::build(mesh, faces, cut)?;
-    let frames = comb::frames(mesh, field, &patch, options)?;
-    finish(mesh, patch, &frames, options)
+    parameterize_by(mesh, faces, cut, options, |f| {
+        comb::face_eigen(mesh, field, f)
+    })
 }
 
 /// [`parameterize`] with the field's decomposition per face made once for the mesh
@@ -349,26 +348,23 @@ pub fn parameterize_with(
     cut: &[bool],
     options: &ParamOptions,
 ) -> Result<SegmentParam, ParamError> {
-    options.validate()?;
-    let patch = patch::Patch::build(mesh, faces, cut)?;
-    let eigen = patch
-        .faces
-        .iter()
-        .map(|&f| tensors.eigen(mesh, f))
-        .collect();
-    let frames = comb::frames_from(mesh, eigen, &patch, options)?;
-    finish(mesh, patch, &frames, options)
+    parameterize_by(mesh, faces, cut, options, |f| tensors.eigen(mesh, f))
 }
 
-/// The solve and the validity report of a patch with its frames.
-fn finish(
+/// The parameterization with `eigen(f)` the field's decomposition on mesh face `f`.
+fn parameterize_by(
     mesh: &TriMesh,
-    patch: patch::Patch,
-    frames: &comb::Frames,
+    faces: &[u32],
+    cut: &[bool],
     options: &ParamOptions,
+    eigen: impl Fn(u32) -> Eigen2,
 ) -> Result<SegmentParam, ParamError> {
-    let uv = solve::solve(mesh, &patch, frames)?;
-    let report = validity::report(mesh, &patch, frames, &uv, options);
+    options.validate()?;
+    let patch = patch::Patch::build(mesh, faces, cut)?;
+    let eigen = patch.faces.iter().map(|&f| eigen(f)).collect();
+    let frames = comb::frames(mesh, eigen, &patch, options)?;
+    let uv = solve::solve(mesh, &patch, &frames)?;
+    let report = validity::report(mesh, &patch, &frames, &uv, options);
     Ok(SegmentParam {
         uv,
         local_to_mesh: patch.local_to_mesh,

@@ -664,7 +664,12 @@ fn large_plane_timing() {
     let patch = patch::Patch::build(&mesh, &faces, &cut).expect("patch");
     let t_patch = t.elapsed();
     let t = Instant::now();
-    let frames = comb::frames(&mesh, &field, &patch, &options).expect("frames");
+    let eigen = patch
+        .faces
+        .iter()
+        .map(|&f| comb::face_eigen(&mesh, &field, f))
+        .collect();
+    let frames = comb::frames(&mesh, eigen, &patch, &options).expect("frames");
     let t_frames = t.elapsed();
     let t = Instant::now();
     let (matrix, mut rhs) = solve::assemble(&mesh, &patch, &frames).expect("assembly");

@@ -198,6 +198,25 @@ mod tests {
         .expect("field")
     }
 
+    /// [`merge_pieces`] with the field's table made for the call.
+    fn merge(
+        mesh: &TriMesh,
+        field: &TensorField,
+        cut: &[bool],
+        pieces: Vec<SegmentParam>,
+        limit: MergeLimit,
+    ) -> (Vec<SegmentParam>, usize) {
+        let tensors = FaceTensors::new(mesh, field);
+        merge_pieces(
+            mesh,
+            &tensors,
+            cut,
+            pieces,
+            &SurfaceOptions::default(),
+            limit,
+        )
+    }
+
     /// Parameterizes every group, each of which must be valid on its own.
     fn valid_pieces(
         mesh: &TriMesh,
@@ -226,16 +245,8 @@ mod tests {
         });
         assert_eq!(parts.len(), 4);
         let pieces = valid_pieces(&mesh, &field, &cut, &parts);
-        let options = SurfaceOptions::default();
         let limit = MergeLimit(mesh.face_count());
-        let (merged, merges) = merge_pieces(
-            &mesh,
-            &FaceTensors::new(&mesh, &field),
-            &cut,
-            pieces,
-            &options,
-            limit,
-        );
+        let (merged, merges) = merge(&mesh, &field, &cut, pieces, limit);
         assert_eq!(merges, 3);
         assert_eq!(merged.len(), 1);
         assert!(merged[0].report.valid);
@@ -254,29 +265,14 @@ mod tests {
         });
         let pieces = valid_pieces(&mesh, &field, &cut, &parts);
         let smallest_union = mesh.face_count() / 2;
-        let options = SurfaceOptions::default();
         let limit = MergeLimit(smallest_union - 1);
-        let (merged, merges) = merge_pieces(
-            &mesh,
-            &FaceTensors::new(&mesh, &field),
-            &cut,
-            pieces.clone(),
-            &options,
-            limit,
-        );
+        let (merged, merges) = merge(&mesh, &field, &cut, pieces.clone(), limit);
         assert_eq!((merges, merged.len()), (0, 4));
         let mut sorted = pieces.clone();
         sorted.sort_by_key(lowest_face);
         assert_eq!(merged, sorted, "untouched, in order of lowest face");
         // At exactly the size of two quadrants, pairs merge but not all four.
-        let (merged, merges) = merge_pieces(
-            &mesh,
-            &FaceTensors::new(&mesh, &field),
-            &cut,
-            pieces,
-            &options,
-            MergeLimit(smallest_union),
-        );
+        let (merged, merges) = merge(&mesh, &field, &cut, pieces, MergeLimit(smallest_union));
         assert_eq!((merges, merged.len()), (2, 2));
     }
 
@@ -290,16 +286,8 @@ mod tests {
         let parts = groups(&mesh, |c| usize::from(c.x > 0.0));
         assert_eq!(parts.len(), 2);
         let pieces = valid_pieces(&mesh, &field, &cut, &parts);
-        let options = SurfaceOptions::default();
         let limit = MergeLimit(mesh.face_count());
-        let (merged, merges) = merge_pieces(
-            &mesh,
-            &FaceTensors::new(&mesh, &field),
-            &cut,
-            pieces.clone(),
-            &options,
-            limit,
-        );
+        let (merged, merges) = merge(&mesh, &field, &cut, pieces.clone(), limit);
         assert_eq!((merges, merged.len()), (0, 2));
         let mut sorted = pieces;
         sorted.sort_by_key(lowest_face);
