@@ -18,10 +18,10 @@
 //! few ranks each per frame, and a rank drawn alone in its bin costs two to three
 //! times one drawn among others (its cells are cold). A bin that lacks ranks is
 //! therefore filled past its need, to `need (1 + a (1 + j))` with `a` the draw-ahead
-//! fraction ([`DRAW_AHEAD`], [`LodPool::with_draw_ahead`]) and `j` in `[0, 1)` fixed
-//! per bin (so that bins filled in one frame run dry in different ones): it is
-//! refilled every few frames, in batches. This changes which ranks the pool holds,
-//! never which are visible: a renderer thresholds by rank.
+//! fraction ([`DRAW_AHEAD`], [`LodPool::with_draw_ahead`]) and `j` in `[0, 1)` drawn
+//! per bin and per fill (so that bins filled in one frame run dry in different ones,
+//! and stay apart): it is refilled every few frames, in batches. This changes which
+//! ranks the pool holds, never which are visible: a renderer thresholds by rank.
 //!
 //! Entries are only ever appended, so a GPU copy of the pool is extended by streaming
 //! the new tail ([`PoolChange::Appended`]). When the extension would outgrow its budget
@@ -327,11 +327,22 @@ impl LodPool {
     }
 
     /// The rank bin `bin` is filled to when it needs `need`: past it by the
-    /// draw-ahead, scaled by a factor in `[1, 2)` fixed per bin.
+    /// draw-ahead, scaled by a factor in `[1, 2)` drawn per bin and per fill (a hash
+    /// of the bin and its current reach). A factor fixed per bin would spread the
+    /// refills' periods but not their phases: under a camera whose needs all grow at
+    /// one rate, bins filled together in one frame come due together again, and
+    /// the frames where several periods meet draw ten times the ranks of the others.
     fn ahead_of(&self, bin: usize, need: u32) -> u32 {
-        // The bin's factor from the top bits of a multiplicative hash of its index.
-        let jitter = f64::from((bin as u32).wrapping_mul(0x9e37_79b9) >> 8) / 16_777_216.0;
+        let key = (bin as u32) ^ self.reach[bin].wrapping_mul(0x85eb_ca6b);
+        let jitter = f64::from(key.wrapping_mul(0x9e37_79b9) >> 8) / 16_777_216.0;
         let more = f64::from(need) * self.ahead * (1.0 + jitter);
+        (f64::from(need) + more).min(f64::from(u32::MAX)) as u32
+    }
+
+    /// The most any fill for `need` reaches: [`ahead_of`](Self::ahead_of) at its
+    /// largest factor.
+    fn ahead_limit(&self, need: u32) -> u32 {
+        let more = f64::from(need) * self.ahead * 2.0;
         (f64::from(need) + more).min(f64::from(u32::MAX)) as u32
     }
 
@@ -360,7 +371,7 @@ impl LodPool {
         // The budget ran out. Rebuild if the extension holds ranks the view does not
         // need, even drawing ahead; otherwise keep what is there.
         let stale = (0..self.reach.len())
-            .any(|b| self.reach[b] > self.prefix.max(self.ahead_of(b, self.needs[b])));
+            .any(|b| self.reach[b] > self.prefix.max(self.ahead_limit(self.needs[b])));
         if !stale {
             return self.finish(sampler, start);
         }
@@ -877,6 +888,31 @@ mod tests {
             e.to_string().contains("must keep the sampler's vertices"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn each_fill_draws_its_own_factor() {
+        // A factor fixed per bin keeps bins filled in one frame in step: under needs
+        // that all grow at one rate they come due together again and again.
+        let s = torus_sampler();
+        let mut pool = LodPool::new(&s, 9, 1_000, 100_000);
+        let need = 1_000_000;
+        let lo = f64::from(need) * (1.0 + pool.ahead);
+        let hi = f64::from(need) * (1.0 + 2.0 * pool.ahead);
+        let mut targets = Vec::new();
+        for reach in [1_000, 1_031, 1_066, 1_100] {
+            pool.reach[0] = reach;
+            let t = pool.ahead_of(0, need);
+            assert!(
+                (lo..=hi).contains(&f64::from(t)),
+                "{t} outside [{lo}, {hi}]"
+            );
+            assert!(pool.ahead_limit(need) >= t);
+            targets.push(t);
+        }
+        targets.sort_unstable();
+        targets.dedup();
+        assert_eq!(targets.len(), 4, "one factor for every fill: {targets:?}");
     }
 
     #[test]
