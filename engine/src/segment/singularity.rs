@@ -261,7 +261,7 @@ fn closed_fans(mesh: &TriMesh, v: u32) -> Option<usize> {
 /// Twice the index of every face (an integer), from a [`LineFieldTransport`].
 pub fn face_double_indices(mesh: &TriMesh, transport: &LineFieldTransport) -> Vec<i64> {
     mesh.triangles()
-        .iter()
+        .par_iter()
         .zip(mesh.face_edges())
         .zip(&transport.face_holonomy)
         .map(|((t, fe), omega)| {

@@ -32,6 +32,8 @@
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 pub use super::graph_walk::RHS_BLOCK;
 use super::graph_walk::{GraphWalk, GraphWalkError, WalkGraph};
 pub use super::multilevel::MULTILEVEL_FACES;
@@ -86,7 +88,10 @@ pub fn walk_weights(mesh: &TriMesh, faces: &FaceField, sigma: f64, blocked: &[bo
     assert!(sigma > 0.0, "sigma must be positive, got {sigma}");
     let ef = mesh.edge_faces();
     // Per edge: (confidence c, damped turn c d); (0, 0) where the edge is not interior.
+    // Per-edge values in parallel (each computed alone); the sum stays sequential, so
+    // the weights do not depend on the thread count.
     let turns: Vec<(f64, f64)> = (0..mesh.edge_count())
+        .into_par_iter()
         .map(|e| {
             if !is_interior(mesh, e) {
                 return (0.0, 0.0);
@@ -108,6 +113,7 @@ pub fn walk_weights(mesh: &TriMesh, faces: &FaceField, sigma: f64, blocked: &[bo
     };
     let p = mesh.positions();
     (0..mesh.edge_count())
+        .into_par_iter()
         .map(|e| {
             if blocked[e] || !is_interior(mesh, e) {
                 return 0.0;
