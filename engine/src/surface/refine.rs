@@ -34,12 +34,9 @@ use rayon::prelude::*;
 
 use super::merge::{MergeLimit, merge_pieces};
 use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
-use crate::field::{
-    FieldError, TensorField, eigen_in_plane, isotropic_copy, outer, principal_axis,
-};
+use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
 use crate::param::{FaceTensors, SegmentParam, parameterize_all, parameterize_with};
-use crate::segment::seeds::ISOTROPY_THRESHOLD;
 use crate::segment::{
     FaceField, SegmentError, Segmentation, detect_singularities, face_frames, is_disc, random_walk,
     walk_weights,
@@ -96,8 +93,7 @@ pub struct SplitContext {
     weights: Vec<f64>,
     tensors: FaceTensors,
     isotropic: OnceLock<TensorField>,
-    /// The faces holding a singularity of negative index where the field has a
-    /// direction (spacing ratio at least `ISOTROPY_THRESHOLD`), ascending.
+    /// The faces holding a singularity of negative index, ascending.
     negative: Vec<u32>,
 }
 
@@ -118,32 +114,17 @@ impl SplitContext {
         }
         let frames = face_frames(mesh, field);
         let weights = walk_weights(mesh, &frames, options.segment.sigma, &cut);
-        // Trisectors where the field has a direction at every corner: in isotropic
-        // regions the line field is noise, and so are its singularities. (The face's
-        // own mean tensor is nearly isotropic at any singularity: its corners'
-        // directions differ by a third of a turn or more.)
-        let anisotropic = |v: u32| {
-            let t = &field.tensors()[v as usize];
-            let e = eigen_in_plane(t, mesh.vertex_normals()[v as usize]);
-            e.anisotropy() >= ISOTROPY_THRESHOLD
-        };
-        let negative = detect_singularities(mesh, field)
-            .into_iter()
-            .filter(|s| s.index < 0.0)
-            .filter(|s| {
-                mesh.triangles()[s.face as usize]
-                    .iter()
-                    .all(|&v| anisotropic(v))
-            })
-            .map(|s| s.face)
-            .collect();
         Self {
             cut,
             frames,
             weights,
             tensors: FaceTensors::new(mesh, field),
             isotropic: OnceLock::new(),
-            negative,
+            negative: detect_singularities(mesh, field)
+                .into_iter()
+                .filter(|s| s.index < 0.0)
+                .map(|s| s.face)
+                .collect(),
         }
     }
 
@@ -346,14 +327,10 @@ impl Splitter<'_> {
 /// corners. Around a `-1/2` singularity (a trisector) the field turns half a turn
 /// against the walk, so a chart covering more than two thirds of its ring maps it to
 /// more than a full turn in the plane and overlaps itself: such a piece is split
-/// without trying. Measured on the constant 3:1 field (bunny subdivided once), every
-/// trisector counted: 45 of the 240 failing tries, holding 40% of the failed tries'
-/// faces, and 4 of the 382 valid ones reach a cover of 0.9; the merge rounds rejoin
-/// what those 4 split, so the segment counts stay (152, 246, 373 from 69k to 1.1M
-/// faces). Only trisectors whose corners all have a direction are listed
-/// (`SplitContext::new`): that keeps a third of the gain on this field, and an
-/// isotropic field's noise no longer splits every chart (the isotropic bunny went
-/// from 47 to 59 charts and 0.09 to 0.96 s of parameterization when they counted).
+/// without trying. Measured on the constant 3:1 field (bunny subdivided once): 45 of
+/// the 240 failing tries, holding 40% of the failed tries' faces, and 4 of the 382
+/// valid ones reach a cover of 0.9; the merge rounds rejoin what those 4 split, so the
+/// segment counts stay (152, 246, 373 from 69k to 1.1M faces).
 fn surrounds_a_trisector(mesh: &TriMesh, negative: &[u32], faces: &[u32]) -> bool {
     if negative.is_empty() {
         return false;
@@ -545,7 +522,7 @@ mod tests {
 
     /// A plane whose 3:1 field has one trisector (index -1/2) at `centre`: the major
     /// direction at angle `-phi / 2`, `phi` the polar angle about `centre`.
-    fn trisector_plane(n: u32, centre: glam::DVec2, ratio: f64) -> (TriMesh, TensorField) {
+    fn trisector_plane(n: u32, centre: glam::DVec2) -> (TriMesh, TensorField) {
         let mesh = shapes::plane(1.0, n).expect("plane");
         let dirs: Vec<DVec3> = mesh
             .positions()
@@ -556,15 +533,15 @@ mod tests {
                 DVec3::new(a.cos(), a.sin(), 0.0)
             })
             .collect();
-        let spacings = vec![[ratio.sqrt(), 1.0 / ratio.sqrt()]; dirs.len()];
-        let field = TensorField::from_frames(&mesh, &dirs, &spacings).expect("field");
+        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
+            .expect("field");
         (mesh, field)
     }
 
     #[test]
     fn a_chart_around_a_trisector_overlaps_and_is_split_without_trying() {
         let centre = glam::DVec2::new(0.53, 0.47);
-        let (mesh, field) = trisector_plane(24, centre, 9.0);
+        let (mesh, field) = trisector_plane(24, centre);
         let options = SurfaceOptions::default();
         let context = SplitContext::new(&mesh, &field, &[], &options);
         assert_eq!(context.negative.len(), 1, "{:?}", context.negative);
@@ -585,12 +562,8 @@ mod tests {
             })
             .collect();
         assert!(!surrounds_a_trisector(&mesh, &context.negative, &half));
-        // A field without trisectors predicts nothing, nor does the same directions'
-        // isotropic field (whose singularities are noise).
+        // A field without trisectors predicts nothing.
         assert!(!surrounds_a_trisector(&mesh, &[], &all));
-        let (_, iso) = trisector_plane(24, centre, 1.0);
-        let context = SplitContext::new(&mesh, &iso, &[], &options);
-        assert!(context.negative.is_empty(), "{:?}", context.negative);
     }
 
     /// The walk's split of the whole mesh from the paper's seeds (the two most
