@@ -38,8 +38,7 @@ use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axi
 use crate::mesh::{FaceSet, TriMesh};
 use crate::param::{FaceTensors, SegmentParam, parameterize_all, parameterize_with};
 use crate::segment::{
-    FaceField, SegmentError, Segmentation, detect_singularities, face_frames, is_disc, random_walk,
-    walk_weights,
+    FaceField, SegmentError, Segmentation, face_frames, is_disc, random_walk, walk_weights,
 };
 
 /// Parameterizes every segment of `segmentation`, splitting invalid ones (see the
@@ -93,8 +92,6 @@ pub struct SplitContext {
     weights: Vec<f64>,
     tensors: FaceTensors,
     isotropic: OnceLock<TensorField>,
-    /// The faces holding a singularity of negative index, ascending.
-    negative: Vec<u32>,
 }
 
 impl SplitContext {
@@ -120,11 +117,6 @@ impl SplitContext {
             weights,
             tensors: FaceTensors::new(mesh, field),
             isotropic: OnceLock::new(),
-            negative: detect_singularities(mesh, field)
-                .into_iter()
-                .filter(|s| s.index < 0.0)
-                .map(|s| s.face)
-                .collect(),
         }
     }
 
@@ -298,12 +290,6 @@ impl Splitter<'_> {
     /// to split, split in two otherwise.
     fn outcome(&self, faces: Vec<u32>) -> Result<Outcome, SurfaceError> {
         let (cut, options) = (&self.context.cut, self.options);
-        let splittable = faces.len() >= options.min_segment_faces.max(2);
-        if splittable && surrounds_a_trisector(self.mesh, &self.context.negative, &faces) {
-            let context = self.context;
-            return split_in_two(self.mesh, &context.frames, &context.weights, cut, &faces)
-                .map(Outcome::Split);
-        }
         match parameterize_with(
             self.mesh,
             &self.context.tensors,
@@ -321,39 +307,6 @@ impl Splitter<'_> {
         split_in_two(self.mesh, &context.frames, &context.weights, cut, &faces).map(Outcome::Split)
     }
 }
-
-/// Whether `faces` covers nearly all of the ring around a singularity of negative
-/// index (a face of `negative`): at least [`DOOMED_COVER`] of the faces around its
-/// corners. Around a `-1/2` singularity (a trisector) the field turns half a turn
-/// against the walk, so a chart covering more than two thirds of its ring maps it to
-/// more than a full turn in the plane and overlaps itself: such a piece is split
-/// without trying. Measured on the constant 3:1 field (bunny subdivided once): 45 of
-/// the 240 failing tries, holding 40% of the failed tries' faces, and 4 of the 382
-/// valid ones reach a cover of 0.9; the merge rounds rejoin what those 4 split, so the
-/// segment counts stay (152, 246, 373 from 69k to 1.1M faces).
-fn surrounds_a_trisector(mesh: &TriMesh, negative: &[u32], faces: &[u32]) -> bool {
-    if negative.is_empty() {
-        return false;
-    }
-    let mut sorted = faces.to_vec();
-    sorted.sort_unstable();
-    let inside = |f: u32| sorted.binary_search(&f).is_ok();
-    let mut ring = Vec::new();
-    negative.iter().filter(|&&f| inside(f)).any(|&f| {
-        ring.clear();
-        for &v in &mesh.triangles()[f as usize] {
-            ring.extend_from_slice(mesh.vertex_faces(v));
-        }
-        ring.sort_unstable();
-        ring.dedup();
-        let held = ring.iter().filter(|&&g| inside(g)).count();
-        held as f64 >= DOOMED_COVER * ring.len() as f64
-    })
-}
-
-/// The share of a trisector's ring past which a piece is split without trying (see
-/// [`surrounds_a_trisector`]; two thirds in the continuum, 0.9 on the faces counted).
-const DOOMED_COVER: f64 = 0.9;
 
 /// The optional stricter angle test (the mean is part of `report.valid` already).
 pub(super) fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
@@ -518,52 +471,6 @@ mod tests {
         let context = SplitContext::new(&mesh, &field, &[], &SurfaceOptions::default());
         let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
         (mesh, context, faces)
-    }
-
-    /// A plane whose 3:1 field has one trisector (index -1/2) at `centre`: the major
-    /// direction at angle `-phi / 2`, `phi` the polar angle about `centre`.
-    fn trisector_plane(n: u32, centre: glam::DVec2) -> (TriMesh, TensorField) {
-        let mesh = shapes::plane(1.0, n).expect("plane");
-        let dirs: Vec<DVec3> = mesh
-            .positions()
-            .iter()
-            .map(|p| {
-                let d = p.truncate() - centre;
-                let a = -0.5 * d.y.atan2(d.x);
-                DVec3::new(a.cos(), a.sin(), 0.0)
-            })
-            .collect();
-        let field = TensorField::from_frames(&mesh, &dirs, &vec![[3.0, 1.0 / 3.0]; dirs.len()])
-            .expect("field");
-        (mesh, field)
-    }
-
-    #[test]
-    fn a_chart_around_a_trisector_overlaps_and_is_split_without_trying() {
-        let centre = glam::DVec2::new(0.53, 0.47);
-        let (mesh, field) = trisector_plane(24, centre);
-        let options = SurfaceOptions::default();
-        let context = SplitContext::new(&mesh, &field, &[], &options);
-        assert_eq!(context.negative.len(), 1, "{:?}", context.negative);
-        let all: Vec<u32> = (0..mesh.face_count() as u32).collect();
-        // The whole plane surrounds it: predicted to fail, and it does.
-        assert!(surrounds_a_trisector(&mesh, &context.negative, &all));
-        let p = parameterize_with(&mesh, &context.tensors, &all, &context.cut, &options.param)
-            .expect("parameterized");
-        assert!(!p.report.valid, "{:?}", p.report);
-        // A piece on one side of it (its faces left of the centre, the singular face
-        // with them) covers about half of its ring: tried as usual.
-        let half: Vec<u32> = all
-            .iter()
-            .copied()
-            .filter(|&f| {
-                let c = mesh.face_positions(f).iter().map(|p| p.x).sum::<f64>() / 3.0;
-                c < centre.x || context.negative.contains(&f)
-            })
-            .collect();
-        assert!(!surrounds_a_trisector(&mesh, &context.negative, &half));
-        // A field without trisectors predicts nothing.
-        assert!(!surrounds_a_trisector(&mesh, &[], &all));
     }
 
     /// The walk's split of the whole mesh from the paper's seeds (the two most
