@@ -655,14 +655,7 @@ mod tests {
 
     #[test]
     fn costs_and_walk_weights_do_not_depend_on_the_thread_count() {
-        let mesh = shapes::sphere(1.0, 12).expect("sphere");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 3.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let (mesh, field) = crate::surface::tests::torus_case();
         let frames = crate::segment::face_frames(&mesh, &field);
         let blocked: Vec<bool> = (0..mesh.edge_count()).map(|e| e % 11 == 0).collect();
         let run = || {
