@@ -211,8 +211,9 @@ fn coarsen(graph: &WalkGraph, seeded: &[bool]) -> (WalkGraph, Vec<u32>, Vec<bool
     }
     // Coarse rows by chunks of coarse nodes, in parallel, then concatenated in order.
     // A row lists its neighbours in the order they are first met and sums repeated
-    // ones in that order (a short linear search: rows hold a few dozen entries at
-    // most), so the graph does not depend on the threads.
+    // ones in that order (a linear search: the longest row over every coarsening of
+    // the bunny subdivided twice holds 12 entries), so the graph is the same for any
+    // thread count, and as the sequential build with a slot table made it.
     let m = members.len();
     let chunks: Vec<CoarseRows> = members
         .par_chunks(BUILD_CHUNK)
@@ -357,7 +358,9 @@ mod tests {
 
     #[test]
     fn coarsening_keeps_the_weight_between_aggregates() {
-        let (_, _, g, _) = turning_graph(20, 1.0);
+        // 2 x 100^2 faces: several chunks of coarse rows (BUILD_CHUNK), so their
+        // concatenation is checked too.
+        let (_, _, g, _) = turning_graph(100, 1.0);
         let n = g.node_count();
         let (coarse, map, _) = coarsen(&g, &vec![false; n]);
         assert!(
@@ -378,6 +381,30 @@ mod tests {
             (total - between).abs() <= 1e-12 * between,
             "{total} {between}"
         );
+        assert!(
+            coarse.node_count() > 2 * BUILD_CHUNK,
+            "{}",
+            coarse.node_count()
+        );
+        // Edge by edge: each coarse edge weighs the fine edges between its aggregates.
+        let mut pairs = std::collections::BTreeMap::new();
+        for v in 0..n {
+            for (u, w) in g.neighbors(v) {
+                let (a, b) = (map[v], map[u as usize]);
+                if a != b {
+                    *pairs.entry((a, b)).or_insert(0.0) += w;
+                }
+            }
+        }
+        let mut listed = 0;
+        for c in 0..coarse.node_count() {
+            for (d, w) in coarse.neighbors(c) {
+                let want = pairs[&(c as u32, d)];
+                assert!((want - w).abs() <= 1e-12 * want, "{c} {d}: {w} {want}");
+                listed += 1;
+            }
+        }
+        assert_eq!(listed, pairs.len());
         // Symmetric: every coarse edge listed once from each end, with one weight (up
         // to the order of its sum).
         for c in 0..coarse.node_count() {
