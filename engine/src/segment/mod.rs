@@ -18,6 +18,7 @@
 
 pub mod charts;
 mod clusters;
+mod comb_flips;
 mod from_labels;
 mod graph_walk;
 pub mod multilevel;
@@ -31,12 +32,14 @@ pub mod walk;
 
 pub use charts::{CHART_NORMAL_ANGLE, chart_labels, isotropic_charts};
 pub use clusters::{SingularityCluster, singularity_clusters};
+pub use comb_flips::comb_flip_vertices;
 pub use from_labels::segmentation_from_labels;
 pub use pipeline::segment;
 pub use region::{RegionError, segment_region, touched_segments};
 
 pub use paths::{
     ShortestPaths, dijkstra, field_edge_costs, field_edge_costs_with, singularity_tree,
+    singularity_tree_to,
 };
 pub use seeds::{FaceField, face_frames, place_seeds};
 pub use singularity::{

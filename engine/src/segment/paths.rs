@@ -311,7 +311,27 @@ pub fn singularity_tree(
     singular_faces: &[u32],
     region: &[bool],
 ) -> Vec<u32> {
+    singularity_tree_to(mesh, costs, singular_faces, region, &[])
+}
+
+/// [`singularity_tree`] with each singular face represented by its lowest-index
+/// corner among those flagged in `ends` (one flag per mesh vertex; empty: none
+/// flagged), and by its lowest-index corner where none is. The surface pipeline flags
+/// the vertices the parameterization cannot comb around
+/// ([`comb_flip_vertices`](super::comb_flip_vertices)), so that the tree's cuts end
+/// where the per-face frames wind.
+pub fn singularity_tree_to(
+    mesh: &TriMesh,
+    costs: &[f64],
+    singular_faces: &[u32],
+    region: &[bool],
+    ends: &[bool],
+) -> Vec<u32> {
     assert_eq!(costs.len(), mesh.edge_count(), "one cost per mesh edge");
+    assert!(
+        ends.is_empty() || ends.len() == mesh.vertex_count(),
+        "one end flag per mesh vertex"
+    );
     assert_eq!(region.len(), mesh.face_count(), "one region flag per face");
     let in_region = |f: u32| f != NONE && region[f as usize];
     let allowed = |e: u32| {
@@ -363,10 +383,16 @@ pub fn singularity_tree(
     }
     let adjacency = VertexEdges::new(mesh);
     let corners = |i: usize| mesh.triangles()[nodes[i] as usize];
-    // Each node is represented by its face's lowest vertex, so that the tree's paths
-    // meet at vertices and the tree is connected as an edge set.
+    // Each node is represented by one corner of its face (its lowest flagged one, else
+    // its lowest), so that the tree's paths meet at vertices and the tree is connected
+    // as an edge set.
+    let flagged = |v: &u32| ends.get(*v as usize).copied().unwrap_or(false);
     let reps: Vec<u32> = (0..k)
-        .map(|i| corners(i).into_iter().min().unwrap_or(0))
+        .map(|i| {
+            let c = corners(i);
+            let flagged = c.into_iter().filter(flagged).min();
+            flagged.or(c.into_iter().min()).unwrap_or(0)
+        })
         .collect();
     let mut sources = reps.clone();
     sources.sort_unstable();
@@ -748,6 +774,47 @@ mod tests {
             .collect();
         TensorField::from_frames(mesh, &dirs, &vec![[4.0, 1.0]; mesh.vertex_count()])
             .expect("valid field")
+    }
+
+    #[test]
+    fn tree_ends_at_the_flagged_corner_of_each_singular_face() {
+        let mesh = shapes::plane(1.0, 20).expect("plane");
+        let field = planar_singular_field(&mesh, &[(0.23, 0.31, 1.0), (0.71, 0.62, -1.0)]);
+        let singular: Vec<u32> = detect_singularities(&mesh, &field)
+            .iter()
+            .map(|s| s.face)
+            .collect();
+        assert_eq!(singular.len(), 2);
+        let costs = field_edge_costs(&mesh, &field);
+        let region = vec![true; mesh.face_count()];
+        let plain = singularity_tree(&mesh, &costs, &singular, &region);
+        let reached = tree_vertices(&mesh, &plain);
+        // Flag, on each singular face, a corner the plain tree does not reach (it ends
+        // at the lowest corner), and vertices on no singular face (ignored).
+        let mut ends = vec![false; mesh.vertex_count()];
+        let mut wanted = Vec::new();
+        for &f in &singular {
+            let t = mesh.triangles()[f as usize];
+            let v = *t
+                .iter()
+                .filter(|v| reached.binary_search(v).is_err())
+                .max()
+                .expect("a corner off the plain tree");
+            ends[v as usize] = true;
+            wanted.push(v);
+        }
+        ends[0] = true;
+        ends[mesh.vertex_count() - 1] = true;
+        let tree = singularity_tree_to(&mesh, &costs, &singular, &region, &ends);
+        let verts = tree_vertices(&mesh, &tree);
+        for v in wanted {
+            assert!(verts.binary_search(&v).is_ok(), "flagged corner {v}");
+        }
+        // No flags: the plain tree.
+        assert_eq!(
+            singularity_tree_to(&mesh, &costs, &singular, &region, &[]),
+            plain
+        );
     }
 
     #[test]

@@ -2,7 +2,8 @@
 
 use rayon::prelude::*;
 
-use super::paths::{field_edge_costs_with, singularity_tree};
+use super::comb_flips::comb_flip_vertices;
+use super::paths::{field_edge_costs_with, singularity_tree_to};
 use super::seeds::{face_frames, place_seeds_sized};
 use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, is_disc, patch_topology};
@@ -23,9 +24,12 @@ const MAX_SPLIT_ROUNDS: usize = 24;
 ///    segment boundary) becomes a cut the walk may not cross, and the segment is
 ///    re-segmented. Only faces of clusters the field winds around count
 ///    ([`singularity_clusters`](super::singularity_clusters) with a non-zero index): a
-///    dipole (a `+1/2` face touching a `-1/2` face) has no winding around it, so a
-///    segment may hold it and still comb consistently around it, and cutting to it
-///    only fragments the segment (bench/README.md, "Trees to net singularities only").
+///    dipole (a `+1/2` face touching a `-1/2` face) has no winding around it, and
+///    cutting to it fragmented segments more than it saved splits (bench/README.md,
+///    "Trees to net singularities only"). Each singular face is reached at the corner
+///    the per-face frames cannot be combed around
+///    ([`comb_flip_vertices`](super::comb_flip_vertices)), where there is one: the
+///    vertex the parameterization needs on a cut.
 /// 3. Every segment that is not a disc is cut along field-following paths (4.2); a
 ///    segment that still is not a disc is split in two by the walk, until all are.
 ///
@@ -88,6 +92,7 @@ pub(crate) fn segment_sized(
         .collect();
     let net = FaceSet::new(mesh, &net_faces);
     if !net_faces.is_empty() {
+        let flips = comb_flip_vertices(mesh, &frames.major);
         let groups = group_by_label(&labels, 0..f_count as u32);
         let trees: Vec<Vec<u32>> = groups
             .par_iter()
@@ -97,7 +102,7 @@ pub(crate) fn segment_sized(
                     return Vec::new();
                 }
                 let region = FaceSet::new(mesh, faces);
-                singularity_tree(mesh, &costs, &sing, region.mask())
+                singularity_tree_to(mesh, &costs, &sing, region.mask(), &flips)
             })
             .collect();
         let touched: Vec<usize> = (0..groups.len())
