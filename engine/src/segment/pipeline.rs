@@ -64,25 +64,37 @@ pub(crate) fn segment_sized(
     options.validate()?;
     let f_count = mesh.face_count();
     let frames = face_frames(mesh, field);
-    let transport = line_field_transport(mesh, field);
-    let costs = field_edge_costs_with(mesh, field, &transport);
-    let singularities = singularities_from(mesh, &transport);
     let mut cut = vec![false; mesh.edge_count()];
 
-    // 1. The whole mesh.
+    // 1. The whole mesh. Its seeding is sequential, so the field's edge costs, its
+    // singularities and the comb flips (needed from step 2) are found beside it.
     let all = FaceSet::all(mesh);
-    let weights = walk_weights(mesh, &frames, options.sigma, &cut);
-    let seeds = place_seeds_sized(
-        mesh,
-        &frames,
-        &weights,
-        all.mask(),
-        options.beta,
-        options.seed,
-        surface_area,
+    let (walked, (costs, singularities, flips)) = rayon::join(
+        || -> Result<Vec<u32>, SegmentError> {
+            let weights = walk_weights(mesh, &frames, options.sigma, &cut);
+            let seeds = place_seeds_sized(
+                mesh,
+                &frames,
+                &weights,
+                all.mask(),
+                options.beta,
+                options.seed,
+                surface_area,
+            );
+            random_walk(mesh, &weights, all.mask(), &seeds)
+        },
+        || {
+            let transport = line_field_transport(mesh, field);
+            let costs = field_edge_costs_with(mesh, field, &transport);
+            let singularities = singularities_from(mesh, &transport);
+            (
+                costs,
+                singularities,
+                comb_flip_vertices(mesh, &frames.major),
+            )
+        },
     );
-    let walked = random_walk(mesh, &weights, all.mask(), &seeds)?;
-    let mut labels = connected_parts(mesh, &walked, &cut);
+    let mut labels = connected_parts(mesh, &walked?, &cut);
 
     // 2. Singularities on segment boundaries.
     let net_faces: Vec<u32> = singularity_clusters(mesh, &singularities)
@@ -92,7 +104,6 @@ pub(crate) fn segment_sized(
         .collect();
     let net = FaceSet::new(mesh, &net_faces);
     if !net_faces.is_empty() {
-        let flips = comb_flip_vertices(mesh, &frames.major);
         let groups = group_by_label(&labels, 0..f_count as u32);
         let trees: Vec<Vec<u32>> = groups
             .par_iter()
