@@ -14,10 +14,13 @@
 //! in that order); the round's unions are parameterized in parallel and the valid ones
 //! replace their pair. A pair that failed is not tried again while both pieces stay
 //! as they are. Only unions of at most [`MergeLimit`] faces are tried, so the cost is
-//! bounded by a few small factorizations per piece. The result depends on the pieces
-//! alone, never on the thread count.
+//! bounded by a few small factorizations per piece. Nor is a union whose faces are a
+//! piece splitting already found invalid ([`PieceSet`]): two halves that both came
+//! out valid would otherwise be glued back into their failed parent and parameterized
+//! again. The result depends on the pieces (and that set) alone, never on the thread
+//! count.
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap, HashSet};
 
 use rayon::prelude::*;
 
@@ -44,9 +47,53 @@ impl MergeLimit {
     }
 }
 
+/// Face sets named by their size and an order-free hash of their faces (the wrapping
+/// sum of a mix of each face), so that the name of a union of two disjoint sets is the
+/// sum of theirs. Two different sets share a name with probability about 2^-64; the
+/// merge pass only uses the set to skip unions known to be invalid, so a collision
+/// would cost one merge, never a wrong piece.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PieceSet(HashSet<(usize, u64)>);
+
+impl PieceSet {
+    /// The name of the face set `faces` (no face twice).
+    pub(crate) fn name(faces: &[u32]) -> (usize, u64) {
+        (
+            faces.len(),
+            faces.iter().fold(0u64, |h, &f| h.wrapping_add(mix(f))),
+        )
+    }
+
+    /// Adds the face set `faces`.
+    #[cfg(test)]
+    pub(crate) fn insert(&mut self, faces: &[u32]) {
+        self.insert_name(Self::name(faces));
+    }
+
+    /// Adds the face set named `name` (see [`name`](Self::name)).
+    pub(crate) fn insert_name(&mut self, name: (usize, u64)) {
+        self.0.insert(name);
+    }
+
+    fn contains(&self, name: (usize, u64)) -> bool {
+        self.0.contains(&name)
+    }
+}
+
+/// SplitMix64's finaliser of `f + 1`: a face's contribution to a [`PieceSet`] name.
+fn mix(f: u32) -> u64 {
+    let mut z = u64::from(f)
+        .wrapping_add(1)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 /// Merges neighbouring pieces of one segment whose union is valid (see the module
-/// docs). `pieces` are the segment's final pieces; returns the pieces after merging,
-/// ordered by their lowest face, and the number of merges.
+/// docs). `pieces` are the segment's final pieces and `invalid` the face sets already
+/// found invalid (unions equal to one are not tried); returns the pieces after
+/// merging, ordered by their lowest face, and the number of merges.
 pub(crate) fn merge_pieces(
     mesh: &TriMesh,
     tensors: &FaceTensors,
@@ -54,6 +101,7 @@ pub(crate) fn merge_pieces(
     mut pieces: Vec<SegmentParam>,
     options: &SurfaceOptions,
     limit: MergeLimit,
+    invalid: &PieceSet,
 ) -> (Vec<SegmentParam>, usize) {
     if pieces.len() < 2 {
         return (pieces, 0);
@@ -71,7 +119,12 @@ pub(crate) fn merge_pieces(
             .filter_map(|(i, j)| {
                 let key = [name(&pieces[i]), name(&pieces[j])];
                 let size = pieces[i].faces.len() + pieces[j].faces.len();
-                (size <= limit.0 && !failed.contains(&key)).then_some((size, key, i, j))
+                let (a, b) = (
+                    PieceSet::name(&pieces[i].faces),
+                    PieceSet::name(&pieces[j].faces),
+                );
+                let known = invalid.contains((a.0 + b.0, a.1.wrapping_add(b.1)));
+                (size <= limit.0 && !known && !failed.contains(&key)).then_some((size, key, i, j))
             })
             .collect();
         if candidates.is_empty() {
@@ -206,6 +259,18 @@ mod tests {
         pieces: Vec<SegmentParam>,
         limit: MergeLimit,
     ) -> (Vec<SegmentParam>, usize) {
+        merge_known(mesh, field, cut, pieces, limit, &PieceSet::default())
+    }
+
+    /// [`merge`] with face sets known to be invalid.
+    fn merge_known(
+        mesh: &TriMesh,
+        field: &TensorField,
+        cut: &[bool],
+        pieces: Vec<SegmentParam>,
+        limit: MergeLimit,
+        invalid: &PieceSet,
+    ) -> (Vec<SegmentParam>, usize) {
         let tensors = FaceTensors::new(mesh, field);
         merge_pieces(
             mesh,
@@ -214,6 +279,7 @@ mod tests {
             pieces,
             &SurfaceOptions::default(),
             limit,
+            invalid,
         )
     }
 
@@ -253,6 +319,42 @@ mod tests {
         let mut faces = merged[0].faces.clone();
         faces.sort_unstable();
         assert_eq!(faces, (0..mesh.face_count() as u32).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn unions_known_to_be_invalid_are_not_tried() {
+        let mesh = shapes::plane(1.0, 16).expect("plane");
+        let field = field_along(&mesh, DVec3::X);
+        let cut = vec![false; mesh.edge_count()];
+        let parts = groups(&mesh, |c| usize::from(c.x > 0.5));
+        let pieces = valid_pieces(&mesh, &field, &cut, &parts);
+        let limit = MergeLimit(mesh.face_count());
+        // The two halves' union is valid; named as invalid (in another face order than
+        // the pieces give it), it is left alone.
+        let mut union: Vec<u32> = parts.concat();
+        union.reverse();
+        let mut invalid = PieceSet::default();
+        invalid.insert(&union);
+        let (kept, merges) = merge_known(&mesh, &field, &cut, pieces.clone(), limit, &invalid);
+        assert_eq!((kept.len(), merges), (2, 0));
+        // A set that is not their union does not stop the merge.
+        let mut other = PieceSet::default();
+        other.insert(&union[1..]);
+        other.insert(&parts[0]);
+        let (merged, merges) = merge_known(&mesh, &field, &cut, pieces, limit, &other);
+        assert_eq!((merged.len(), merges), (1, 1));
+    }
+
+    #[test]
+    fn union_names_add_up() {
+        let a = [3u32, 17, 4, 250];
+        let b = [9u32, 1000, 0];
+        let (na, nb) = (PieceSet::name(&a), PieceSet::name(&b));
+        let mut ab: Vec<u32> = a.iter().chain(&b).copied().collect();
+        assert_eq!(PieceSet::name(&ab), (na.0 + nb.0, na.1.wrapping_add(nb.1)));
+        ab.sort_unstable();
+        assert_eq!(PieceSet::name(&ab), (7, na.1.wrapping_add(nb.1)));
+        assert_ne!(PieceSet::name(&a[..3]).1, PieceSet::name(&[3u32, 17, 5]).1);
     }
 
     #[test]

@@ -32,7 +32,7 @@ use std::sync::{Mutex, OnceLock, PoisonError};
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use super::merge::{MergeLimit, merge_pieces};
+use super::merge::{MergeLimit, PieceSet, merge_pieces};
 use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
@@ -167,6 +167,7 @@ pub fn parameterize_segment_with_splitting(
         mut accepted,
         mut small,
         splits,
+        invalid,
     } = splitter.split_until_valid(faces.to_vec())?;
     let mut report = SurfaceReport {
         splits,
@@ -199,7 +200,15 @@ pub fn parameterize_segment_with_splitting(
     }
     let (mut accepted, merges) = if options.merge_pieces {
         let limit = MergeLimit::for_mesh(mesh.face_count());
-        merge_pieces(mesh, &context.tensors, cut, accepted, options, limit)
+        merge_pieces(
+            mesh,
+            &context.tensors,
+            cut,
+            accepted,
+            options,
+            limit,
+            &invalid,
+        )
     } else {
         (accepted, 0)
     };
@@ -213,12 +222,14 @@ pub fn parameterize_segment_with_splitting(
 }
 
 /// What splitting with the field leaves: valid pieces, pieces too small to split
-/// further (for the isotropic fallback) and the number of splits.
+/// further (for the isotropic fallback), the number of splits and the pieces split
+/// because they were invalid (so that merging does not rebuild them).
 #[derive(Debug, Default)]
 struct Pieces {
     accepted: Vec<SegmentParam>,
     small: Vec<Vec<u32>>,
     splits: usize,
+    invalid: PieceSet,
 }
 
 /// Parameterizes pieces and splits the invalid ones in two, each piece as soon as its
@@ -258,6 +269,7 @@ impl Splitter<'_> {
         if lock().is_err() {
             return; // another piece failed: the whole segment does
         }
+        let name = PieceSet::name(&faces);
         match self.outcome(faces) {
             Ok(Outcome::Accepted(p)) => {
                 if let Ok(pieces) = &mut *lock() {
@@ -272,6 +284,7 @@ impl Splitter<'_> {
             Ok(Outcome::Split(halves)) => {
                 if let Ok(pieces) = &mut *lock() {
                     pieces.splits += 1;
+                    pieces.invalid.insert_name(name);
                 }
                 for half in halves {
                     scope.spawn(move |scope| self.visit(scope, out, half));
