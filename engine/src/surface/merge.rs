@@ -15,10 +15,10 @@
 //! replace their pair. A pair that failed is not tried again while both pieces stay
 //! as they are. Only unions of at most [`MergeLimit`] faces are tried, so the cost is
 //! bounded by a few small factorizations per piece. Nor is a union whose faces are a
-//! piece splitting already found invalid ([`PieceSet`]): two halves that both came
-//! out valid would otherwise be glued back into their failed parent and parameterized
-//! again. The result depends on the pieces (and that set) alone, never on the thread
-//! count.
+//! piece splitting already found invalid (named by size and an order-free hash of its
+//! faces): two halves that both came out valid would otherwise be glued back into
+//! their failed parent and parameterized again. The result depends on the pieces (and
+//! those names) alone, never on the thread count.
 
 use std::collections::{BTreeSet, HashMap, HashSet};
 
