@@ -28,6 +28,7 @@ use super::SurfaceOptions;
 use super::refine::lowest_face;
 use crate::mesh::{NONE, TriMesh};
 use crate::param::{FaceTensors, SegmentParam, parameterize_with};
+use crate::rng::mix64;
 
 /// Unions larger than this many faces are not tried: `max(MERGE_MIN_FACES, faces /
 /// MERGE_SHARE)` for a mesh of `faces` faces, so the largest merge attempted covers
@@ -80,14 +81,14 @@ impl PieceSet {
     }
 }
 
-/// SplitMix64's finaliser of `f + 1`: a face's contribution to a [`PieceSet`] name.
+/// A face's contribution to a [`PieceSet`] name: SplitMix64's finaliser of a
+/// multiple of the golden ratio, so that face 0 contributes too.
 fn mix(f: u32) -> u64 {
-    let mut z = u64::from(f)
-        .wrapping_add(1)
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    mix64(
+        u64::from(f)
+            .wrapping_add(1)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15),
+    )
 }
 
 /// Merges neighbouring pieces of one segment whose union is valid (see the module
