@@ -776,16 +776,23 @@ mod tests {
             .expect("valid field")
     }
 
-    #[test]
-    fn tree_ends_at_the_flagged_corner_of_each_singular_face() {
-        let mesh = shapes::plane(1.0, 20).expect("plane");
-        let field = planar_singular_field(&mesh, &[(0.23, 0.31, 1.0), (0.71, 0.62, -1.0)]);
+    /// The `n` x `n` unit plane with [`planar_singular_field`] at `points`: the mesh,
+    /// its singular faces (one per point) and the field's edge costs.
+    fn plane_case(n: u32, points: &[(f64, f64, f64)]) -> (TriMesh, Vec<u32>, Vec<f64>) {
+        let mesh = shapes::plane(1.0, n).expect("plane");
+        let field = planar_singular_field(&mesh, points);
         let singular: Vec<u32> = detect_singularities(&mesh, &field)
             .iter()
             .map(|s| s.face)
             .collect();
-        assert_eq!(singular.len(), 2);
+        assert_eq!(singular.len(), points.len());
         let costs = field_edge_costs(&mesh, &field);
+        (mesh, singular, costs)
+    }
+
+    #[test]
+    fn tree_ends_at_the_flagged_corner_of_each_singular_face() {
+        let (mesh, singular, costs) = plane_case(20, &[(0.23, 0.31, 1.0), (0.71, 0.62, -1.0)]);
         let region = vec![true; mesh.face_count()];
         let plain = singularity_tree(&mesh, &costs, &singular, &region);
         let reached = tree_vertices(&mesh, &plain);
@@ -819,17 +826,10 @@ mod tests {
 
     #[test]
     fn tree_joins_all_singularities_of_a_region() {
-        let mesh = shapes::plane(1.0, 20).expect("plane");
-        let field = planar_singular_field(
-            &mesh,
+        let (mesh, singular, costs) = plane_case(
+            20,
             &[(0.23, 0.31, 1.0), (0.71, 0.37, 1.0), (0.52, 0.74, -1.0)],
         );
-        let singular: Vec<u32> = detect_singularities(&mesh, &field)
-            .iter()
-            .map(|s| s.face)
-            .collect();
-        assert_eq!(singular.len(), 3);
-        let costs = field_edge_costs(&mesh, &field);
         let region = vec![true; mesh.face_count()];
         let tree = singularity_tree(&mesh, &costs, &singular, &region);
         let verts = tree_vertices(&mesh, &tree);
@@ -924,9 +924,8 @@ mod tests {
 
     #[test]
     fn tree_is_as_cheap_as_the_paper_s_pairwise_mst() {
-        let mesh = shapes::plane(1.0, 24).expect("plane");
-        let field = planar_singular_field(
-            &mesh,
+        let (mesh, singular, costs) = plane_case(
+            24,
             &[
                 (0.13, 0.21, 1.0),
                 (0.81, 0.27, 1.0),
@@ -935,12 +934,6 @@ mod tests {
                 (0.68, 0.53, 1.0),
             ],
         );
-        let singular: Vec<u32> = detect_singularities(&mesh, &field)
-            .iter()
-            .map(|s| s.face)
-            .collect();
-        assert_eq!(singular.len(), 5);
-        let costs = field_edge_costs(&mesh, &field);
         let region = vec![true; mesh.face_count()];
         let tree = singularity_tree(&mesh, &costs, &singular, &region);
         let cost: f64 = tree.iter().map(|&e| costs[e as usize]).sum();
