@@ -82,6 +82,12 @@ pub(crate) struct Connection {
 /// needs 10 to 25; more means the system is nearly singular).
 const MAX_CG_ITERATIONS: usize = 500;
 
+/// Conjugate-gradient iterations a solve with a reused hierarchy
+/// ([`Connection::solve_with_hierarchy`]) may take before the caller builds a fresh
+/// one: three times the 15 to 21 a fresh hierarchy takes on the bunny at every size,
+/// and more than a fresh hierarchy's setup costs (about 14 iterations at 1.1M faces).
+const REUSE_MAX_ITERATIONS: usize = 60;
+
 /// Relative residual of the multigrid solves of the normal smoothing: the smoothed
 /// normals only steer the connection, so 1e-5 (about 1e-5 rad) is ample.
 const NORMALS_TOLERANCE: f64 = 1e-5;
@@ -342,6 +348,34 @@ impl Connection {
             matrix.as_ref(),
             spare,
         )?))
+    }
+
+    /// Solves `(A + diag(extra)) z = rhs` on the whole mesh by conjugate gradients
+    /// preconditioned with `amg`, the hierarchy of `A + shift M` (see
+    /// [`pcg::solve_with_diagonal`]); `None` where it fails or runs out of iterations
+    /// (the caller then builds a hierarchy of its own).
+    pub(crate) fn solve_with_hierarchy(
+        &self,
+        amg: &Amg<c64>,
+        shift: f64,
+        extra: &[f64],
+        rhs: &[c64],
+    ) -> Option<Vec<c64>> {
+        let delta: Vec<f64> = extra
+            .iter()
+            .zip(&self.mass)
+            .map(|(d, m)| d - shift * m)
+            .collect();
+        let mut z = vec![c64::new(0.0, 0.0); rhs.len()];
+        let solved = pcg::solve_with_diagonal(
+            amg,
+            &delta,
+            rhs,
+            &mut z,
+            SOLVE_TOLERANCE,
+            REUSE_MAX_ITERATIONS,
+        );
+        (solved.is_ok() && z.iter().all(|v| v.is_finite())).then_some(z)
     }
 
     /// Keeps `factor`'s buffers for the next [`factor`](Self::factor).

@@ -463,7 +463,7 @@ fn the_lambda_1_estimate_is_from_above_and_close() {
             .expect("field")
             .rayleigh;
         let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, true).expect("system");
-        let estimate = smallest_eigenvalue(&mesh, &system, system.shift()).expect("estimate");
+        let (estimate, _) = smallest_eigenvalue(&mesh, &system, system.shift()).expect("estimate");
         println!("{name}: lambda_1 {converged}, estimate {estimate}");
         assert!(
             estimate >= converged * (1.0 - 1e-9),
@@ -474,4 +474,25 @@ fn the_lambda_1_estimate_is_from_above_and_close() {
             "{name}: {estimate} vs {converged}"
         );
     }
+}
+
+#[test]
+fn the_reuse_bound_brackets_the_rayleigh_ratio() {
+    let mass = [1.0, 2.0, 0.5];
+    let (shift, lambda) = (0.01, 1.99);
+    // The hierarchy's own matrix: ratio 1.
+    let same: Vec<f64> = mass.iter().map(|m| shift * m).collect();
+    assert!((reuse_condition(&same, &mass, shift, lambda) - 1.0).abs() < 1e-12);
+    // r = lambda + shift at one vertex: z^H K z / z^H B z up to 2.
+    let more = [shift * 1.0, (2.0 * shift + lambda) * 2.0, shift * 0.5];
+    assert!((reuse_condition(&more, &mass, shift, lambda) - 2.0).abs() < 1e-12);
+    // The pull -(lambda + shift) / 2 at one vertex: down to 1/2.
+    let less = [shift - 1.0, shift * 2.0, shift * 0.5];
+    assert!((reuse_condition(&less, &mass, shift, lambda) - 2.0).abs() < 1e-12);
+    // Both: 2 / (1/2).
+    let both = [shift - 1.0, (2.0 * shift + lambda) * 2.0, shift * 0.5];
+    assert!((reuse_condition(&both, &mass, shift, lambda) - 4.0).abs() < 1e-12);
+    // A pull of lambda + shift or more may make K indefinite: no bound.
+    let indefinite = [shift - 2.0, shift * 2.0, shift * 0.5];
+    assert!(reuse_condition(&indefinite, &mass, shift, lambda).is_infinite());
 }

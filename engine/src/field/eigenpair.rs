@@ -11,6 +11,7 @@ use super::connection::{Connection, Factor};
 use super::design::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
 use super::lanczos;
 use super::line_field::LineFieldError;
+use crate::linalg::Amg;
 use crate::mesh::TriMesh;
 
 /// A fixed pseudo-random value in `[-1, 1)` for index `i` (SplitMix64 finaliser).
@@ -87,13 +88,14 @@ fn inverse_iteration(
 
 /// An estimate from above of the smallest eigenvalue `lambda_1` of `A z = lambda M z`,
 /// to [`LAMBDA_TOLERANCE`] in at most [`LAMBDA_ITERATIONS`] solves (see
-/// [`smallest_eigenpair`]).
+/// [`smallest_eigenpair`]), and with multigrid the hierarchy of `A + shift M` it
+/// built, for a caller whose next system differs from it by the diagonal only.
 pub(crate) fn smallest_eigenvalue(
     mesh: &TriMesh,
     system: &Connection,
     shift: f64,
-) -> Result<f64, LineFieldError> {
-    let (_, value, _) = smallest_eigenpair(
+) -> Result<(f64, Option<Amg<c64>>), LineFieldError> {
+    let ((_, value, _), factor) = eigenpair_and_factor(
         mesh,
         system,
         shift,
@@ -102,7 +104,13 @@ pub(crate) fn smallest_eigenvalue(
         0.0,
         false,
     )?;
-    Ok(value)
+    Ok(match factor {
+        Factor::Multigrid(amg) => (value, Some(amg)),
+        direct => {
+            system.recycle(direct);
+            (value, None)
+        }
+    })
 }
 
 /// Most basis vectors of the Krylov space behind [`smallest_eigenpair`] before it
@@ -131,6 +139,24 @@ pub(crate) fn smallest_eigenpair(
     floor: f64,
     vector: bool,
 ) -> Result<(Vec<c64>, f64, usize), LineFieldError> {
+    let (found, factor) = eigenpair_and_factor(mesh, system, shift, max, tolerance, floor, vector)?;
+    system.recycle(factor);
+    Ok(found)
+}
+
+/// The vector (`z^H M z = 1`), its value and the solves taken.
+type Eigenpair = (Vec<c64>, f64, usize);
+
+/// [`smallest_eigenpair`] and the factor it used.
+fn eigenpair_and_factor(
+    mesh: &TriMesh,
+    system: &Connection,
+    shift: f64,
+    max: usize,
+    tolerance: f64,
+    floor: f64,
+    vector: bool,
+) -> Result<(Eigenpair, Factor), LineFieldError> {
     let n = system.len();
     let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
     let identity: Vec<usize> = (0..n).collect();
@@ -168,6 +194,5 @@ pub(crate) fn smallest_eigenpair(
             (x, value, solves)
         })
     };
-    system.recycle(factor);
-    found
+    Ok((found?, factor))
 }

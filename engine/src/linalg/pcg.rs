@@ -1,6 +1,7 @@
 //! Preconditioned conjugate gradients for Hermitian positive definite systems.
 
 use super::amg::Amg;
+use super::csr::Csr;
 use super::error::LinalgError;
 use super::scalar::{Scalar, dot, norm2};
 
@@ -33,19 +34,62 @@ pub fn solve<S: Scalar>(
     let mut xi = vec![S::ZERO; n];
     amg.to_internal(b, &mut bi);
     amg.to_internal(x, &mut xi);
-    let report = solve_internal(amg, &bi, &mut xi, tolerance, max_iterations);
+    let report = solve_internal(amg.matrix(), amg, &bi, &mut xi, tolerance, max_iterations);
+    amg.from_internal(&xi, x);
+    report
+}
+
+/// Solves `(A + diag(delta)) x = b` (`A` the matrix `amg` was built from, `delta` in
+/// the caller's numbering) by conjugate gradients preconditioned with `amg`'s V-cycle
+/// for `A`, from the `x` given, to the same tolerance as [`solve`]. For a system that
+/// differs from an already built hierarchy's by its diagonal only: the iterations grow
+/// with how far `A + diag(delta)` is from `A` (the ratio of the largest to the
+/// smallest `z^H (A + diag(delta)) z / z^H A z`), so a caller gates it on a bound of
+/// that ratio. Errors as [`solve`]; an indefinite sum is reported as such.
+pub fn solve_with_diagonal<S: Scalar>(
+    amg: &Amg<S>,
+    delta: &[f64],
+    b: &[S],
+    x: &mut [S],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<PcgReport, LinalgError> {
+    let mut a = amg.matrix().clone();
+    let n = a.rows();
+    assert!(
+        delta.len() == n && b.len() == n && x.len() == n,
+        "pcg: vector lengths differ from the matrix"
+    );
+    let mut d = vec![S::ZERO; n];
+    amg.to_internal(
+        &delta.iter().map(|&v| S::real(v)).collect::<Vec<S>>(),
+        &mut d,
+    );
+    for (r, dr) in d.iter().enumerate() {
+        let (cols, vals) = a.row_mut(r);
+        match cols.binary_search(&(r as u32)) {
+            Ok(k) => vals[k] += *dr,
+            // Every row of a matrix `Amg` accepts has its (positive) diagonal.
+            Err(_) => return Err(LinalgError::NotPositiveDefinite { pivot: r }),
+        }
+    }
+    let mut bi = vec![S::ZERO; n];
+    let mut xi = vec![S::ZERO; n];
+    amg.to_internal(b, &mut bi);
+    amg.to_internal(x, &mut xi);
+    let report = solve_internal(&a, amg, &bi, &mut xi, tolerance, max_iterations);
     amg.from_internal(&xi, x);
     report
 }
 
 fn solve_internal<S: Scalar>(
+    a: &Csr<S>,
     amg: &Amg<S>,
     b: &[S],
     x: &mut [S],
     tolerance: f64,
     max_iterations: usize,
 ) -> Result<PcgReport, LinalgError> {
-    let a = amg.matrix();
     let n = a.rows();
     assert!(
         b.len() == n && x.len() == n,
