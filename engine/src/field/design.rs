@@ -235,7 +235,7 @@ fn smoothest_on(
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
     let shift = system.shift();
-    let (x, _, solves) = smallest_eigenpair(
+    let ((x, _, solves), factor) = smallest_eigenpair(
         mesh,
         system,
         shift,
@@ -244,6 +244,7 @@ fn smoothest_on(
         shift,
         true,
     )?;
+    system.recycle(factor);
     Ok(system.output(&x, solves))
 }
 
@@ -502,7 +503,9 @@ pub(crate) fn constrained_line_field_with<'g>(
 /// built. The bound is a worst case over single vertices: the bunny's designed field
 /// (`configs/stanford-bunny-smooth.ron`) gives 3.3 / 5.2 / 8.6 at 69k / 278k / 1.1M
 /// faces and the reused hierarchy takes 21 iterations at 278k and 1.1M, as a fresh one
-/// does; the field tests with guidance weights of 100 and more give 200 to 26,000.
+/// does. Stiffer systems fall above it: the bunny at guidance weights 100 and 1000
+/// gives 223 and 1,545, the built-in cylinder with the default design (strong
+/// curvature guidance against a small `lambda_1`) 25,935.
 pub(crate) const REUSE_CONDITION: f64 = 16.0;
 
 /// A bound on the condition number of `B^-1 K` for `K = A + diag(extra)` and

@@ -95,7 +95,7 @@ pub(crate) fn smallest_eigenvalue(
     system: &Connection,
     shift: f64,
 ) -> Result<(f64, Option<Amg<c64>>), LineFieldError> {
-    let ((_, value, _), factor) = eigenpair_and_factor(
+    let ((_, value, _), factor) = smallest_eigenpair(
         mesh,
         system,
         shift,
@@ -124,31 +124,17 @@ fn start_vector(n: usize) -> Vec<c64> {
         .collect()
 }
 
+/// The vector (`z^H M z = 1`), its value and the solves taken.
+type Eigenpair = (Vec<c64>, f64, usize);
+
 /// The smallest eigenpair of `A z = lambda M z` on the whole mesh with the factor of
 /// `A + shift M`, from the fixed pseudo-random start, until a step changes the value by
 /// at most `tolerance` times the larger of its magnitude and `floor`, or after `max`
 /// solves: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)) with a direct
 /// factor, preconditioned inverse iteration with multigrid. Returns the vector
-/// (`z^H M z = 1`), its value (never below the eigenvalue) and the solves taken.
+/// (`z^H M z = 1`), its value (never below the eigenvalue) and the solves taken, and
+/// the factor, for the caller to reuse or to [`recycle`](Connection::recycle).
 pub(crate) fn smallest_eigenpair(
-    mesh: &TriMesh,
-    system: &Connection,
-    shift: f64,
-    max: usize,
-    tolerance: f64,
-    floor: f64,
-    vector: bool,
-) -> Result<(Vec<c64>, f64, usize), LineFieldError> {
-    let (found, factor) = eigenpair_and_factor(mesh, system, shift, max, tolerance, floor, vector)?;
-    system.recycle(factor);
-    Ok(found)
-}
-
-/// The vector (`z^H M z = 1`), its value and the solves taken.
-type Eigenpair = (Vec<c64>, f64, usize);
-
-/// [`smallest_eigenpair`] and the factor it used.
-fn eigenpair_and_factor(
     mesh: &TriMesh,
     system: &Connection,
     shift: f64,
