@@ -23,8 +23,9 @@ use crate::mesh::{NONE, TriMesh};
 /// Per vertex, whether the per-face directions `major` (one unit vector per face, in
 /// its plane, sign arbitrary) flip around it: an odd number of the vertex's edges
 /// join two faces whose directions, one carried into the other's plane about the
-/// shared edge, point in opposite senses. Boundary and non-manifold vertices (an
-/// edge without exactly two faces) are never flagged.
+/// shared edge, point in opposite senses. A vertex with an edge that does not have
+/// exactly two faces (a boundary or non-manifold edge) is never flagged; at a vertex
+/// pinching two closed fans the edges of both count.
 pub fn comb_flip_vertices(mesh: &TriMesh, major: &[DVec3]) -> Vec<bool> {
     assert_eq!(major.len(), mesh.face_count(), "one direction per face");
     let pos = mesh.positions();

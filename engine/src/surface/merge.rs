@@ -115,15 +115,14 @@ pub(crate) fn merge_pieces(
     let name = |p: &SegmentParam| (lowest_face(p), p.faces.len());
     loop {
         let pairs = adjacent_pairs(mesh, cut, &pieces);
+        // Each piece's set name once per round (a piece has many neighbours).
+        let sets: Vec<(usize, u64)> = pieces.iter().map(|p| PieceSet::name(&p.faces)).collect();
         let mut candidates: Vec<(usize, PairKey, usize, usize)> = pairs
             .into_iter()
             .filter_map(|(i, j)| {
                 let key = [name(&pieces[i]), name(&pieces[j])];
                 let size = pieces[i].faces.len() + pieces[j].faces.len();
-                let (a, b) = (
-                    PieceSet::name(&pieces[i].faces),
-                    PieceSet::name(&pieces[j].faces),
-                );
+                let (a, b) = (sets[i], sets[j]);
                 let known = invalid.contains((a.0 + b.0, a.1.wrapping_add(b.1)));
                 (size <= limit.0 && !known && !failed.contains(&key)).then_some((size, key, i, j))
             })
