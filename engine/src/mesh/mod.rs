@@ -12,6 +12,7 @@
 
 mod error;
 pub(crate) mod face_set;
+mod label_smoothing;
 pub mod shapes;
 mod subdivide;
 mod topology;

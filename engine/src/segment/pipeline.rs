@@ -30,7 +30,11 @@ const MAX_SPLIT_ROUNDS: usize = 24;
 ///    the per-face frames cannot be combed around
 ///    ([`comb_flip_vertices`](super::comb_flip_vertices)), where there is one: the
 ///    vertex the parameterization needs on a cut.
-/// 3. Every segment that is not a disc is cut along field-following paths (4.2); a
+/// 3. The borders between segments are smoothed: a face sharing two edges with
+///    another segment joins it ([`FaceSet::smooth_labels`]), since a field-aligned
+///    map folds such one-face ears and notches over and the segment fails the
+///    overlap test (bench/README.md, "Borders that fold").
+/// 4. Every segment that is not a disc is cut along field-following paths (4.2); a
 ///    segment that still is not a disc is split in two by the walk, until all are.
 ///
 /// Deterministic for `options.seed`, whatever the thread count.
@@ -160,7 +164,12 @@ pub(crate) fn segment_sized(
         }
     }
 
-    // 3. Discs.
+    // 3. Borders without one-face zigzags. Before the disc step, which repairs what a
+    // move could not foresee.
+    all.smooth_labels(mesh, &cut, &mut labels);
+    labels = connected_parts(mesh, &labels, &cut);
+
+    // 4. Discs.
     for _ in 0..MAX_SPLIT_ROUNDS {
         let groups = group_by_label(&labels, 0..f_count as u32);
         let extra: Vec<(usize, Vec<u32>, bool)> = groups

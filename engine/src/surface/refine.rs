@@ -11,7 +11,10 @@
 //! two most different directions, and both halves are parameterized again. A split
 //! whose parts are not discs or are badly unbalanced (an outlier direction next to a
 //! singularity seeds a region of a few faces) is redone from two faces far apart, so a
-//! segment needs about log2 of its size rounds, not one per outlier. Pieces of
+//! segment needs about log2 of its size rounds, not one per outlier. The border between
+//! the two parts is smoothed ([`FaceSet::smoothed_parts`]: no face shares two edges
+//! with the other part), since a field-aligned map folds one-face zigzags of a border
+//! over. Pieces of
 //! `WALK_SPLIT_FACES` (4096) faces or more skip the walk and are halved by hops
 //! straight away (the walk's split fails that test for most of them). Below
 //! `min_segment_faces` a segment is parameterized with an isotropic field (flagged
@@ -380,7 +383,7 @@ fn split_in_two(
     };
     let walk = |seeds: [u32; 2]| -> Result<Option<Vec<Vec<u32>>>, SurfaceError> {
         match random_walk(mesh, weights, set.mask(), &seeds) {
-            Ok(labels) => Ok(Some(set.parts(mesh, &labels, cut))),
+            Ok(labels) => Ok(Some(set.smoothed_parts(mesh, cut, &labels))),
             // Parts of the segment unreachable from both seeds (cut off by cut edges).
             Err(SegmentError::Unseeded { .. }) => Ok(None),
             Err(e) => Err(e.into()),
@@ -417,7 +420,7 @@ fn halve(mesh: &TriMesh, cut: &[bool], set: &FaceSet) -> Vec<Vec<u32>> {
     {
         let nearer_b = set.nearer_to_second(mesh, cut, a, b);
         let labels = set.labels(|i| u32::from(nearer_b[i]));
-        let parts = set.parts(mesh, &labels, cut);
+        let parts = set.smoothed_parts(mesh, cut, &labels);
         if parts.len() > 1 {
             return parts;
         }
