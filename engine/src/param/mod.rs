@@ -28,6 +28,11 @@
 //! 5. validity (section 5.2): flipped triangles (exact orientation predicate),
 //!    self-overlap of the parameter mesh (exact boundary self-intersection test over a
 //!    uniform grid) and the angle statistics of section 7.3.1.
+//! 6. repair of local folds: a map that flips or overlaps only within a few edges (a
+//!    sharp corner of the border folded over by the field's stretch) is relaxed there,
+//!    a few rounds of moving the vertices around the defect to the mean of their
+//!    neighbours, and kept when it then passes step 5 ([`ParamReport::relaxed_vertices`]
+//!    says how many moved); otherwise it stays invalid and the caller splits it.
 //!
 //! Cost, for a segment of `F` faces and `B` boundary edges: O(F) for the patch, the
 //! combing and the assembly; the Cholesky factorization of an AMD-ordered planar-like
@@ -50,6 +55,7 @@ mod patch;
 pub mod predicates;
 mod solve;
 mod spd;
+mod untangle;
 mod validity;
 
 pub use face_tensors::FaceTensors;
@@ -231,6 +237,10 @@ pub struct ParamReport {
     /// the field asks, `k` where they come out `k` times longer one way than the
     /// other; a degenerate face counts 1000).
     pub mean_stretch: f64,
+    /// Vertices moved by the repair of a local fold (0 for the map as solved): a
+    /// map that flipped or overlapped only within a few edges is relaxed there and
+    /// kept when it then passes the exact test.
+    pub relaxed_vertices: usize,
 }
 
 /// The parameterization of one segment: its cut-open local mesh with `uv` coordinates.
@@ -363,8 +373,17 @@ fn parameterize_by(
     let patch = patch::Patch::build(mesh, faces, cut)?;
     let eigen = patch.faces.iter().map(|&f| eigen(f)).collect();
     let frames = comb::frames(mesh, eigen, &patch, options)?;
-    let uv = solve::solve(mesh, &patch, &frames)?;
-    let report = validity::report(mesh, &patch, &frames, &uv, options);
+    let mut uv = solve::solve(mesh, &patch, &frames)?;
+    let mut report = validity::report(mesh, &patch, &frames, &uv, options);
+    // A map that fails by a fold a few edges long is relaxed there (module
+    // `untangle`) rather than split.
+    if !report.valid
+        && (report.flipped > 0 || report.overlaps)
+        && let Some((relaxed, r)) = untangle::repair(mesh, &patch, &frames, &uv, options)
+    {
+        uv = relaxed;
+        report = r;
+    }
     Ok(SegmentParam {
         uv,
         local_to_mesh: patch.local_to_mesh,

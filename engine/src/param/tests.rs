@@ -700,3 +700,119 @@ fn large_plane_timing() {
         matrix.compute_nnz(),
     );
 }
+
+/// The solved map of the 8 x 8 unit plane with a constant 2:1 field, its patch and
+/// frames, for the repair tests.
+fn plane_map() -> (
+    TriMesh,
+    patch::Patch,
+    comb::Frames,
+    Vec<DVec2>,
+    ParamOptions,
+) {
+    let mesh = shapes::plane(1.0, 8).expect("plane");
+    let field = constant(&mesh, [1.0, 0.0, 0.0], 2.0, 1.0);
+    let options = ParamOptions::default();
+    let faces = all_faces(&mesh);
+    let patch = patch::Patch::build(&mesh, &faces, &no_cut(&mesh)).expect("patch");
+    let eigen = patch
+        .faces
+        .iter()
+        .map(|&f| comb::face_eigen(&mesh, &field, f))
+        .collect();
+    let frames = comb::frames(&mesh, eigen, &patch, &options).expect("frames");
+    let uv = solve::solve(&mesh, &patch, &frames).expect("solve");
+    (mesh, patch, frames, uv, options)
+}
+
+#[test]
+fn defects_are_the_corners_of_flips_and_the_vertices_that_turn_more_than_once() {
+    let (mesh, patch, _, mut uv, _) = plane_map();
+    assert!(!untangle::defects(&uv, &patch.triangles).contains(&true));
+    // Push the middle of the bottom edge up past the next row: its triangles flip.
+    let v = vertex_at(&mesh, DVec3::new(0.5, 0.0, 0.0)) as usize;
+    let above = vertex_at(&mesh, DVec3::new(0.5, 0.25, 0.0)) as usize;
+    uv[v] = uv[above] + (uv[above] - uv[v]) * 0.5;
+    let bad = untangle::defects(&uv, &patch.triangles);
+    assert!(bad[v]);
+    assert!(count_flipped(&uv, &patch.triangles) > 0);
+    // Every flagged vertex is a corner of a flipped triangle or turns more than once.
+    let flipped_corners: Vec<bool> = {
+        let mut c = vec![false; uv.len()];
+        for t in &patch.triangles {
+            if count_flipped(&uv, &[*t]) == 1 {
+                for &k in t {
+                    c[k as usize] = true;
+                }
+            }
+        }
+        c
+    };
+    for (i, &b) in bad.iter().enumerate() {
+        if b && !flipped_corners[i] {
+            let turn: f64 = patch
+                .triangles
+                .iter()
+                .filter(|t| t.contains(&(i as u32)))
+                .map(|t| {
+                    let k = t.iter().position(|&c| c as usize == i).expect("corner");
+                    let (a, b) = (
+                        uv[t[(k + 1) % 3] as usize] - uv[i],
+                        uv[t[(k + 2) % 3] as usize] - uv[i],
+                    );
+                    a.perp_dot(b).atan2(a.dot(b))
+                })
+                .sum();
+            assert!(turn > std::f64::consts::TAU, "vertex {i} turns {turn}");
+        }
+    }
+}
+
+#[test]
+fn a_local_fold_is_relaxed_and_the_rest_of_the_map_stays() {
+    let (mesh, patch, frames, solved, options) = plane_map();
+    let mut uv = solved.clone();
+    let v = vertex_at(&mesh, DVec3::new(0.5, 0.0, 0.0)) as usize;
+    let above = vertex_at(&mesh, DVec3::new(0.5, 0.25, 0.0)) as usize;
+    uv[v] = uv[above] + (uv[above] - uv[v]) * 0.5;
+    assert!(!validity::report(&mesh, &patch, &frames, &uv, &options).valid);
+    let (fixed, report) =
+        untangle::repair(&mesh, &patch, &frames, &uv, &options).expect("a local fold repairs");
+    assert!(report.valid, "{report:?}");
+    assert_eq!(report, {
+        let mut r = validity::report(&mesh, &patch, &frames, &fixed, &options);
+        r.relaxed_vertices = report.relaxed_vertices;
+        r
+    });
+    assert!(report.relaxed_vertices > 0);
+    // Vertices more than a few rings (edge 1/8) from the defect keep their place.
+    let centre = DVec3::new(0.5, 0.0, 0.0);
+    for (i, (&p, &q)) in fixed.iter().zip(&uv).enumerate() {
+        let at = mesh.positions()[patch.local_to_mesh[i] as usize];
+        if at.distance(centre) > 0.26 * untangle::ROUNDS as f64 {
+            assert_eq!(p, q, "vertex {i} at {at} moved");
+        }
+    }
+}
+
+#[test]
+fn a_map_that_winds_over_itself_is_not_repaired() {
+    let (mesh, patch, frames, _, options) = plane_map();
+    // The plane wound onto a band through more than a full turn: a global overlap.
+    let uv: Vec<DVec2> = patch
+        .local_to_mesh
+        .iter()
+        .map(|&m| {
+            let p = mesh.positions()[m as usize];
+            let angle = (std::f64::consts::TAU + 1.5) * p.x;
+            DVec2::new(angle.cos(), angle.sin()) * (2.0 - p.y)
+        })
+        .collect();
+    let report = validity::report(&mesh, &patch, &frames, &uv, &options);
+    assert_eq!(
+        report.flipped, 0,
+        "counter-clockwise: only the overlap is wrong"
+    );
+    assert!(report.overlaps);
+    assert!(untangle::repair(&mesh, &patch, &frames, &uv, &options).is_none());
+}

@@ -97,9 +97,21 @@ fn pair_overlaps(uv: &[DVec2], [a, b]: [u32; 2], [c, d]: [u32; 2]) -> bool {
 /// assert!(!boundary_overlaps(&uv, &[[0, 2], [2, 1], [1, 3], [3, 0]]));
 /// ```
 pub fn boundary_overlaps(uv: &[DVec2], edges: &[[u32; 2]]) -> bool {
+    !boundary_crossings(uv, edges, 1).is_empty()
+}
+
+/// The pairs of `edges` that meet other than at shared endpoints (as
+/// [`boundary_overlaps`] decides), at most `limit` of them, each pair once in the
+/// order the grid finds them.
+pub(crate) fn boundary_crossings(
+    uv: &[DVec2],
+    edges: &[[u32; 2]],
+    limit: usize,
+) -> Vec<[[u32; 2]; 2]> {
+    let mut found = Vec::new();
     let edges: Vec<[u32; 2]> = edges.iter().copied().filter(|[a, b]| a != b).collect();
-    if edges.len() < 2 {
-        return false;
+    if edges.len() < 2 || limit == 0 {
+        return found;
     }
     let (lo, hi) = edges.iter().flatten().fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
@@ -161,13 +173,16 @@ pub fn boundary_overlaps(uv: &[DVec2], edges: &[[u32; 2]]) -> bool {
                         continue;
                     }
                     if pair_overlaps(uv, edges[i as usize], edges[j as usize]) {
-                        return true;
+                        found.push([edges[i as usize], edges[j as usize]]);
+                        if found.len() == limit {
+                            return found;
+                        }
                     }
                 }
             }
         }
     }
-    false
+    found
 }
 
 /// Grid of about `count` square-ish cells over a box of `size`.
@@ -191,6 +206,16 @@ fn grid_dims(size: DVec2, count: usize) -> (usize, usize) {
 /// run both ways between the same two vertices (the two sides of a closed seam) are
 /// glued, i.e. dropped.
 fn overlaps_with_closed_seams(uv: &[DVec2], edges: &[[u32; 2]], local_to_mesh: &[u32]) -> bool {
+    boundary_overlaps(uv, &with_closed_seams(uv, edges, local_to_mesh))
+}
+
+/// The boundary edges left after closing seams (see [`overlaps_with_closed_seams`]),
+/// in the welded vertices' numbering (each welded vertex is one of its copies).
+pub(crate) fn with_closed_seams(
+    uv: &[DVec2],
+    edges: &[[u32; 2]],
+    local_to_mesh: &[u32],
+) -> Vec<[u32; 2]> {
     let (lo, hi) = uv.iter().fold(
         (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
         |(lo, hi), p| (lo.min(*p), hi.max(*p)),
@@ -231,7 +256,21 @@ fn overlaps_with_closed_seams(uv: &[DVec2], edges: &[[u32; 2]], local_to_mesh: &
             kept.push(e);
         }
     }
-    boundary_overlaps(uv, &kept)
+    kept
+}
+
+/// The boundary edges of a patch (local vertex pairs, in the triangles' orientation).
+pub(crate) fn patch_boundary(patch: &Patch) -> Vec<[u32; 2]> {
+    patch
+        .triangles
+        .iter()
+        .zip(&patch.neighbors)
+        .flat_map(|(t, nb)| {
+            (0..3)
+                .filter(|&k| nb[k].0 == NONE)
+                .map(move |k| [t[k], t[(k + 1) % 3]])
+        })
+        .collect()
 }
 
 /// Computes the report of a solved segment.
@@ -243,16 +282,7 @@ pub(crate) fn report(
     options: &ParamOptions,
 ) -> ParamReport {
     let flipped = count_flipped(uv, &patch.triangles);
-    let edges: Vec<[u32; 2]> = patch
-        .triangles
-        .iter()
-        .zip(&patch.neighbors)
-        .flat_map(|(t, nb)| {
-            (0..3)
-                .filter(|&k| nb[k].0 == NONE)
-                .map(move |k| [t[k], t[(k + 1) % 3]])
-        })
-        .collect();
+    let edges = patch_boundary(patch);
     let overlaps = overlaps_with_closed_seams(uv, &edges, &patch.local_to_mesh);
     let (mut weighted, mut total_area, mut max_angle) = (0.0, 0.0, 0.0f64);
     let mut stretch_sum = 0.0;
@@ -300,6 +330,7 @@ pub(crate) fn report(
         inconsistent_combing: frames.inconsistent,
         mean_anisotropy: frames.mean_anisotropy,
         mean_stretch,
+        relaxed_vertices: 0,
     }
 }
 
