@@ -73,6 +73,9 @@ pub struct SegmentEntry {
     /// Area-weighted mean stretch of the map (the strata's aspect ratio in the field's
     /// metric, 1 when they are as the field asks; `ParamReport::mean_stretch`).
     pub mean_stretch: f64,
+    /// Vertices moved by the repair of a local fold (0 for a map as solved;
+    /// `ParamReport::relaxed_vertices`).
+    pub relaxed_vertices: usize,
     /// Parameterized with the isotropic fallback frame.
     pub isotropic_fallback: bool,
     /// An isotropic chart: most of its faces have all three vertices isotropic in the
@@ -154,6 +157,7 @@ impl SegmentReport {
                         mean_angle_deg: r.mean_angle_deg,
                         max_angle_deg: r.max_angle_deg,
                         mean_stretch: r.mean_stretch,
+                        relaxed_vertices: r.relaxed_vertices,
                         isotropic_fallback: r.isotropic_fallback,
                         chart: is_chart(p),
                     }
