@@ -15,7 +15,7 @@ pub(crate) mod face_set;
 mod label_smoothing;
 pub mod shapes;
 mod subdivide;
-mod topology;
+pub(crate) mod topology;
 
 pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};

@@ -393,8 +393,9 @@ fn build_edges(mesh: &mut TriMesh, triangles: &[[u32; 3]], v_count: usize) {
     }
 }
 
-/// CSR lists of faces and of neighbouring vertices around each vertex.
-fn build_vertex_rings(mesh: &mut TriMesh, triangles: &[[u32; 3]], v_count: usize) {
+/// The triangles around each of `v_count` vertices as CSR: offsets per vertex and
+/// triangle indices, ascending within each vertex (a counting sort, O(V + F)).
+pub(crate) fn vertex_triangles(triangles: &[[u32; 3]], v_count: usize) -> (Vec<u32>, Vec<u32>) {
     let mut counts = vec![0u32; v_count + 1];
     for t in triangles {
         for &v in t {
@@ -412,6 +413,12 @@ fn build_vertex_rings(mesh: &mut TriMesh, triangles: &[[u32; 3]], v_count: usize
             fill[v as usize] += 1;
         }
     }
+    (counts, faces)
+}
+
+/// CSR lists of faces and of neighbouring vertices around each vertex.
+fn build_vertex_rings(mesh: &mut TriMesh, triangles: &[[u32; 3]], v_count: usize) {
+    let (counts, faces) = vertex_triangles(triangles, v_count);
     mesh.vertex_face_offsets = counts;
     mesh.vertex_faces = faces;
 

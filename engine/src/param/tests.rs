@@ -664,12 +664,7 @@ fn large_plane_timing() {
     let patch = patch::Patch::build(&mesh, &faces, &cut).expect("patch");
     let t_patch = t.elapsed();
     let t = Instant::now();
-    let eigen = patch
-        .faces
-        .iter()
-        .map(|&f| comb::face_eigen(&mesh, &field, f))
-        .collect();
-    let frames = comb::frames(&mesh, eigen, &patch, &options).expect("frames");
+    let frames = frames_of(&mesh, &field, &patch, &options);
     let t_frames = t.elapsed();
     let t = Instant::now();
     let (matrix, mut rhs) = solve::assemble(&mesh, &patch, &frames).expect("assembly");
@@ -701,6 +696,21 @@ fn large_plane_timing() {
     );
 }
 
+/// The combed frames of `patch` for `field`.
+fn frames_of(
+    mesh: &TriMesh,
+    field: &TensorField,
+    patch: &patch::Patch,
+    options: &ParamOptions,
+) -> comb::Frames {
+    let eigen = patch
+        .faces
+        .iter()
+        .map(|&f| comb::face_eigen(mesh, field, f))
+        .collect();
+    comb::frames(mesh, eigen, patch, options).expect("frames")
+}
+
 /// The solved map of the 8 x 8 unit plane with a constant 2:1 field, its patch and
 /// frames, for the repair tests.
 fn plane_map() -> (
@@ -715,12 +725,7 @@ fn plane_map() -> (
     let options = ParamOptions::default();
     let faces = all_faces(&mesh);
     let patch = patch::Patch::build(&mesh, &faces, &no_cut(&mesh)).expect("patch");
-    let eigen = patch
-        .faces
-        .iter()
-        .map(|&f| comb::face_eigen(&mesh, &field, f))
-        .collect();
-    let frames = comb::frames(&mesh, eigen, &patch, &options).expect("frames");
+    let frames = frames_of(&mesh, &field, &patch, &options);
     let uv = solve::solve(&mesh, &patch, &frames).expect("solve");
     (mesh, patch, frames, uv, options)
 }

@@ -23,6 +23,7 @@ use super::patch::Patch;
 use super::predicates::orient2d;
 use super::{ParamOptions, ParamReport, validity};
 use crate::mesh::TriMesh;
+use crate::mesh::topology::vertex_triangles;
 
 /// The map `uv` of `patch` relaxed around its defects (see the module docs) and its
 /// report, if that makes it valid; `None` when it has no local defect, folds in more
@@ -58,7 +59,7 @@ pub(crate) fn repair(
         .iter()
         .map(|&m| copies[m as usize] == 1)
         .collect();
-    let incidence = incidence(uv.len(), &patch.triangles);
+    let incidence = vertex_triangles(&patch.triangles, uv.len());
     let mut trial = uv.to_vec();
     for _ in 0..ROUNDS {
         let moved = relax(
@@ -135,7 +136,7 @@ pub(crate) fn defects_near(
 /// Relaxes `uv` around the flagged vertices `region` (grown by one ring first), moving
 /// each movable vertex of the region to the mean of its neighbours, `steps` times
 /// (Jacobi: every step reads the previous step's positions). `incidence` lists each
-/// local vertex's triangles ([`incidence`]); `movable` excludes vertices on cuts.
+/// local vertex's triangles (`mesh::topology::vertex_triangles`); `movable` excludes vertices on cuts.
 /// Returns how many vertices it moves.
 pub(crate) fn relax(
     uv: &mut [DVec2],
@@ -184,27 +185,4 @@ pub(crate) fn relax(
         }
     }
     members.len()
-}
-
-/// The triangles of each local vertex, as CSR (offsets per vertex, triangle indices in
-/// ascending order): a counting sort, O(V + F).
-pub(crate) fn incidence(vertex_count: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
-    let mut offsets = vec![0u32; vertex_count + 1];
-    for t in triangles {
-        for &v in t {
-            offsets[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..vertex_count {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut fill = offsets.clone();
-    let mut faces = vec![0u32; offsets[vertex_count] as usize];
-    for (i, t) in triangles.iter().enumerate() {
-        for &v in t {
-            faces[fill[v as usize] as usize] = i as u32;
-            fill[v as usize] += 1;
-        }
-    }
-    (offsets, faces)
 }
