@@ -6,9 +6,9 @@
 //! corner beside a reflex one, the least-squares map can fold the border over by a
 //! few edges (bench/README.md, "Borders that fold"). The rest of the map is sound.
 //! Instead of splitting the piece, the vertices around the defect (corners of flipped
-//! triangles, vertices whose angles in the map add up to more than a full turn) and
-//! their neighbours are moved towards the mean of their neighbours, a few rounds, the
-//! region growing by a ring per round; the result is tested exactly as a fresh map is
+//! triangles, vertices whose angles in the map add up to more than a full turn, ends
+//! of crossing boundary edges) and their neighbours are moved towards the mean of
+//! their neighbours, a few rounds, the region growing by a ring per round; the result is tested exactly as a fresh map is
 //! ([`validity::report`](super::validity)), so a repair never passes an invalid map.
 //! Vertices with more than one copy (on a cut) stay where they are, so seams that
 //! close stay closed.
@@ -49,15 +49,15 @@ pub(crate) fn repair(
         return None;
     }
     // A mesh vertex with several local copies is on a cut: moving one copy would open
-    // a seam that closes, so they stay.
-    let mut copies = vec![0u8; mesh.vertex_count()];
-    for &m in &patch.local_to_mesh {
-        copies[m as usize] = copies[m as usize].saturating_add(1);
-    }
+    // a seam that closes, so they stay. (Sorted, not a table over the mesh: a small
+    // piece of a large mesh pays for its own size.)
+    let mut sorted = patch.local_to_mesh.clone();
+    sorted.sort_unstable();
+    let copies = |m: u32| sorted.partition_point(|&x| x <= m) - sorted.partition_point(|&x| x < m);
     let movable: Vec<bool> = patch
         .local_to_mesh
         .iter()
-        .map(|&m| copies[m as usize] == 1)
+        .map(|&m| copies(m) == 1)
         .collect();
     let incidence = vertex_triangles(&patch.triangles, uv.len());
     let mut trial = uv.to_vec();
@@ -136,8 +136,8 @@ pub(crate) fn defects_near(
 /// Relaxes `uv` around the flagged vertices `region` (grown by one ring first), moving
 /// each movable vertex of the region to the mean of its neighbours, `steps` times
 /// (Jacobi: every step reads the previous step's positions). `incidence` lists each
-/// local vertex's triangles (`mesh::topology::vertex_triangles`); `movable` excludes vertices on cuts.
-/// Returns how many vertices it moves.
+/// local vertex's triangles (`mesh::topology::vertex_triangles`); `movable` excludes
+/// vertices on cuts. Returns how many vertices it moves.
 pub(crate) fn relax(
     uv: &mut [DVec2],
     region: &mut [bool],
