@@ -222,7 +222,7 @@ impl FaceSet {
     }
 
     /// The set's faces, ascending, with their places.
-    fn places(&self, mesh: &TriMesh) -> MaskFaces {
+    pub(super) fn places(&self, mesh: &TriMesh) -> MaskFaces {
         let mut sorted = self.faces.clone();
         sorted.sort_unstable();
         MaskFaces::from_sorted(sorted, mesh.face_count())

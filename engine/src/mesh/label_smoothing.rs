@@ -9,14 +9,13 @@
 //! the random walk leave such zigzags; moving each face that shares two edges with
 //! another part into that part removes them.
 //!
-//! Each move shortens the total border by one edge, so the smoothing ends after at
-//! most as many moves as there are border edges; a move never disconnects a part nor
+//! Each move shortens the total border by at least one edge, so the smoothing ends
+//! after at most as many moves as there are border edges; a move never disconnects a part nor
 //! changes its Euler characteristic (see [`FaceSet::smooth_labels`]). Cost: O(size of
 //! the set) plus O(1) per move; sequential, in a fixed order, so deterministic.
 
 use std::collections::VecDeque;
 
-use super::face_set::MaskFaces;
 use super::{FaceSet, NONE, TriMesh};
 
 impl FaceSet {
@@ -46,9 +45,7 @@ impl FaceSet {
     /// # Ok::<(), strata_engine::mesh::MeshError>(())
     /// ```
     pub fn smooth_labels(&self, mesh: &TriMesh, cut: &[bool], labels: &mut [u32]) -> usize {
-        let mut sorted = self.faces().to_vec();
-        sorted.sort_unstable();
-        let places = MaskFaces::from_sorted(sorted, mesh.face_count());
+        let places = self.places(mesh);
         let faces = places.faces();
         let mut queued = vec![true; faces.len()];
         let mut queue: VecDeque<u32> = faces.iter().copied().collect();

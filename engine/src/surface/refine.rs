@@ -14,9 +14,8 @@
 //! segment needs about log2 of its size rounds, not one per outlier. The border between
 //! the two parts is smoothed ([`FaceSet::smoothed_parts`]: no face shares two edges
 //! with the other part), since a field-aligned map folds one-face zigzags of a border
-//! over. Pieces of
-//! `WALK_SPLIT_FACES` (4096) faces or more skip the walk and are halved by hops
-//! straight away (the walk's split fails that test for most of them). Below
+//! over. Pieces of `WALK_SPLIT_FACES` (4096) faces or more skip the walk and are
+//! halved by hops straight away (the walk's split fails that test for most of them). Below
 //! `min_segment_faces` a segment is parameterized with an isotropic field (flagged
 //! `isotropic_fallback`; it is sampled with the right density but without
 //! anisotropy); a piece for which even that flips is halved again, down to single
