@@ -10,7 +10,7 @@
 //! module header.
 
 use faer::Mat;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use glam::{DVec2, DVec3};
 
 use crate::mesh::TriMesh;
@@ -31,8 +31,68 @@ pub(crate) fn hat_gradients(p: [DVec3; 3], n: DVec3, area: f64) -> [DVec3; 3] {
     ]
 }
 
+/// The lower triangle's pattern of the stiffness matrix of `triangles` (`unknowns`
+/// unknowns; local vertex `v` is unknown `v - 1`, vertex 0 pinned): column `c` holds the
+/// diagonal and then, ascending, every unknown sharing a triangle with it. Made by a
+/// counting sort over the triangles' sides (O(F), no global sort): per column the
+/// larger ends of its sides, sorted and deduplicated in place.
+fn stiffness_pattern(triangles: &[[u32; 3]], unknowns: usize) -> (Vec<usize>, Vec<usize>) {
+    // Each side below the diagonal, as (column, row): both ends unknowns, row > column.
+    let sides = |t: &[u32; 3]| {
+        let t = *t;
+        (0..3).filter_map(move |k| {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let (c, r) = (a.min(b).checked_sub(1)?, a.max(b) - 1);
+            (r != c).then_some((c, r))
+        })
+    };
+    // Column starts with room for the diagonal and every side (an interior side twice).
+    let mut start = vec![0usize; unknowns + 1];
+    for t in triangles {
+        for (c, _) in sides(t) {
+            start[c + 1] += 1;
+        }
+    }
+    for c in 0..unknowns {
+        start[c + 1] += start[c] + 1;
+    }
+    let mut rows = vec![0usize; start[unknowns]];
+    let mut fill: Vec<usize> = start[..unknowns].iter().map(|&s| s + 1).collect();
+    for (c, &s) in start[..unknowns].iter().enumerate() {
+        rows[s] = c;
+    }
+    for t in triangles {
+        for (c, r) in sides(t) {
+            rows[fill[c]] = r;
+            fill[c] += 1;
+        }
+    }
+    // Sort and deduplicate each column's sides, compacting as we go.
+    let mut col_ptr = Vec::with_capacity(unknowns + 1);
+    let mut kept = 0;
+    for c in 0..unknowns {
+        col_ptr.push(kept);
+        let (from, to) = (start[c], start[c + 1]);
+        rows[from + 1..to].sort_unstable();
+        let mut last = usize::MAX;
+        for i in from..to {
+            let r = rows[i];
+            if r != last {
+                rows[kept] = r;
+                kept += 1;
+                last = r;
+            }
+        }
+    }
+    col_ptr.push(kept);
+    rows.truncate(kept);
+    (col_ptr, rows)
+}
+
 /// The normal equations: the lower triangle of `K` (local vertex 0 pinned, unknown
-/// `v - 1` for local vertex `v`) and the two right-hand sides as columns.
+/// `v - 1` for local vertex `v`) and the two right-hand sides as columns. The matrix is
+/// filled into its pattern ([`stiffness_pattern`]) face by face, so each entry sums
+/// its faces' terms in face order, as an assembly from triplets would.
 pub(crate) fn assemble(
     mesh: &TriMesh,
     patch: &Patch,
@@ -41,7 +101,8 @@ pub(crate) fn assemble(
     let vertex_count = patch.local_to_mesh.len();
     // Unknown of local vertex v is v - 1; vertex 0 is pinned at (0, 0).
     let unknowns = vertex_count - 1;
-    let mut triplets = Vec::with_capacity(6 * patch.faces.len() + unknowns);
+    let (col_ptr, row_idx) = stiffness_pattern(&patch.triangles, unknowns);
+    let mut values = vec![0.0; row_idx.len()];
     let mut rhs = Mat::<f64>::zeros(unknowns, 2);
     for (i, (&f, t)) in patch.faces.iter().zip(&patch.triangles).enumerate() {
         let n = mesh.face_normals()[f as usize];
@@ -63,14 +124,18 @@ pub(crate) fn assemble(
                 };
                 // Lower triangle only: the factorization reads Side::Lower.
                 if ra >= rb {
-                    triplets.push(Triplet::new(ra, rb, area * grads[a].dot(grads[b])));
+                    let column = col_ptr[rb]..col_ptr[rb + 1];
+                    let slot = row_idx[column.clone()]
+                        .iter()
+                        .position(|&r| r == ra)
+                        .ok_or(ParamError::Solver { stage: "assembly" })?;
+                    values[column.start + slot] += area * grads[a].dot(grads[b]);
                 }
             }
         }
     }
-    let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(unknowns, unknowns, &triplets)
-        .map_err(|_| ParamError::Solver { stage: "assembly" })?;
-    Ok((matrix, rhs))
+    let symbolic = SymbolicSparseColMat::new_checked(unknowns, unknowns, col_ptr, None, row_idx);
+    Ok((SparseColMat::new(symbolic, values), rhs))
 }
 
 /// Solves for `(u, v)` per local vertex.

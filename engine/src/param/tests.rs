@@ -830,3 +830,63 @@ fn a_map_that_winds_over_itself_is_not_repaired() {
     assert!(report.overlaps);
     assert!(untangle::repair(&mesh, &patch, &frames, &uv, &options).is_none());
 }
+
+#[test]
+fn stiffness_fills_its_pattern_as_a_dense_sum_of_the_faces_would() {
+    // A plane slit from its left side to its middle: the slit's vertices are copied in
+    // the patch, so the patch's sides are not the mesh's edges.
+    let mesh = shapes::plane(1.0, 8).expect("plane");
+    let pos = mesh.positions();
+    let cut: Vec<bool> = mesh
+        .edges()
+        .iter()
+        .map(|&[a, b]| {
+            let (p, q) = (pos[a as usize], pos[b as usize]);
+            (p.y - 0.5).abs() < 1e-9 && (q.y - 0.5).abs() < 1e-9 && p.x.max(q.x) <= 0.5 + 1e-9
+        })
+        .collect();
+    assert_eq!(cut.iter().filter(|&&c| c).count(), 4);
+    let field = turning(&mesh, 0.5);
+    let patch = patch::Patch::build(&mesh, &all_faces(&mesh), &cut).expect("patch");
+    assert_eq!(patch.local_to_mesh.len(), mesh.vertex_count() + 4);
+    let frames = frames_of(&mesh, &field, &patch, &ParamOptions::default());
+    let (matrix, _) = solve::assemble(&mesh, &patch, &frames).expect("assembly");
+    // The reference: every face's terms summed into a dense matrix, in face order.
+    let n = patch.local_to_mesh.len() - 1;
+    let mut dense = vec![vec![0.0; n]; n];
+    let mut coupled = vec![vec![false; n]; n];
+    for (&f, t) in patch.faces.iter().zip(&patch.triangles) {
+        let (normal, area) = (
+            mesh.face_normals()[f as usize],
+            mesh.face_areas()[f as usize],
+        );
+        let grads = solve::hat_gradients(mesh.face_positions(f), normal, area);
+        for a in 0..3 {
+            for b in 0..3 {
+                if let (Some(r), Some(c)) = (
+                    (t[a] as usize).checked_sub(1),
+                    (t[b] as usize).checked_sub(1),
+                ) && r >= c
+                {
+                    dense[r][c] += area * grads[a].dot(grads[b]);
+                    coupled[r][c] = true;
+                }
+            }
+        }
+    }
+    let symbolic = matrix.symbolic();
+    let mut entries = 0;
+    for c in 0..n {
+        let rows = symbolic.row_idx_of_col_raw(c);
+        let values = matrix.val_of_col(c);
+        assert_eq!(rows[0], c, "column {c} starts at its diagonal");
+        assert!(rows.windows(2).all(|w| w[0] < w[1]), "column {c}: {rows:?}");
+        for (&r, &v) in rows.iter().zip(values) {
+            assert!(coupled[r][c], "({r}, {c}) shares no face");
+            assert_eq!(v, dense[r][c], "({r}, {c})");
+        }
+        entries += rows.len();
+    }
+    let want: usize = coupled.iter().flatten().filter(|&&c| c).count();
+    assert_eq!(entries, want, "every coupled pair once");
+}
