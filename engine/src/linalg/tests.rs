@@ -470,7 +470,7 @@ fn blocked_sweeps_keep_the_cycle_symmetric_and_thread_independent() {
         "{left:?} against {right:?}"
     );
     // And it still smooths like Gauss-Seidel: 16 iterations, as with one block.
-    let b = rhs(n, |u, v| c64::new(u, v));
+    let b = rhs(n, |u, v| c64::new(v, u));
     let mut z = vec![c64::new(0.0, 0.0); n];
     let report = pcg::solve(&amg, &b, &mut z, 1e-10, 200).expect("converges");
     assert!(residual(&a, &z, &b) < 2e-10);
