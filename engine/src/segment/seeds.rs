@@ -417,13 +417,17 @@ fn region_centre<F: Fn(u32) -> usize>(
         }
     }
     centroid /= area;
-    let mut best = (0, f64::INFINITY, grown[0]);
+    // Breadth-first depths are non-decreasing in queue order, so the deepest faces are
+    // the last ones reached: only they need their distance to the centroid.
+    let mut deepest: Vec<u32> = Vec::new();
+    let mut max_depth = 0;
     while let Some(f) = ring.pop_front() {
         let d = depth[at(f)];
-        let dist = barycentre(f).distance_squared(centroid);
-        if (d, -dist, std::cmp::Reverse(f)) > (best.0, -best.1, std::cmp::Reverse(best.2)) {
-            best = (d, dist, f);
+        if d > max_depth {
+            max_depth = d;
+            deepest.clear();
         }
+        deepest.push(f);
         for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
             let lg = at(g);
             if region[lg] == id && depth[lg] == NONE {
@@ -432,7 +436,14 @@ fn region_centre<F: Fn(u32) -> usize>(
             }
         });
     }
-    best.2
+    let mut best = (f64::INFINITY, grown[0]);
+    for f in deepest {
+        let dist = barycentre(f).distance_squared(centroid);
+        if (-dist, std::cmp::Reverse(f)) > (-best.0, std::cmp::Reverse(best.1)) {
+            best = (dist, f);
+        }
+    }
+    best.1
 }
 
 #[cfg(test)]
