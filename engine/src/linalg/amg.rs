@@ -291,8 +291,8 @@ const SWEEP_BLOCK_ROWS: usize = PARALLEL_ROWS;
 /// One Gauss-Seidel sweep on `A x = b`, forward or backward, by blocks of
 /// [`SWEEP_BLOCK_ROWS`] rows on every thread ("hybrid" Gauss-Seidel, as hypre's
 /// smoothers run in parallel): inside a block each row uses the block's newest values,
-/// across blocks the values from before the sweep (`before`, a copy of `x` made here;
-/// `None` when `x` is zero, so they are zero). The blocks of a forward and a backward
+/// across blocks the values from before the sweep (`before`: scratch for a copy of `x`
+/// made here; `None` when `x` is zero, so they are zero). The blocks of a forward and a backward
 /// sweep are the same, so the two are adjoint and the V-cycle stays symmetric. The
 /// unknowns are in breadth-first order, so few couplings cross a block's edge and the
 /// sweep smooths almost as a sequential one.
@@ -304,12 +304,13 @@ fn gauss_seidel<S: Scalar>(
     before: Option<&mut [S]>,
     backward: bool,
 ) {
+    // One block reads no value from outside itself: no copy needed.
     let before: &[S] = match before {
-        Some(copy) => {
+        Some(copy) if x.len() > SWEEP_BLOCK_ROWS => {
             copy.copy_from_slice(x);
             copy
         }
-        None => &[],
+        _ => &[],
     };
     let sweep = |block: usize, xs: &mut [S]| {
         let first = block * SWEEP_BLOCK_ROWS;
