@@ -39,10 +39,10 @@
 //! Laplacian is about O(F^1.5) time and O(F log F) memory, each solve O(F log F); the
 //! validity test is O(F + B) for well-spread boundaries (a uniform grid of about `B`
 //! cells). Measured on one core (release, `large_plane_timing` in the tests): a
-//! 200 x 200 grid (80 000 faces, 40 400 unknowns) with a turning field takes 80 ms:
-//! patch 12, frames 12, assembly 11, symbolic factorization 11, numeric factorization
-//! 23, both solves 6, validity 6; the isotropic fallback (one more solve, on the face
-//! graph) brings it to 185 ms.
+//! 200 x 200 grid (80 000 faces, 40 400 unknowns) with a turning field takes 68 ms:
+//! patch 4, frames 12, assembly 4 (into the stiffness pattern, no triplet sort),
+//! symbolic factorization 11, numeric factorization 19, both solves 6, validity 6;
+//! the isotropic fallback (one more solve, on the face graph) brings it to 170 ms.
 //!
 //! References: Quinn et al., "Generalized Anisotropic Stratified Surface Sampling",
 //! sections 5 and 7.3.1; Ray et al. 2006, "Periodic global parameterization" (the
