@@ -24,8 +24,9 @@
 //! backward sweep after it: a symmetric preconditioner, as conjugate gradients needs.
 //! On levels of more than [`PARALLEL_ROWS`] unknowns the sweeps run by fixed blocks of
 //! rows on every thread (each block sequential inside, the blocks Jacobi-coupled: see
-//! `gauss_seidel`); on a grid of 90,000 unknowns they take as many iterations as one
-//! sequential sweep (a unit test).
+//! `gauss_seidel`). On a 300 x 300 complex grid (three blocks) conjugate gradients
+//! take 16 iterations to 1e-10 with them and 16 with one sequential sweep (measured
+//! once with the block size raised above the grid; the unit test bounds it at 17).
 //!
 //! Cost: setup and each cycle are linear in the non-zeros (operator complexity, the
 //! non-zeros of all levels over the finest's, is about 1.5 to 2 on meshes).
