@@ -319,15 +319,23 @@ pub fn constrained_line_field(
     constraints: &[LineConstraint],
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
-    constrained_line_field_with(mesh, || Cow::Borrowed(guidance), constraints, options)
+    let guided = !guidance.is_empty();
+    constrained_line_field_with(
+        mesh,
+        (guided, || Cow::Borrowed(guidance)),
+        constraints,
+        options,
+    )
 }
 
-/// [`constrained_line_field`] with the guidance made by `guidance` on one thread while
-/// the connection is built (and `lambda_1` estimated) on another; the result does not
+/// [`constrained_line_field`] with the guidance made by `guidance.1` on one thread
+/// while the connection is built (and `lambda_1` estimated) on another; `guidance.0`
+/// says whether it may be non-empty (without it and without constraints the field is
+/// the smoothest, and no `lambda_1` is estimated for a shift). The result does not
 /// depend on the thread count.
 pub(crate) fn constrained_line_field_with<'g>(
     mesh: &TriMesh,
-    guidance: impl FnOnce() -> Cow<'g, [DVec3]> + Send,
+    (guided, guidance): (bool, impl FnOnce() -> Cow<'g, [DVec3]> + Send),
     constraints: &[LineConstraint],
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
@@ -338,7 +346,8 @@ pub(crate) fn constrained_line_field_with<'g>(
     // whenever the shift may apply (it is dropped when a component turns out unpinned);
     // the connection's build keeps both threads busy on its own. Without the shift the
     // guidance is made beside the build.
-    let may_shift = options.smoothness > 0.0 && (options.weight > 0.0 || !constraints.is_empty());
+    let may_shift =
+        options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty());
     let (built, guidance) = if may_shift {
         let system = Connection::build(mesh, smoothing, options.solver, true)?;
         rayon::join(

@@ -375,7 +375,7 @@ impl Design {
         };
         Ok(constrained_line_field_with(
             mesh,
-            guidance,
+            (!matches!(self.guidance, Guidance::Smoothest), guidance),
             &constraints,
             &options,
         )?)
