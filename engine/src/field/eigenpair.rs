@@ -2,8 +2,9 @@
 //! line-field solvers of [`design`](super::design): the smoothest field (its vector)
 //! and the estimate of `lambda_1` behind the smoothness shift (its value). With a
 //! direct factor: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)); with
-//! multigrid: preconditioned inverse iteration. Both start from one fixed
-//! pseudo-random vector, so results are deterministic.
+//! multigrid: Rayleigh-Ritz on a space grown by preconditioned residuals (Davidson)
+//! for the vector, preconditioned inverse iteration for the value. All start from one
+//! fixed pseudo-random vector and sum in a fixed order, so results are deterministic.
 
 use faer::c64;
 
@@ -23,13 +24,15 @@ pub(crate) fn start_value(i: u64) -> f64 {
     (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
 }
 
-/// Inverse power iteration for the smallest eigenpair of `A z = lambda M z` with the
-/// factor `llt` of `A + shift M`, from `x`, `M`-normalised each step, until the
-/// Rayleigh quotient changes by at most `tolerance` times its value (or `shift`) or
-/// after `max` steps. Returns the iterate (`z^H M z = 1`) and the steps taken.
+/// Preconditioned inverse iteration (Knyazev and Neymeyr 2003) for the smallest
+/// eigenpair of `A z = lambda M z` with the hierarchy `amg` of `A + shift M`: from
+/// `x`, each step subtracts a V-cycle of the eigen-residual `A x - rho M x` and
+/// `M`-normalises, until the Rayleigh quotient changes by at most `tolerance` times
+/// its value (or `shift`) or after `max` steps. Returns the iterate (`z^H M z = 1`)
+/// and the steps taken.
 fn inverse_iteration(
     system: &Connection,
-    factor: &mut Factor,
+    amg: &Amg<c64>,
     mut x: Vec<c64>,
     max: usize,
     tolerance: f64,
@@ -49,30 +52,17 @@ fn inverse_iteration(
     normalise(&mut x)?;
     let mut previous = f64::INFINITY;
     let mut iterations = 0;
-    let mut work = match factor {
-        Factor::Multigrid(amg) => Some(amg.workspace()),
-        Factor::Direct(_) => None,
-    };
-    let mut step = vec![c64::new(0.0, 0.0); if work.is_some() { x.len() } else { 0 }];
+    let mut work = amg.workspace();
+    let mut step = vec![c64::new(0.0, 0.0); x.len()];
     for _ in 0..max {
-        if let (Factor::Multigrid(amg), Some(work)) = (&*factor, &mut work) {
-            // Preconditioned inverse iteration (Knyazev and Neymeyr 2003): a V-cycle
-            // on the eigen-residual instead of a full solve, since the iteration only
-            // needs the direction.
-            let rho = system.energy(&x);
-            let mut residual = system.apply(&x);
-            for ((r, z), m) in residual.iter_mut().zip(&x).zip(&system.mass) {
-                *r -= *z * (rho * m);
-            }
-            amg.apply(&residual, &mut step, work);
-            for (z, s) in x.iter_mut().zip(&step) {
-                *z -= *s;
-            }
-        } else {
-            for (z, m) in x.iter_mut().zip(&system.mass) {
-                *z *= *m;
-            }
-            factor.solve(&mut x)?;
+        let rho = system.energy(&x);
+        let mut residual = system.apply(&x);
+        for ((r, z), m) in residual.iter_mut().zip(&x).zip(&system.mass) {
+            *r -= *z * (rho * m);
+        }
+        amg.apply(&residual, &mut step, &mut work);
+        for (z, s) in x.iter_mut().zip(&step) {
+            *z -= *s;
         }
         normalise(&mut x)?;
         iterations += 1;
@@ -117,6 +107,14 @@ pub(crate) fn smallest_eigenvalue(
 /// restarts from its Ritz vector (memory: this many complex vectors of the mesh).
 const KRYLOV_BASIS: usize = 24;
 
+/// Most basis vectors of the multigrid-preconditioned (Davidson) space behind the
+/// smoothest field, before it restarts from its two newest Ritz vectors. Each step
+/// orthogonalises against the whole basis, which costs more than the V-cycle at a
+/// few dozen vectors: on the bunny Loop-subdivided once 8 vectors took 30 steps
+/// (0.48 s), 24 took 24 steps (0.60 s) and 3 took 34 (bench/README.md, "The
+/// smoothest field by multigrid").
+const DAVIDSON_BASIS: usize = 8;
+
 /// The fixed pseudo-random start of the eigen-iterations.
 fn start_vector(n: usize) -> Vec<c64> {
     (0..n as u64)
@@ -129,11 +127,17 @@ type Eigenpair = (Vec<c64>, f64, usize);
 
 /// The smallest eigenpair of `A z = lambda M z` on the whole mesh with the factor of
 /// `A + shift M`, from the fixed pseudo-random start, until a step changes the value by
-/// at most `tolerance` times the larger of its magnitude and `floor`, or after `max`
-/// solves: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)) with a direct
-/// factor, preconditioned inverse iteration with multigrid. Returns the vector
-/// (`z^H M z = 1`), its value (never below the eigenvalue) and the solves taken, and
-/// the factor, for the caller to reuse or to [`recycle`](Connection::recycle).
+/// at most `tolerance` times the larger of its magnitude and `floor` (and, for the
+/// `vector`, its residual is at most `sqrt(tolerance)` times the value), or after
+/// `max` solves: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)) with a
+/// direct factor. With multigrid, the vector comes from the preconditioned Davidson
+/// method ([`lanczos::smallest_eigenpair_preconditioned`]), and the value alone from
+/// preconditioned inverse iteration: it settles to [`LAMBDA_TOLERANCE`] in as few
+/// V-cycles (8 against Davidson's 7 at 1.1M faces) with two vectors of memory, where
+/// for the vector's 1e-8 it stalled (over 200 V-cycles on the bunny subdivided once,
+/// against Davidson's 30). Returns the vector (`z^H M z = 1`), its value (never below
+/// the eigenvalue) and the solves taken, and the factor, for the caller to reuse or
+/// to [`recycle`](Connection::recycle).
 pub(crate) fn smallest_eigenpair(
     mesh: &TriMesh,
     system: &Connection,
@@ -147,15 +151,15 @@ pub(crate) fn smallest_eigenpair(
     let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
     let identity: Vec<usize> = (0..n).collect();
     let mut factor = system.factor(mesh, &extra, &identity, n)?;
-    let found = if matches!(factor, Factor::Direct(_)) {
-        let options = lanczos::KrylovOptions {
-            max_solves: max,
-            tolerance,
-            floor,
-            basis_limit: KRYLOV_BASIS,
-            residual: vector.then(|| tolerance.sqrt()),
-        };
-        lanczos::smallest_eigenpair(
+    let mut options = lanczos::KrylovOptions {
+        max_solves: max,
+        tolerance,
+        floor,
+        basis_limit: KRYLOV_BASIS,
+        residual: vector.then(|| tolerance.sqrt()),
+    };
+    let found = match &mut factor {
+        Factor::Direct(_) => lanczos::smallest_eigenpair(
             &system.mass,
             start_vector(n),
             options,
@@ -164,21 +168,29 @@ pub(crate) fn smallest_eigenpair(
                 factor.solve(x)
             },
             |x| system.apply(x),
-        )
-        .map(|(value, x, solves)| (x, value, solves))
-    } else {
-        inverse_iteration(
+        ),
+        Factor::Multigrid(amg) if vector => {
+            let mut work = amg.workspace();
+            options.floor = floor.max(shift);
+            options.basis_limit = DAVIDSON_BASIS;
+            lanczos::smallest_eigenpair_preconditioned(
+                &system.mass,
+                start_vector(n),
+                options,
+                |r, z| amg.apply(r, z, &mut work),
+                |x| system.apply(x),
+            )
+        }
+        Factor::Multigrid(amg) => inverse_iteration(
             system,
-            &mut factor,
+            amg,
             start_vector(n),
             max,
             tolerance,
             floor.max(shift),
         )
-        .map(|(x, solves)| {
-            let value = system.energy(&x);
-            (x, value, solves)
-        })
-    };
+        .map(|(x, solves)| (system.energy(&x), x, solves)),
+    }
+    .map(|(value, x, solves)| (x, value, solves));
     Ok((found?, factor))
 }
