@@ -1,5 +1,7 @@
-//! The estimate of the smallest eigenvalue `lambda_1` of `A z = lambda M z` behind the
-//! designed fields' smoothness shift: Rayleigh-Ritz on a shift-and-invert Krylov space.
+//! The smallest eigenpair of `A z = lambda M z` behind the designed fields: the estimate
+//! of `lambda_1` for the smoothness shift, and the smoothest field. Rayleigh-Ritz on a
+//! shift-and-invert Krylov space with a direct factor, on a Davidson space with a
+//! multigrid preconditioner.
 //!
 //! With the factor of `P = A + sigma M`, the operator `T = P^-1 M` is self-adjoint in
 //! the mass inner product `<x, y>_M = x^H M y`, and its dominant eigenvectors are the
@@ -9,12 +11,20 @@
 //! Courant-Fischer theorem it is never below `lambda_1`, which the shifted solve needs
 //! (a shift above `lambda_1` would make it indefinite). Inverse iteration keeps only
 //! the last vector of the same space, so this converges much faster per solve: on the
-//! bunny 4 solves give `lambda_1` to 0.3% (483.4 against 482.0), where 5 inverse iterations were 0.8% off
-//! (bench/README "Field design").
+//! bunny 4 solves give `lambda_1` to 0.3% (483.4 against 482.0), where 5 inverse
+//! iterations were 0.8% off (bench/README "Field design").
 //!
-//! Input: the masses, a start vector, `x <- T x` and `x -> A x` as closures. Output:
-//! the estimate and the solves taken. Cost per step `k`: one solve, one product with
-//! `A`, `O(k n)` orthogonalisation and a `k x k` eigenvalue problem.
+//! Without a factor (multigrid), the space grows instead by `B^-1 (A x - theta M x)`,
+//! a V-cycle `B^-1 ~ P^-1` of the current Ritz pair's residual (the preconditioned
+//! Davidson method), and restarts from its two newest Ritz vectors (as LOBPCG keeps
+//! its previous iterate), so a small basis loses little. The bound from above holds
+//! for any space.
+//!
+//! Input: the masses, a start vector, `x <- T x` (or `r -> B^-1 r`) and `x -> A x` as
+//! closures. Output: the estimate, its vector and the solves taken. Cost per step `k`:
+//! one solve (or V-cycle), one product with `A`, `O(k n)` orthogonalisation (in
+//! parallel over fixed blocks of rows, so sums do not depend on the thread count) and
+//! a `k x k` eigenvalue problem.
 
 use std::ops::Range;
 

@@ -129,7 +129,7 @@ pub struct LineField {
     /// The Rayleigh quotient `E(z) / (z^H M z)` (0 for a zero field); for the smoothest
     /// field, the estimate of the smallest eigenvalue.
     pub rayleigh: f64,
-    /// Solves (direct) or preconditioned inverse iterations (multigrid) done for the
+    /// Solves (direct) or V-cycles (multigrid, one per Davidson step) done for the
     /// smoothest field (0 for a guided field).
     pub iterations: usize,
 }
