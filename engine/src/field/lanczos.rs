@@ -312,9 +312,6 @@ fn rayleigh_ritz(
     >,
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
 ) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
-    let failed = || LineFieldError::Factorization {
-        stage: "solve (eigenvalue estimate: zero or non-finite iterate)",
-    };
     let normalised = |mut x: Vec<c64>| -> Result<Vec<c64>, LineFieldError> {
         let norm = norm2(mass, &x, false).sqrt();
         if !(norm > 0.0 && norm.is_finite()) {
@@ -342,83 +339,59 @@ fn rayleigh_ritz(
     let mut estimate = (space.h[0][0].re, vec![c64::new(1.0, 0.0)]);
     let max_solves = options.max_solves.max(1);
     let limit = options.basis_limit.max(2);
+    let davidson = matches!(expansion, Expansion::Precondition(_));
     let mut solves = 0;
     // Set once a step changed the estimate by at most the tolerance while the residual
     // test was still to pass: the scale the residual is measured against.
     let mut settled_at: Option<f64> = None;
+    // The Ritz pair's coordinates before the newest basis vector was added.
     let mut previous: Vec<c64> = Vec::new();
     loop {
-        // The Ritz pair's residual, when the value has settled or the expansion
-        // needs it.
-        let residual = match (&expansion, settled_at) {
-            (Expansion::Precondition(_), _) | (Expansion::Inverse(_), Some(_)) => {
-                Some(space.residual(mass, estimate.0, &estimate.1))
-            }
-            _ => None,
-        };
-        if let (Some(scale), Some(r), Some(bound)) = (settled_at, &residual, options.residual)
-            && norm2(mass, r, true).sqrt() <= bound * scale
-        {
-            return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
-        }
         if solves >= max_solves {
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
         if space.basis.len() >= limit {
-            // Restart from the Ritz vector (its estimate is unchanged).
+            // Restart from the Ritz vector (its estimate is unchanged); Davidson also
+            // keeps the one before it (in the current basis: `previous` and a zero).
             let x = normalised(space.combine(&estimate.1))?;
-            let thick = matches!(expansion, Expansion::Precondition(_))
-                && previous.len() + 1 == space.basis.len();
-            let older = thick.then(|| {
-                let mut y = previous.clone();
+            let older = (davidson && previous.len() + 1 == space.basis.len()).then(|| {
+                let mut y = std::mem::take(&mut previous);
                 y.push(c64::new(0.0, 0.0));
                 space.combine(&y)
             });
             space = Space::new(x, &apply_matrix);
             estimate.1 = vec![c64::new(1.0, 0.0)];
-            if let Some(mut w) = older {
-                let before = norm2(mass, &w, false).sqrt();
-                for _ in 0..2 {
-                    let c = inners(Some(mass), &space.basis, &w);
-                    add_combination(&mut w, &space.basis, &c, -1.0);
-                }
-                let b = norm2(mass, &w, false).sqrt();
-                if b.is_finite() && b > 1e-10 * before {
-                    w.par_iter_mut().for_each(|z| *z /= b);
-                    space.push(w, &apply_matrix);
-                    estimate = smallest_pair(&space.h).ok_or_else(failed)?;
-                }
+            if let Some(w) = older.and_then(|w| orthonormalised(mass, &space.basis, w).ok()?) {
+                space.push(w, &apply_matrix);
+                estimate = smallest_pair(&space.h).ok_or_else(failed)?;
             }
         }
-        let mut w = match (&mut expansion, residual) {
-            (Expansion::Precondition(precondition), Some(r)) => {
+        // The Ritz pair's residual, when the value has settled or Davidson grows by it.
+        let residual = (davidson || settled_at.is_some())
+            .then(|| space.residual(mass, estimate.0, &estimate.1));
+        if let (Some(scale), Some(r), Some(bound)) = (settled_at, &residual, options.residual)
+            && norm2(mass, r, true).sqrt() <= bound * scale
+        {
+            return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
+        }
+        let w = match &mut expansion {
+            Expansion::Precondition(precondition) => {
+                let r = residual.unwrap_or_else(|| space.residual(mass, estimate.0, &estimate.1));
                 let mut w = vec![c64::new(0.0, 0.0); r.len()];
                 precondition(&r, &mut w);
                 w
             }
-            (Expansion::Inverse(apply_inverse), _) => {
+            Expansion::Inverse(apply_inverse) => {
                 let mut w = space.basis[space.basis.len() - 1].clone();
                 apply_inverse(&mut w)?;
                 w
             }
-            (Expansion::Precondition(_), None) => unreachable!("computed above"),
         };
         solves += 1;
-        let before = norm2(mass, &w, false).sqrt();
-        // Classical Gram-Schmidt, twice: enough for a few dozen vectors.
-        for _ in 0..2 {
-            let c = inners(Some(mass), &space.basis, &w);
-            add_combination(&mut w, &space.basis, &c, -1.0);
-        }
-        let b = norm2(mass, &w, false).sqrt();
-        if !(b.is_finite() && before.is_finite()) {
-            return Err(failed());
-        }
-        // The space stopped growing: the estimate is exact for it.
-        if b <= 1e-10 * before {
+        let Some(w) = orthonormalised(mass, &space.basis, w)? else {
+            // The space stopped growing: the estimate is exact for it.
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
-        }
-        w.par_iter_mut().for_each(|z| *z /= b);
+        };
         space.push(w, &apply_matrix);
         // The change of a step bounds the error of the step before; with the
         // superlinear convergence of Krylov methods the last step's error is much
@@ -432,6 +405,39 @@ fn rayleigh_ritz(
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
     }
+}
+
+/// A zero or non-finite start or iterate (a failed solve).
+fn failed() -> LineFieldError {
+    LineFieldError::Factorization {
+        stage: "solve (eigenvalue estimate: zero or non-finite iterate)",
+    }
+}
+
+/// `w` made `M`-orthogonal to the (`M`-orthonormal) `basis` by classical Gram-Schmidt
+/// twice (enough for a few dozen vectors) and `M`-normalised; `None` when nothing of it
+/// is left outside the basis.
+///
+/// Errors: a non-finite `w`.
+fn orthonormalised(
+    mass: &[f64],
+    basis: &[Vec<c64>],
+    mut w: Vec<c64>,
+) -> Result<Option<Vec<c64>>, LineFieldError> {
+    let before = norm2(mass, &w, false).sqrt();
+    for _ in 0..2 {
+        let c = inners(Some(mass), basis, &w);
+        add_combination(&mut w, basis, &c, -1.0);
+    }
+    let b = norm2(mass, &w, false).sqrt();
+    if !(b.is_finite() && before.is_finite()) {
+        return Err(failed());
+    }
+    if b <= 1e-10 * before {
+        return Ok(None);
+    }
+    w.par_iter_mut().for_each(|z| *z /= b);
+    Ok(Some(w))
 }
 
 #[cfg(test)]
@@ -480,6 +486,30 @@ mod tests {
                 |x| x.iter().zip(&self.a).map(|(x, a)| *x * *a).collect(),
             )
             .map(|(value, _, solves)| (value, solves))
+            .expect("valid test input")
+        }
+    }
+
+    impl Pencil {
+        /// [`smallest_eigenpair_preconditioned`] with the diagonal preconditioner
+        /// `B^-1 = diag(inverse)`.
+        fn davidson(
+            &self,
+            start: Vec<c64>,
+            options: KrylovOptions,
+            inverse: &[f64],
+        ) -> (f64, Vec<c64>, usize) {
+            smallest_eigenpair_preconditioned(
+                &self.m,
+                start,
+                options,
+                |r, z| {
+                    for ((z, r), b) in z.iter_mut().zip(r).zip(inverse) {
+                        *z = *r * *b;
+                    }
+                },
+                |x| x.iter().zip(&self.a).map(|(x, a)| *x * *a).collect(),
+            )
             .expect("valid test input")
         }
     }
@@ -571,18 +601,7 @@ mod tests {
                 basis_limit,
                 residual: Some(1e-6),
             };
-            let (value, x, solves) = smallest_eigenpair_preconditioned(
-                &pencil.m,
-                start.clone(),
-                options,
-                |r, z| {
-                    for ((z, r), b) in z.iter_mut().zip(r).zip(&rough) {
-                        *z = *r * *b;
-                    }
-                },
-                |x| x.iter().zip(&pencil.a).map(|(x, a)| *x * *a).collect(),
-            )
-            .expect("valid test input");
+            let (value, x, solves) = pencil.davidson(start.clone(), options, &rough);
             assert!(solves < 400, "{basis_limit}: did not converge");
             assert!(
                 value >= 2.0 - 1e-12 && value - 2.0 < 1e-9,
@@ -610,6 +629,9 @@ mod tests {
         let start: Vec<c64> = (0..300)
             .map(|k| c64::new(1.0 + (k % 5) as f64, (k % 3) as f64))
             .collect();
+        let rough: Vec<f64> = (0..300)
+            .map(|k| (0.5 + (k % 4) as f64 * 0.5) / pencil.a[k])
+            .collect();
         let mut previous = f64::INFINITY;
         let mut values = Vec::new();
         for max in [1, 2, 4, 8, 16, 32] {
@@ -620,18 +642,7 @@ mod tests {
                 basis_limit: 4,
                 residual: None,
             };
-            let (value, _, solves) = smallest_eigenpair_preconditioned(
-                &pencil.m,
-                start.clone(),
-                options,
-                |r, z| {
-                    for (k, (z, r)) in z.iter_mut().zip(r).enumerate() {
-                        *z = *r * (0.5 + (k % 4) as f64 * 0.5) / pencil.a[k];
-                    }
-                },
-                |x| x.iter().zip(&pencil.a).map(|(x, a)| *x * *a).collect(),
-            )
-            .expect("valid test input");
+            let (value, _, solves) = pencil.davidson(start.clone(), options, &rough);
             assert_eq!(solves, max);
             assert!(value >= 2.0 - 1e-12, "{max}: {value}");
             assert!(
