@@ -22,8 +22,8 @@ use super::cholesky::{self, Cholesky, Storage, Symbolic};
 use super::pattern::VertexPattern;
 
 use super::line_field::{
-    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
-    SOLVE_TOLERANCE,
+    LAMBDA_MULTIGRID_VERTICES, LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT,
+    MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
 };
 use super::{tangent_frame, vertex_frames};
 use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
@@ -75,7 +75,9 @@ pub(crate) struct Connection {
     /// The buffers of the last direct factor handed back, for the next.
     spare: RefCell<Option<Storage<c64>>>,
     /// Whether solves use multigrid (else sparse Cholesky).
-    multigrid: bool,
+    pub(crate) multigrid: bool,
+    /// Whether the estimate of `lambda_1` uses multigrid (always when `multigrid`).
+    pub(crate) lambda_multigrid: bool,
 }
 
 /// Most conjugate-gradient iterations of one multigrid-preconditioned solve (a mesh
@@ -218,10 +220,10 @@ impl Connection {
         if n == 0 {
             return Err(LineFieldError::EmptyMesh);
         }
-        let multigrid = match solver {
-            LinearSolver::Auto => n >= MULTIGRID_VERTICES,
-            LinearSolver::Direct => false,
-            LinearSolver::Multigrid => true,
+        let (multigrid, lambda_multigrid) = match solver {
+            LinearSolver::Auto => (n >= MULTIGRID_VERTICES, n >= LAMBDA_MULTIGRID_VERTICES),
+            LinearSolver::Direct => (false, false),
+            LinearSolver::Multigrid => (true, true),
         };
         let pattern = if multigrid {
             None
@@ -295,6 +297,7 @@ impl Connection {
             symbolic: symbolic.map_or_else(OnceCell::new, OnceCell::from),
             spare: RefCell::new(spare),
             multigrid,
+            lambda_multigrid,
         })
     }
 
@@ -330,17 +333,10 @@ impl Connection {
             let llt = Cholesky::new(symbolic, pattern.matrix(&values), spare)?;
             return Ok(Factor::Direct(llt));
         }
-        let t = triplets(mesh, slots, free, diagonal, |e, b_below| {
-            let term = &self.edges[e];
-            let c = -term.rotation * term.weight;
-            if b_below { c } else { c.conj() }
-        });
         if self.multigrid {
-            let matrix = hermitian_csr(free, &t);
-            let amg = Amg::new(matrix, None, &AmgOptions::default())?;
-            return Ok(Factor::Multigrid(amg));
+            return Ok(Factor::Multigrid(self.hierarchy(mesh, extra, slots, free)?));
         }
-        let matrix = assemble(free, &t)?;
+        let matrix = assemble(free, &self.lower_triplets(mesh, extra, slots, free))?;
         let symbolic = cholesky::symbolic(matrix.symbolic())?;
         let spare = self.spare.borrow_mut().take();
         Ok(Factor::Direct(Cholesky::new(
@@ -354,6 +350,39 @@ impl Connection {
     /// preconditioned with `amg`, the hierarchy of `A + shift M` (see
     /// [`pcg::solve_with_diagonal`]); `None` where it fails or runs out of iterations
     /// (the caller then builds a hierarchy of its own).
+    /// The multigrid hierarchy of `A + diag(extra)` restricted as in
+    /// [`factor`](Self::factor), whichever solver the system uses.
+    pub(crate) fn hierarchy(
+        &self,
+        mesh: &TriMesh,
+        extra: &[f64],
+        slots: &[usize],
+        free: usize,
+    ) -> Result<Amg<c64>, LineFieldError> {
+        let lower = self.lower_triplets(mesh, extra, slots, free);
+        Ok(Amg::new(
+            hermitian_csr(free, &lower),
+            None,
+            &AmgOptions::default(),
+        )?)
+    }
+
+    /// The lower triangle of `A + diag(extra)` on the unknowns of `slots`.
+    fn lower_triplets(
+        &self,
+        mesh: &TriMesh,
+        extra: &[f64],
+        slots: &[usize],
+        free: usize,
+    ) -> Vec<Triplet<usize, usize, c64>> {
+        let diagonal = |v: usize| c64::new(self.diagonal[v] + extra[v], 0.0);
+        triplets(mesh, slots, free, diagonal, |e, b_below| {
+            let term = &self.edges[e];
+            let c = -term.rotation * term.weight;
+            if b_below { c } else { c.conj() }
+        })
+    }
+
     pub(crate) fn solve_with_hierarchy(
         &self,
         amg: &Amg<c64>,

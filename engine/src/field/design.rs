@@ -33,8 +33,9 @@
 //! conjugate gradients preconditioned with algebraic multigrid ([`crate::linalg`]) to
 //! [`SOLVE_TOLERANCE`], since a factor's fill grows faster than the mesh; the
 //! eigen-solves then take one V-cycle on the eigen-residual per step instead of a
-//! solve (the smoothest field: the Davidson method, Rayleigh-Ritz on the space of
-//! those corrections; the estimate of `lambda_1`: preconditioned inverse iteration).
+//! solve (the Davidson method, Rayleigh-Ritz on the space of those corrections). The
+//! estimate of `lambda_1` uses such a hierarchy from [`LAMBDA_MULTIGRID_VERTICES`]
+//! already, where it costs less than a factorization.
 //!
 //! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the frames and
 //! the rotations `r_ab` are measured in the tangent planes of the vertex normals after
@@ -89,8 +90,8 @@ use glam::DVec3;
 use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
 pub use super::line_field::{
-    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
-    SOLVE_TOLERANCE,
+    LAMBDA_MULTIGRID_VERTICES, LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT,
+    MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
 };
 use crate::mesh::TriMesh;
 

@@ -513,6 +513,43 @@ fn the_lambda_1_estimate_is_from_above_and_close() {
 }
 
 #[test]
+fn lambda_1_by_multigrid_beside_direct_solves_is_from_above_and_close() {
+    // The bunny has more than LAMBDA_MULTIGRID_VERTICES vertices and fewer than
+    // MULTIGRID_VERTICES: with `Auto` its solves use a factor and its estimate of
+    // lambda_1 a hierarchy (Davidson).
+    let Some(mesh) = crate::io::shared_mesh("stanford-bunny.obj") else {
+        return;
+    };
+    let n = mesh.vertex_count();
+    assert!(
+        (crate::field::LAMBDA_MULTIGRID_VERTICES..crate::field::MULTIGRID_VERTICES).contains(&n)
+    );
+    let smoothing = 0.3 * (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt();
+    let options = LineFieldOptions {
+        tolerance: 1e-10,
+        smoothing: 0.3,
+        solver: LinearSolver::Direct,
+        ..LineFieldOptions::default()
+    };
+    let converged = smoothest_line_field(&mesh, &options)
+        .expect("field")
+        .rayleigh;
+    let auto = Connection::build(&mesh, smoothing, LinearSolver::Auto, true).expect("system");
+    assert!(auto.lambda_multigrid && !auto.multigrid);
+    let (estimate, hierarchy) = smallest_eigenvalue(&mesh, &auto, auto.shift()).expect("estimate");
+    let direct = Connection::build(&mesh, smoothing, LinearSolver::Direct, true).expect("system");
+    let (by_factor, _) = smallest_eigenvalue(&mesh, &direct, direct.shift()).expect("estimate");
+    println!("bunny: lambda_1 {converged}, estimate {estimate} (by the factor {by_factor})");
+    // The solves stay direct: no hierarchy is handed on.
+    assert!(hierarchy.is_none());
+    assert!(
+        estimate >= converged * (1.0 - 1e-9),
+        "{estimate} below {converged}"
+    );
+    assert!(estimate <= converged * 1.01, "{estimate} vs {converged}");
+}
+
+#[test]
 fn the_reuse_bound_brackets_the_rayleigh_ratio() {
     let mass = [1.0, 2.0, 0.5];
     let (shift, lambda) = (0.01, 1.99);

@@ -92,6 +92,14 @@ pub const SHIFT: f64 = 1e-8;
 /// linear cost wins (about even at 139k vertices).
 pub const MULTIGRID_VERTICES: usize = 100_000;
 
+/// Vertices from which [`LinearSolver::Auto`] estimates `lambda_1` (the smoothness
+/// shift's smallest eigenvalue, needed to 2%) with a multigrid hierarchy while its
+/// solves keep sparse Cholesky below [`MULTIGRID_VERTICES`]: the hierarchy and 5
+/// V-cycles cost less than a complex factorization and 4 solves from about here
+/// (bunny, 35k vertices: designed field 0.18-0.19 -> 0.15-0.16 s; rocker arm, 10k:
+/// 0.036 -> 0.047 s, so not below; bench/README.md, "lambda_1 by multigrid").
+pub const LAMBDA_MULTIGRID_VERTICES: usize = 25_000;
+
 /// Relative residual `|b - A x| / |b|` at which a multigrid-preconditioned solve
 /// ([`LinearSolver::Multigrid`]) stops.
 pub const SOLVE_TOLERANCE: f64 = 1e-8;
@@ -102,7 +110,8 @@ pub const SOLVE_TOLERANCE: f64 = 1e-8;
 #[non_exhaustive]
 pub enum LinearSolver {
     /// [`Direct`](Self::Direct) below [`MULTIGRID_VERTICES`] vertices,
-    /// [`Multigrid`](Self::Multigrid) from there.
+    /// [`Multigrid`](Self::Multigrid) from there; the estimate of `lambda_1` by
+    /// multigrid from [`LAMBDA_MULTIGRID_VERTICES`].
     #[default]
     Auto,
     /// faer's sparse Cholesky: exact, but its fill and time grow faster than the mesh.
