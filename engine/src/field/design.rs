@@ -70,11 +70,12 @@
 //! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
 //! turns into a [`TensorField`](super::TensorField). Cost: O(V + E) assembly, one AMD ordering, one
 //! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
-//! solve with that factor per inverse iteration. Measured on the Stanford bunny (35k
-//! vertices, 2 cores, release): a guided solve 0.17 s (0.19 s with smoothing), the
-//! smoothest field 0.2 s (12 solves). With a
-//! smoothness shift the estimate of `lambda_1` adds one factorization and a few solves
-//! (Rayleigh-Ritz on a Krylov space, `lanczos.rs`; [`LAMBDA_TOLERANCE`]). Two threads:
+//! solve with that factor per Krylov step. With a smoothness shift the estimate of
+//! `lambda_1` adds one factorization and a few solves (Rayleigh-Ritz on a Krylov space,
+//! `lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`LAMBDA_MULTIGRID_VERTICES`] a
+//! multigrid hierarchy and a few V-cycles. Measured on the Stanford bunny (35k
+//! vertices, 2 cores, release, `field_design`): the designed (curvature-aligned,
+//! shifted) field 0.15 s, the smoothest field 0.21 s (12 solves). Two threads:
 //! the AMD ordering beside the weights, the factor buffers' allocation beside the
 //! normals' smoothing, the guidance (the designed field's curvature) beside the
 //! estimate of `lambda_1`; the factors reuse one set of buffers (`cholesky.rs`).
