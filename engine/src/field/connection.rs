@@ -346,10 +346,6 @@ impl Connection {
         )?))
     }
 
-    /// Solves `(A + diag(extra)) z = rhs` on the whole mesh by conjugate gradients
-    /// preconditioned with `amg`, the hierarchy of `A + shift M` (see
-    /// [`pcg::solve_with_diagonal`]); `None` where it fails or runs out of iterations
-    /// (the caller then builds a hierarchy of its own).
     /// The multigrid hierarchy of `A + diag(extra)` restricted as in
     /// [`factor`](Self::factor), whichever solver the system uses.
     pub(crate) fn hierarchy(
@@ -383,6 +379,10 @@ impl Connection {
         })
     }
 
+    /// Solves `(A + diag(extra)) z = rhs` on the whole mesh by conjugate gradients
+    /// preconditioned with `amg`, the hierarchy of `A + shift M` (see
+    /// [`pcg::solve_with_diagonal`]); `None` where it fails or runs out of iterations
+    /// (the caller then builds a hierarchy of its own).
     pub(crate) fn solve_with_hierarchy(
         &self,
         amg: &Amg<c64>,
