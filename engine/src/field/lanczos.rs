@@ -63,51 +63,16 @@ fn inners(weights: Option<&[f64]>, vectors: &[Vec<c64>], w: &[c64]) -> Vec<c64> 
     total
 }
 
-/// Lanes of the sums in [`block_inner`]: independent partial sums, so that the loop
-/// is not bound by the latency of one chain of additions.
-const LANES: usize = 4;
-
-/// `x^H W y` (`W` the identity for `None`), in [`LANES`] partial sums.
+/// `x^H W y` (`W` the identity for `None`).
 fn block_inner(x: &[c64], y: &[c64], weights: Option<&[f64]>) -> c64 {
-    let (mut re, mut im) = ([0.0f64; LANES], [0.0f64; LANES]);
-    let mut add = |lane: usize, x: c64, y: c64, m: f64| {
-        re[lane] += (x.re * y.re + x.im * y.im) * m;
-        im[lane] += (x.re * y.im - x.im * y.re) * m;
-    };
-    let body = x.len() / LANES * LANES;
     match weights {
-        Some(w) => {
-            for ((x, y), w) in x[..body]
-                .chunks_exact(LANES)
-                .zip(y[..body].chunks_exact(LANES))
-                .zip(w[..body].chunks_exact(LANES))
-            {
-                for l in 0..LANES {
-                    add(l, x[l], y[l], w[l]);
-                }
-            }
-            for i in body..x.len() {
-                add(i - body, x[i], y[i], w[i]);
-            }
-        }
-        None => {
-            for (x, y) in x[..body]
-                .chunks_exact(LANES)
-                .zip(y[..body].chunks_exact(LANES))
-            {
-                for l in 0..LANES {
-                    add(l, x[l], y[l], 1.0);
-                }
-            }
-            for i in body..x.len() {
-                add(i - body, x[i], y[i], 1.0);
-            }
-        }
+        Some(w) => w
+            .iter()
+            .zip(x.iter().zip(y))
+            .map(|(m, (x, y))| x.conj() * y * *m)
+            .sum(),
+        None => x.iter().zip(y).map(|(x, y)| x.conj() * y).sum(),
     }
-    c64::new(
-        (re[0] + re[1]) + (re[2] + re[3]),
-        (im[0] + im[1]) + (im[2] + im[3]),
-    )
 }
 
 /// `<x, x>_W = x^H W x` for the positive diagonal `W = diag(weights)`, or with `W^-1`.
