@@ -499,28 +499,37 @@ fn patch_check(mesh: TriMesh, spec: FieldSpec) {
 #[test]
 fn designed_bunny_segments_do_not_depend_on_the_resolution() {
     // Issue 17: the bunny Loop-subdivided once gives segments within 1.3x of the
-    // bunny's with the same designed field. Measured with the default options: 58 and
-    // 63 (with the scene's, and before seeding regions had to cover a share of the
-    // surface: see MIN_REGION_SHARE).
+    // bunny's with the same designed field. One seed's count jumps with small changes
+    // (the default options' seed gave 12 and 20 after trees moved before the walk),
+    // so the medians over segmentation seeds 1 to 5 are compared: 16 and 18
+    // (bench/README.md, "Trees before the walk").
     let Some(dir) = shared_mesh_dir() else {
         eprintln!("shared meshes not found: skipping");
         return;
     };
     let coarse = strata_engine::io::load(&dir.join("stanford-bunny.obj")).expect("mesh");
     let fine = strata_engine::mesh::loop_subdivide(&coarse).expect("subdivided");
-    let segments = |mesh: TriMesh| {
+    let median_segments = |mesh: TriMesh| {
         let mesh = Arc::new(mesh);
         let field = Arc::new(designed().build(&mesh).expect("field"));
-        Preprocessed::build(mesh, field, &SurfaceOptions::default())
-            .expect("preprocess")
-            .report
-            .segments
+        let mut counts: Vec<usize> = (1..=5u64)
+            .map(|seed| {
+                let mut options = SurfaceOptions::default();
+                options.segment.seed = seed;
+                Preprocessed::build(mesh.clone(), field.clone(), &options)
+                    .expect("preprocess")
+                    .report
+                    .segments
+            })
+            .collect();
+        counts.sort_unstable();
+        (counts[2], counts)
     };
-    let (a, b) = (segments(coarse), segments(fine));
-    println!("designed bunny: {a} segments; Loop-subdivided once: {b}");
+    let ((a, coarse_counts), (b, fine_counts)) = (median_segments(coarse), median_segments(fine));
+    println!("designed bunny: segments {coarse_counts:?}; Loop-subdivided once: {fine_counts:?}");
     assert!(
         a.max(b) as f64 <= 1.3 * a.min(b) as f64,
-        "{a} against {b} segments"
+        "medians {a} against {b} segments"
     );
 }
 
