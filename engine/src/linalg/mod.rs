@@ -35,6 +35,7 @@
 mod amg;
 mod csr;
 mod dense;
+pub mod dissection;
 mod error;
 pub mod pcg;
 mod scalar;

@@ -208,7 +208,12 @@ fn spread_holonomy(
         .map_err(|_| ParamError::Solver {
             stage: "assembly of the fallback frame",
         })?;
-    let phi = solve_spd(&matrix, rhs)?;
+    // Unknown r is face r + 1, at its centroid.
+    let points: Vec<DVec3> = patch.faces[1..]
+        .iter()
+        .map(|&f| mesh.face_positions(f).iter().sum::<DVec3>() / 3.0)
+        .collect();
+    let phi = solve_spd(&matrix, rhs, Some(&points))?;
     Ok((0..n)
         .map(|f| {
             let angle = if f == 0 { 0.0 } else { phi[(f - 1, 0)] };

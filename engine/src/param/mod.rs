@@ -18,7 +18,8 @@
 //!    counted (they reveal a singularity inside the segment);
 //! 3. least squares (section 5.1): the normal equations are the cotangent Laplacian
 //!    with the divergence of the two target fields as right-hand sides; one sparse
-//!    Cholesky factorization (faer, sequential) serves both solves;
+//!    Cholesky factorization (faer, sequential; ordered by nested dissection from
+//!    10k unknowns, `linalg::dissection`) serves both solves;
 //! 4. nearly isotropic segments (area-weighted mean of `sqrt(l1 / l2)` below
 //!    `isotropy_threshold`) use a smooth fallback frame instead of their undefined
 //!    eigenvectors: a tangent axis parallel-transported from face 0 over the

@@ -146,7 +146,12 @@ pub(crate) fn solve(
 ) -> Result<Vec<DVec2>, ParamError> {
     let (matrix, rhs) = assemble(mesh, patch, frames)?;
     let unknowns = rhs.nrows();
-    let rhs = solve_spd(&matrix, rhs)?;
+    // Unknown r is local vertex r + 1.
+    let points: Vec<DVec3> = patch.local_to_mesh[1..]
+        .iter()
+        .map(|&v| mesh.positions()[v as usize])
+        .collect();
+    let rhs = solve_spd(&matrix, rhs, Some(&points))?;
     let mut uv = Vec::with_capacity(unknowns + 1);
     uv.push(DVec2::ZERO);
     for r in 0..unknowns {
