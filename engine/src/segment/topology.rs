@@ -44,6 +44,8 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
+use rayon::slice::ParallelSliceMut;
+
 use super::paths::UnionFind;
 use crate::mesh::face_set::MaskFaces;
 use crate::mesh::{NONE, TriMesh};
@@ -265,6 +267,16 @@ struct Joined {
     faces: [u32; 2],
 }
 
+/// `x`'s bits mapped so that unsigned order is [`f64::total_cmp`]'s order.
+fn total_order_bits(x: f64) -> u64 {
+    let bits = x.to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | 1 << 63
+    }
+}
+
 /// The mesh edges (ascending, none already in `cut`) to cut in addition to `cut` so
 /// that every connected component of the patch made of `faces` becomes a topological
 /// disc (Euler characteristic 1, one boundary loop; check with [`patch_topology`]).
@@ -403,15 +415,25 @@ pub fn disc_cuts(mesh: &TriMesh, costs: &[f64], faces: &[u32], cut: &[bool]) -> 
         let j = &joined[ji];
         dist[j.ends[0] as usize] + costs[j.edge as usize] + dist[j.ends[1] as usize]
     };
-    let mut cotree: Vec<usize> = (0..joined.len()).filter(|&ji| !in_tree[ji]).collect();
-    cotree.sort_by(|&x, &y| {
-        loop_length(y)
-            .total_cmp(&loop_length(x))
-            .then(joined[x].edge.cmp(&joined[y].edge))
-    });
+    // Longest loops first, ties by mesh edge (unique per joined edge, so the order is
+    // total and a parallel sort gives the sequential one). Keys computed once: sorting
+    // with the lengths computed in the comparison took 0.19 s of 0.48 on a segment of
+    // 693k faces.
+    let mut cotree: Vec<(u64, u32, u32)> = (0..joined.len())
+        .filter(|&ji| !in_tree[ji])
+        .map(|ji| {
+            (
+                !total_order_bits(loop_length(ji)),
+                joined[ji].edge,
+                ji as u32,
+            )
+        })
+        .collect();
+    cotree.par_sort_unstable();
     let mut dual = UnionFind::new(patch.faces.len());
     let mut in_cut = in_tree;
-    for ji in cotree {
+    for (_, _, ji) in cotree {
+        let ji = ji as usize;
         let [f, g] = joined[ji].faces;
         if !dual.union(f, g) {
             in_cut[ji] = true;
