@@ -41,6 +41,11 @@ pub fn levels_arg(default: usize) -> Result<usize, std::num::ParseIntError> {
     count_arg(2, default)
 }
 
+/// The third command-line argument as a count of segmentation seeds, or `default`.
+pub fn seeds_arg(default: usize) -> Result<usize, std::num::ParseIntError> {
+    count_arg(3, default)
+}
+
 /// Command-line argument `position` as a count, or `default` when absent.
 fn count_arg(position: usize, default: usize) -> Result<usize, std::num::ParseIntError> {
     std::env::args()
