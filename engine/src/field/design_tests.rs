@@ -443,7 +443,9 @@ fn multigrid_and_sparse_cholesky_give_the_same_guided_fields() {
         dc.abs_diff(mc) <= 2 && (ds - ms).abs() < 1e-9,
         "{dc} vs {mc}"
     );
-    // Without the shift both solve the same system to 1e-8.
+    // Without the shift both solve the same system, the multigrid one to a relative
+    // residual of 1e-6 (`SOLVE_TOLERANCE`) after normals smoothed to 1e-4: 2.1e-5 rad
+    // measured (1.1e-6 with 1e-8 and 1e-5).
     let plain = LineFieldOptions {
         smoothness: 0.0,
         ..base
@@ -462,7 +464,7 @@ fn multigrid_and_sparse_cholesky_give_the_same_guided_fields() {
         "{count} vertices compared"
     );
     println!("bunny guided without shift: largest angle {angle:.2e} rad");
-    assert!(angle < 1e-5, "{angle} rad");
+    assert!(angle < 1e-4, "{angle} rad");
     assert_eq!(
         singularities(&mesh, &direct),
         singularities(&mesh, &multigrid)
