@@ -66,9 +66,13 @@ impl PieceSet {
     }
 
     /// Adds the face set `faces`.
-    #[cfg(test)]
     pub(crate) fn insert(&mut self, faces: &[u32]) {
         self.insert_name(Self::name(faces));
+    }
+
+    /// Adds every name of `other`.
+    pub(crate) fn extend(&mut self, other: PieceSet) {
+        self.0.extend(other.0);
     }
 
     /// Adds the face set named `name` (see [`name`](Self::name)).
