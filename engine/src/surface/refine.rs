@@ -618,6 +618,16 @@ mod tests {
         );
     }
 
+    /// A 3:1 field along the world direction `major` (projected into the surface).
+    fn three_to_one(mesh: &TriMesh, major: DVec3) -> TensorField {
+        TensorField::from_frames(
+            mesh,
+            &vec![major; mesh.vertex_count()],
+            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
+        )
+        .expect("field")
+    }
+
     fn split_all(mesh: &TriMesh, context: &SplitContext, faces: &[u32]) -> Vec<Vec<u32>> {
         split_in_two(mesh, &context.frames, &context.weights, &context.cut, faces).expect("split")
     }
@@ -649,12 +659,7 @@ mod tests {
     #[test]
     fn splitting_gives_the_same_pieces_on_any_number_of_threads() {
         let mesh = shapes::sphere(1.0, 3).expect("sphere");
-        let field = TensorField::from_frames(
-            &mesh,
-            &vec![DVec3::X; mesh.vertex_count()],
-            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
-        )
-        .expect("field");
+        let field = three_to_one(&mesh, DVec3::X);
         let options = SurfaceOptions::default();
         let context = SplitContext::new(&mesh, &field, &[], &options);
         let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
@@ -686,12 +691,7 @@ mod tests {
     fn a_large_piece_split_while_parameterized_gives_its_halves_pieces() {
         let mesh = shapes::sphere(1.0, 52).expect("sphere");
         assert!(mesh.face_count() >= SPECULATE_FACES);
-        let field = TensorField::from_frames(
-            &mesh,
-            &vec![DVec3::X; mesh.vertex_count()],
-            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
-        )
-        .expect("field");
+        let field = three_to_one(&mesh, DVec3::X);
         let options = SurfaceOptions {
             merge_pieces: false,
             ..SurfaceOptions::default()
@@ -728,12 +728,7 @@ mod tests {
     fn a_valid_large_piece_is_kept_whole() {
         let mesh = shapes::plane(1.0, 160).expect("plane");
         assert!(mesh.face_count() >= SPECULATE_FACES);
-        let field = TensorField::from_frames(
-            &mesh,
-            &vec![DVec3::new(1.0, 0.5, 0.0).normalize(); mesh.vertex_count()],
-            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
-        )
-        .expect("field");
+        let field = three_to_one(&mesh, DVec3::new(1.0, 0.5, 0.0).normalize());
         let options = SurfaceOptions::default();
         let context = SplitContext::new(&mesh, &field, &[], &options);
         let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
