@@ -226,7 +226,7 @@ fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use crate::field::TensorField;
     use crate::param::parameterize;
     use std::collections::BTreeMap;
@@ -246,7 +246,8 @@ mod tests {
         out.into_values().collect()
     }
 
-    fn field_along(mesh: &TriMesh, d: DVec3) -> TensorField {
+    /// A 3:1 field along the world direction `d` (projected into the surface).
+    pub(crate) fn field_along(mesh: &TriMesh, d: DVec3) -> TensorField {
         TensorField::from_frames(
             mesh,
             &vec![d; mesh.vertex_count()],

@@ -574,6 +574,7 @@ fn most_different_faces(frames: &FaceField, faces: &[u32]) -> [u32; 2] {
 mod tests {
     use super::*;
     use crate::mesh::shapes;
+    use crate::surface::merge::tests::field_along;
 
     /// The unit plane of `2 n^2` faces with a 3:1 field along x, turned by 90 degrees
     /// inside the disc of `radius` about `centre`: its split context and all its faces.
@@ -618,16 +619,6 @@ mod tests {
         );
     }
 
-    /// A 3:1 field along the world direction `major` (projected into the surface).
-    fn three_to_one(mesh: &TriMesh, major: DVec3) -> TensorField {
-        TensorField::from_frames(
-            mesh,
-            &vec![major; mesh.vertex_count()],
-            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
-        )
-        .expect("field")
-    }
-
     fn split_all(mesh: &TriMesh, context: &SplitContext, faces: &[u32]) -> Vec<Vec<u32>> {
         split_in_two(mesh, &context.frames, &context.weights, &context.cut, faces).expect("split")
     }
@@ -659,7 +650,7 @@ mod tests {
     #[test]
     fn splitting_gives_the_same_pieces_on_any_number_of_threads() {
         let mesh = shapes::sphere(1.0, 3).expect("sphere");
-        let field = three_to_one(&mesh, DVec3::X);
+        let field = field_along(&mesh, DVec3::X);
         let options = SurfaceOptions::default();
         let context = SplitContext::new(&mesh, &field, &[], &options);
         let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
@@ -691,7 +682,7 @@ mod tests {
     fn a_large_piece_split_while_parameterized_gives_its_halves_pieces() {
         let mesh = shapes::sphere(1.0, 52).expect("sphere");
         assert!(mesh.face_count() >= SPECULATE_FACES);
-        let field = three_to_one(&mesh, DVec3::X);
+        let field = field_along(&mesh, DVec3::X);
         let options = SurfaceOptions {
             merge_pieces: false,
             ..SurfaceOptions::default()
@@ -728,7 +719,7 @@ mod tests {
     fn a_valid_large_piece_is_kept_whole() {
         let mesh = shapes::plane(1.0, 160).expect("plane");
         assert!(mesh.face_count() >= SPECULATE_FACES);
-        let field = three_to_one(&mesh, DVec3::new(1.0, 0.5, 0.0).normalize());
+        let field = field_along(&mesh, DVec3::new(1.0, 0.5, 0.0).normalize());
         let options = SurfaceOptions::default();
         let context = SplitContext::new(&mesh, &field, &[], &options);
         let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
