@@ -30,8 +30,9 @@
 //! segments keep every thread busy). A piece of [`SPECULATE_FACES`] faces or more is
 //! split on an idle thread while it is parameterized, its halves used only if it is
 //! invalid: the chain of halvings of one large segment no longer runs on one thread
-//! (parameterization of the smooth bunny field's segments, medians of alternated runs:
-//! 69k faces 0.164 -> 0.135 s, 278k 0.789 -> 0.705 s, 1.1M 3.66-3.69 -> 3.24-3.34 s).
+//! (parameterization of the smooth bunny field's segments, medians of alternated runs,
+//! from 50,000 faces: 69k faces 0.164 -> 0.135 s, 278k 0.789 -> 0.705 s, 1.1M
+//! 3.66-3.69 -> 3.24-3.34 s).
 //! The result does not depend on the thread count.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -433,8 +434,11 @@ fn combine(
 
 /// Pieces of at least this many faces are split on an idle thread while they are
 /// parameterized (see the [module docs](self)); their halves are used only when the
-/// piece is invalid. Below it a piece costs little next to the bookkeeping.
-pub const SPECULATE_FACES: usize = 50_000;
+/// piece is invalid. Below it a piece costs little next to the bookkeeping. Against
+/// 50,000, parameterization of the constant-field bunny (69k faces) took 0.156 s
+/// against 0.168 s (medians of five alternated runs), and of the smooth one at 278k
+/// faces 0.698 s against 0.727 s (three).
+pub const SPECULATE_FACES: usize = 20_000;
 
 /// The optional stricter angle test (the mean is part of `report.valid` already).
 pub(super) fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
@@ -674,13 +678,13 @@ mod tests {
         assert_eq!(four, one);
     }
 
-    /// A sphere of more than `SPECULATE_FACES` faces is no disc, so it is split while
+    /// A sphere of more than `SPECULATE_FACES` faces (24,500) is no disc, so it is split while
     /// it is parameterized: the result is exactly its two halves' pieces, each half
     /// split on its own (below `SPECULATE_FACES`, without speculation), plus the one
     /// split, on one thread and on four.
     #[test]
     fn a_large_piece_split_while_parameterized_gives_its_halves_pieces() {
-        let mesh = shapes::sphere(1.0, 52).expect("sphere");
+        let mesh = shapes::sphere(1.0, 35).expect("sphere");
         assert!(mesh.face_count() >= SPECULATE_FACES);
         let field = field_along(&mesh, DVec3::X);
         let options = SurfaceOptions {
@@ -713,11 +717,11 @@ mod tests {
         assert_eq!(run(4, &faces).0, whole);
     }
 
-    /// A valid piece of more than `SPECULATE_FACES` faces stays whole: the halves
+    /// A valid piece of more than `SPECULATE_FACES` faces (20,402) stays whole: the halves
     /// begun beside it are dropped.
     #[test]
     fn a_valid_large_piece_is_kept_whole() {
-        let mesh = shapes::plane(1.0, 160).expect("plane");
+        let mesh = shapes::plane(1.0, 101).expect("plane");
         assert!(mesh.face_count() >= SPECULATE_FACES);
         let field = field_along(&mesh, DVec3::new(1.0, 0.5, 0.0).normalize());
         let options = SurfaceOptions::default();
