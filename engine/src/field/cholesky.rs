@@ -2,7 +2,8 @@
 //! three matrices of one pattern in a row, and on the bunny zeroing a fresh 29 MB factor
 //! (the page faults of a new allocation) cost about as much as a third of the
 //! factorization itself. A [`Cholesky`] hands its buffers back as [`Storage`] for the
-//! next factorization to reuse.
+//! next factorization to reuse. The parameterization's sparse solves
+//! (`param::spd`) factor and solve with it too, on their own symbolic factorization.
 //!
 //! Input: a symbolic factorization (AMD ordering, faer's supernodal layout) shared by
 //! every matrix of the pattern, and a Hermitian matrix's lower triangle. Output: the

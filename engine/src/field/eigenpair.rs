@@ -98,13 +98,7 @@ fn davidson(
     vector: bool,
 ) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
     let mut work = amg.workspace();
-    let options = lanczos::KrylovOptions {
-        max_solves: max,
-        tolerance,
-        floor,
-        basis_limit: DAVIDSON_BASIS,
-        residual: vector.then(|| tolerance.sqrt()),
-    };
+    let options = stopping_rule(max, tolerance, floor, vector, DAVIDSON_BASIS);
     lanczos::smallest_eigenpair_preconditioned(
         &system.mass,
         start_vector(system.len()),
@@ -112,6 +106,24 @@ fn davidson(
         |r, z| amg.apply(r, z, &mut work),
         |x| system.apply(x),
     )
+}
+
+/// The stopping rule of [`smallest_eigenpair`] (shared by both of its solvers) with
+/// at most `basis_limit` basis vectors.
+fn stopping_rule(
+    max: usize,
+    tolerance: f64,
+    floor: f64,
+    vector: bool,
+    basis_limit: usize,
+) -> lanczos::KrylovOptions {
+    lanczos::KrylovOptions {
+        max_solves: max,
+        tolerance,
+        floor,
+        basis_limit,
+        residual: vector.then(|| tolerance.sqrt()),
+    }
 }
 
 /// The fixed pseudo-random start of the eigen-iterations.
@@ -150,13 +162,7 @@ pub(crate) fn smallest_eigenpair(
     let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
     let identity: Vec<usize> = (0..n).collect();
     let mut factor = system.factor(mesh, &extra, &identity, n)?;
-    let options = lanczos::KrylovOptions {
-        max_solves: max,
-        tolerance,
-        floor,
-        basis_limit: KRYLOV_BASIS,
-        residual: vector.then(|| tolerance.sqrt()),
-    };
+    let options = stopping_rule(max, tolerance, floor, vector, KRYLOV_BASIS);
     let found = match &mut factor {
         Factor::Direct(_) => lanczos::smallest_eigenpair(
             &system.mass,

@@ -11,14 +11,17 @@
 //! on large segments.
 //! Kept below `solve` and `comb` so neither depends on the other for it.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
+use std::sync::Arc;
+
 use faer::perm::PermRef;
 use faer::sparse::SparseColMat;
-use faer::sparse::linalg::cholesky::{LltRef, SymmetricOrdering, factorize_symbolic_cholesky};
-use faer::{Conj, Mat, Par, Side};
+use faer::sparse::linalg::cholesky::{SymmetricOrdering, factorize_symbolic_cholesky};
+use faer::{Mat, Side};
 use glam::DVec3;
 
 use super::ParamError;
+use crate::field::LineFieldError;
+use crate::field::cholesky::Cholesky;
 use crate::linalg::dissection::nested_dissection;
 
 /// From this many unknowns a system whose unknowns have positions is ordered by nested
@@ -54,37 +57,15 @@ pub(crate) fn solve_spd(
         .map_err(|_| ParamError::Solver {
             stage: "symbolic factorization",
         })?;
-    const OUT_OF_MEMORY: ParamError = ParamError::Solver {
-        stage: "factor memory (out of memory)",
+    // The numeric factorization and the solve are the field's (`field::cholesky`).
+    let solver = |e: LineFieldError| ParamError::Solver {
+        stage: match e {
+            LineFieldError::Factorization { stage } => stage,
+            _ => "numeric factorization",
+        },
     };
-    let mut values = Vec::new();
-    values
-        .try_reserve_exact(symbolic.len_val())
-        .map_err(|_| OUT_OF_MEMORY)?;
-    values.resize(symbolic.len_val(), 0.0);
-    let req = symbolic
-        .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-        .or(symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq));
-    let mut scratch = MemBuffer::try_new(req).map_err(|_| OUT_OF_MEMORY)?;
-    symbolic
-        .factorize_numeric_llt::<f64>(
-            &mut values,
-            matrix.as_ref(),
-            Side::Lower,
-            Default::default(),
-            Par::Seq,
-            MemStack::new(&mut scratch),
-            Default::default(),
-        )
-        .map_err(|_| ParamError::Solver {
-            stage: "numeric factorization (matrix not positive definite)",
-        })?;
-    LltRef::new(&symbolic, &values).solve_in_place_with_conj(
-        Conj::No,
-        rhs.as_mut(),
-        Par::Seq,
-        MemStack::new(&mut scratch),
-    );
+    let mut factor = Cholesky::new(Arc::new(symbolic), matrix.as_ref(), None).map_err(solver)?;
+    factor.solve(rhs.as_mut()).map_err(solver)?;
     Ok(rhs)
 }
 
