@@ -267,25 +267,7 @@ impl Connection {
             },
         );
         let frames = frames?;
-        // Per edge e^(i psi) at both ends, by arithmetic rather than angles: the
-        // rotation is (u_b conj(u_a))^2 (the doubled angle difference).
-        let pos = mesh.positions();
-        let edges: Vec<EdgeTerm> = mesh
-            .edges()
-            .par_iter()
-            .zip(&weights)
-            .map(|(&[a, b], &weight)| {
-                let (a, b) = (a as usize, b as usize);
-                let d = pos[b] - pos[a];
-                let r = unit_direction(d, frames[b]) * unit_direction(d, frames[a]).conj();
-                EdgeTerm {
-                    a,
-                    b,
-                    weight,
-                    rotation: r * r,
-                }
-            })
-            .collect();
+        let edges = edge_terms(mesh, &frames, weights.iter().copied());
         let mut diagonal = vec![0.0; n];
         for e in &edges {
             diagonal[e.a] += e.weight;
@@ -302,6 +284,45 @@ impl Connection {
             multigrid,
             lambda_multigrid,
         })
+    }
+
+    /// The same weights and masses with the connection measured in the mesh's own
+    /// vertex frames (no smoothing), for evaluation only (no factorization is
+    /// prepared): where a field is compared with the segmentation's view of it.
+    pub(crate) fn unsmoothed(&self, mesh: &TriMesh) -> Self {
+        let frames = vertex_frames(mesh);
+        let edges = edge_terms(mesh, &frames, self.edges.iter().map(|e| e.weight));
+        Self {
+            frames,
+            edges,
+            diagonal: self.diagonal.clone(),
+            mass: self.mass.clone(),
+            pattern: None,
+            symbolic: OnceCell::new(),
+            spare: RefCell::new(None),
+            multigrid: self.multigrid,
+            lambda_multigrid: self.lambda_multigrid,
+        }
+    }
+
+    /// The doubled-angle values `z` of this system's frames in `to`'s: each line
+    /// projected into `to`'s tangent plane, with the same magnitude (0 where the line
+    /// is normal to that plane).
+    pub(crate) fn transfer(&self, z: &[c64], to: &Connection) -> Vec<c64> {
+        z.iter()
+            .zip(self.frames.iter().zip(&to.frames))
+            .map(|(z, ((e1, e2), (f1, f2)))| {
+                let (s, c) = (0.5 * z.im.atan2(z.re)).sin_cos();
+                let d = *e1 * c + *e2 * s;
+                let (c, s) = (d.dot(*f1), d.dot(*f2));
+                let len2 = c * c + s * s;
+                if len2 > 0.0 {
+                    c64::new(c * c - s * s, 2.0 * c * s) * (z.norm() / len2)
+                } else {
+                    c64::new(0.0, 0.0)
+                }
+            })
+            .collect()
     }
 
     /// The tiny shift `sigma = SHIFT tr(A) / tr(M)` that keeps `A + sigma M` definite.
@@ -461,6 +482,32 @@ impl Connection {
             iterations,
         }
     }
+}
+
+/// Per edge the term `w |z_b - r z_a|^2`: `e^(i psi)` at both ends by arithmetic
+/// rather than angles, the rotation `(u_b conj(u_a))^2` (the doubled angle difference).
+fn edge_terms(
+    mesh: &TriMesh,
+    frames: &[(DVec3, DVec3)],
+    weights: impl IntoIterator<Item = f64>,
+) -> Vec<EdgeTerm> {
+    let pos = mesh.positions();
+    let weights: Vec<f64> = weights.into_iter().collect();
+    mesh.edges()
+        .par_iter()
+        .zip(&weights)
+        .map(|(&[a, b], &weight)| {
+            let (a, b) = (a as usize, b as usize);
+            let d = pos[b] - pos[a];
+            let r = unit_direction(d, frames[b]) * unit_direction(d, frames[a]).conj();
+            EdgeTerm {
+                a,
+                b,
+                weight,
+                rotation: r * r,
+            }
+        })
+        .collect()
 }
 
 /// Solves in place with `llt`, checking the result is finite.

@@ -65,6 +65,11 @@
 //!   the smoothest field) keeps the system definite in a connected component that
 //!   nothing pins (its field is then zero, and its directions are the frames' first
 //!   axes). Weight 0 and no constraints give the smoothest field.
+//! - Pair cancellation ([`LineFieldOptions::cancel_distance`], `cancel.rs`): after
+//!   either solve, opposite singularities closer than a distance are removed together
+//!   by re-solving the field's angle on a disc around both (Zhang, Hays and Turk 2007).
+//!   It works in the mesh's own vertex frames, where the segmentation measures
+//!   singularities, and the field is then returned in those frames.
 //!
 //! Input: a [`TriMesh`] (and a guidance per vertex). Output: a [`LineField`], a unit
 //! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
@@ -88,6 +93,7 @@ use std::borrow::Cow;
 use faer::c64;
 use glam::DVec3;
 
+use super::cancel::cancel_pairs;
 use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
 pub use super::line_field::{
@@ -140,6 +146,11 @@ pub struct LineFieldOptions {
     pub tolerance: f64,
     /// How the sparse systems are solved; default [`LinearSolver::Auto`].
     pub solver: LinearSolver,
+    /// Opposite singularities (`+1/2` and `-1/2`) whose centres lie at most this far
+    /// apart, as a fraction of the area radius `R`, are cancelled after the solve: the
+    /// field on a disc around both becomes the smoothest field matching its boundary
+    /// (see the [module docs](self)). Range `[0, inf)`, 0 cancelling none; default 0.
+    pub cancel_distance: f64,
 }
 
 impl Default for LineFieldOptions {
@@ -151,6 +162,7 @@ impl Default for LineFieldOptions {
             iterations: 200,
             tolerance: 1e-8,
             solver: LinearSolver::Auto,
+            cancel_distance: 0.0,
         }
     }
 }
@@ -176,6 +188,13 @@ impl LineFieldOptions {
             return Err(LineFieldError::InvalidOption {
                 option: "smoothing",
                 value: self.smoothing,
+                expected: "finite and >= 0",
+            });
+        }
+        if !(self.cancel_distance.is_finite() && self.cancel_distance >= 0.0) {
+            return Err(LineFieldError::InvalidOption {
+                option: "cancel_distance",
+                value: self.cancel_distance,
                 expected: "finite and >= 0",
             });
         }
@@ -251,7 +270,36 @@ fn smoothest_on(
         true,
     )?;
     system.recycle(factor);
-    Ok(system.output(&x, solves))
+    let held = vec![false; x.len()];
+    output(mesh, system, x, &held, options, solves)
+}
+
+/// The line field of the solution `x` (doubled angles in `system`'s frames) with
+/// [`LineFieldOptions::cancel_distance`] applied: pairs are cancelled in the mesh's
+/// own frames, where the segmentation measures singularities (with a smoothed
+/// connection the two can differ by a pair in a bumpy region), and the field is
+/// returned in those frames. Vertices with `held[v]` keep their values.
+fn output(
+    mesh: &TriMesh,
+    system: &Connection,
+    x: Vec<c64>,
+    held: &[bool],
+    options: &LineFieldOptions,
+    iterations: usize,
+) -> Result<LineField, LineFieldError> {
+    if options.cancel_distance == 0.0 {
+        return Ok(system.output(&x, iterations));
+    }
+    let distance = options.cancel_distance * area_radius(mesh);
+    if options.smoothing == 0.0 {
+        let mut x = x;
+        cancel_pairs(mesh, system, &mut x, held, distance)?;
+        return Ok(system.output(&x, iterations));
+    }
+    let own = system.unsmoothed(mesh);
+    let mut z = system.transfer(&x, &own);
+    cancel_pairs(mesh, &own, &mut z, held, distance)?;
+    Ok(own.output(&z, iterations))
 }
 
 /// The smoothness energy `E(z) = sum_edges w_ab |z_b - r_ab z_a|^2` of the unit line
@@ -509,7 +557,8 @@ pub(crate) fn constrained_line_field_with<'g>(
     let x: Vec<c64> = (0..n)
         .map(|v| fixed[v].unwrap_or_else(|| rhs[slots[v]]))
         .collect();
-    Ok(system.output(&x, 0))
+    let held: Vec<bool> = fixed.iter().map(Option::is_some).collect();
+    output(mesh, &system, x, &held, options, 0)
 }
 
 /// The largest bound on the condition number of `B^-1 K` under which the shifted

@@ -17,6 +17,7 @@
 //! Field design ([`smoothest_line_field`], [`guided_line_field`]): smooth line fields
 //! with few singularities (Knöppel et al. 2013).
 
+mod cancel;
 pub(crate) mod cholesky;
 mod connection;
 mod curvature;

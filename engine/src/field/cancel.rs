@@ -1,0 +1,656 @@
+//! Singularity pair cancellation: a `+1/2` and a `-1/2` singularity of a line field
+//! closer than a given distance are removed together, by replacing the field on a disc
+//! around both with the smoothest field that agrees with it on the disc's boundary
+//! (the editing operation of Zhang, Hays and Turk, "Interactive tensor field design and
+//! visualization on surfaces", 2007, and of Palacios and Zhang's rotational-symmetry
+//! field design, 2007). The winding of the field around such a disc is zero, so the
+//! smoothest field inside has no reason to turn; where it still does, the disc is left
+//! as it was.
+//!
+//! Field design keeps these pairs because its guidance asks for them: a scanned
+//! surface's principal directions really turn around small bumps and dents, and the
+//! guided field follows them. Two opposite singularities a fraction of the surface's
+//! size apart are that detail, not the field's topology (the index sum, and so the
+//! Euler characteristic, does not change), and each one would otherwise cost the
+//! segmentation a cut.
+//!
+//! Input: a mesh, its [`Connection`], a doubled-angle field `z` per vertex and a
+//! distance. Output: `z` changed on the discs of the cancelled pairs, and their count.
+//! Cost: O(F) to find the singularities, then per candidate pair two bounded Dijkstra
+//! searches and one sparse Cholesky of the disc's vertices (a few thousand on the
+//! bunny). Deterministic: pairs are taken by increasing distance, ties by cluster.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::f64::consts::TAU;
+
+use faer::MatMut;
+use faer::c64;
+use faer::sparse::{SparseColMat, Triplet};
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::cholesky::{self, Cholesky};
+use super::connection::{Connection, EdgeTerm};
+use super::line_field::LineFieldError;
+use crate::mesh::TriMesh;
+
+/// Twice the index of every face of the line field `z` (doubled angles in the
+/// connection's vertex frames): the turn of the field against the connection's
+/// transport around the face, plus the face's holonomy, over `2 pi`. The same index
+/// as the segmentation's, measured in the connection's (possibly smoothed) frames.
+pub(crate) fn face_double_indices(mesh: &TriMesh, system: &Connection, z: &[c64]) -> Vec<i32> {
+    let edges = &system.edges;
+    (0..mesh.face_count())
+        .into_par_iter()
+        .map(|f| face_double_index(mesh, edges, z, f))
+        .collect()
+}
+
+/// Twice the index of face `f` (see [`face_double_indices`]), with `edges` the
+/// connection's edge terms.
+fn face_double_index(mesh: &TriMesh, edges: &[EdgeTerm], z: &[c64], f: usize) -> i32 {
+    let t = mesh.triangles()[f];
+    let fe = mesh.face_edges()[f];
+    let mut turn = 0.0;
+    let mut holonomy = c64::new(1.0, 0.0);
+    for k in 0..3 {
+        let (u, v) = (t[k] as usize, t[(k + 1) % 3] as usize);
+        let e = &edges[fe[k] as usize];
+        // The stored rotation transports a -> b; walking b -> a takes its inverse.
+        let r = if e.a == u {
+            e.rotation
+        } else {
+            e.rotation.conj()
+        };
+        holonomy *= r;
+        let d = z[v] * (r * z[u]).conj();
+        turn += d.im.atan2(d.re);
+    }
+    ((turn + holonomy.im.atan2(holonomy.re)) / TAU).round() as i32
+}
+
+/// Singular faces that share a vertex, with a non-zero net index.
+#[derive(Debug)]
+struct Cluster {
+    /// Ascending.
+    faces: Vec<u32>,
+    /// Twice the index sum.
+    index: i32,
+    /// Mean of the faces' centroids.
+    centre: DVec3,
+}
+
+/// The net singularity clusters of the doubled indices `double`, in order of their
+/// lowest face.
+fn net_clusters(mesh: &TriMesh, double: &[i32]) -> Vec<Cluster> {
+    let singular: Vec<u32> = (0..mesh.face_count() as u32)
+        .filter(|&f| double[f as usize] != 0)
+        .collect();
+    let mut parent: Vec<usize> = (0..singular.len()).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for (i, &f) in singular.iter().enumerate() {
+        for &v in &mesh.triangles()[f as usize] {
+            for g in mesh.vertex_faces(v) {
+                if let Ok(j) = singular.binary_search(g) {
+                    let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+    }
+    let mut out: Vec<Cluster> = Vec::new();
+    let mut slot = vec![usize::MAX; singular.len()];
+    for (i, &f) in singular.iter().enumerate() {
+        let root = find(&mut parent, i);
+        if slot[root] == usize::MAX {
+            slot[root] = out.len();
+            out.push(Cluster {
+                faces: Vec::new(),
+                index: 0,
+                centre: DVec3::ZERO,
+            });
+        }
+        let c = &mut out[slot[root]];
+        c.faces.push(f);
+        c.index += double[f as usize];
+        let [a, b, d] = mesh.face_positions(f);
+        c.centre += (a + b + d) / 3.0;
+    }
+    out.retain(|c| c.index != 0);
+    for c in &mut out {
+        c.centre /= c.faces.len() as f64;
+    }
+    out
+}
+
+/// A Dijkstra queue entry, ordered so that the heap pops the nearest vertex first
+/// (the lowest index among ties).
+#[derive(PartialEq)]
+struct Entry(f64, u32);
+
+impl Eq for Entry {}
+
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.0.total_cmp(&self.0).then(other.1.cmp(&self.1))
+    }
+}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+/// Geodesic distances along edges, kept per vertex and reset after each search.
+struct Distances {
+    dist: Vec<f64>,
+    touched: Vec<u32>,
+}
+
+impl Distances {
+    fn new(n: usize) -> Self {
+        Self {
+            dist: vec![f64::INFINITY; n],
+            touched: Vec::new(),
+        }
+    }
+
+    /// Distances from `sources` along the mesh's edges, up to `limit`; with `targets`
+    /// (ascending) the search stops at the first target it reaches and returns its
+    /// distance.
+    fn search(&mut self, mesh: &TriMesh, sources: &[u32], limit: f64, targets: &[u32]) -> f64 {
+        for &v in &self.touched {
+            self.dist[v as usize] = f64::INFINITY;
+        }
+        self.touched.clear();
+        let pos = mesh.positions();
+        let mut heap = BinaryHeap::new();
+        for &s in sources {
+            if self.dist[s as usize] > 0.0 {
+                self.dist[s as usize] = 0.0;
+                self.touched.push(s);
+                heap.push(Entry(0.0, s));
+            }
+        }
+        while let Some(Entry(d, v)) = heap.pop() {
+            if d > self.dist[v as usize] {
+                continue;
+            }
+            if targets.binary_search(&v).is_ok() {
+                return d;
+            }
+            for &u in mesh.vertex_neighbors(v) {
+                let du = d + pos[v as usize].distance(pos[u as usize]);
+                if du <= limit && du < self.dist[u as usize] {
+                    if self.dist[u as usize] == f64::INFINITY {
+                        self.touched.push(u);
+                    }
+                    self.dist[u as usize] = du;
+                    heap.push(Entry(du, u));
+                }
+            }
+        }
+        f64::INFINITY
+    }
+}
+
+/// Cancels the opposite net singularity pairs of `z` whose centres lie at most
+/// `distance` apart (see the [module docs](self)), nearest pairs first, each cluster at
+/// most once; vertices with `held[v]` keep their value. Returns the number of
+/// singularities removed (two per pair, more where a disc holds several whose indices
+/// sum to zero). A pair is left alone when no disc of [`WIDTHS`] around it works: one
+/// that is not a topological disc, cuts through a singularity, holds singularities
+/// whose indices do not sum to zero or a held vertex, or still has a singular face
+/// after the solve.
+///
+/// Errors: a failed factorization of a disc's system.
+pub(crate) fn cancel_pairs(
+    mesh: &TriMesh,
+    system: &Connection,
+    z: &mut [c64],
+    held: &[bool],
+    distance: f64,
+) -> Result<usize, LineFieldError> {
+    if !(distance > 0.0) {
+        return Ok(0);
+    }
+    let clusters = net_clusters(mesh, &face_double_indices(mesh, system, z));
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, a) in clusters.iter().enumerate() {
+        for (j, b) in clusters.iter().enumerate().skip(i + 1) {
+            let d = a.centre.distance(b.centre);
+            if a.index == -b.index && d <= distance {
+                pairs.push((d, i, j));
+            }
+        }
+    }
+    if pairs.is_empty() {
+        return Ok(0);
+    }
+    pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    let n = mesh.vertex_count();
+    let mut from_a = Distances::new(n);
+    let mut from_b = Distances::new(n);
+    let mut gone = vec![false; clusters.len()];
+    let margin = 3.0 * mesh.mean_edge_length();
+    let mut cancelled = 0;
+    for (_, i, j) in pairs {
+        if gone[i] || gone[j] {
+            continue;
+        }
+        let corners = |c: &Cluster| {
+            let mut v: Vec<u32> = c
+                .faces
+                .iter()
+                .flat_map(|&f| mesh.triangles()[f as usize])
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let (a, b) = (corners(&clusters[i]), corners(&clusters[j]));
+        // The disc: vertices whose detour through them from one singularity to the
+        // other is at most `reach` (an ellipse with the two as foci). Along edges the
+        // pair may lie up to `GEODESIC_SLACK` times farther apart than in space.
+        let apart = from_a.search(mesh, &a, GEODESIC_SLACK * distance, &b);
+        if !apart.is_finite() {
+            continue;
+        }
+        // The narrowest disc that works: wider ones change more of the field. Both
+        // searches reach exactly as far as the disc.
+        for width in WIDTHS {
+            let reach = (width * apart).max(apart + 2.0 * margin);
+            from_a.search(mesh, &a, reach, &[]);
+            from_b.search(mesh, &b, reach, &[]);
+            let removed = cancel_inside(
+                mesh,
+                system,
+                z,
+                held,
+                &clusters,
+                &mut gone,
+                [i, j],
+                |v| from_a.dist[v as usize] + from_b.dist[v as usize] <= reach,
+                &from_b.touched,
+            )?;
+            if removed > 0 {
+                cancelled += removed;
+                break;
+            }
+        }
+    }
+    Ok(cancelled)
+}
+
+/// How much longer than their distance in space a pair's distance along edges may be
+/// (edge paths zigzag: about 1.1 times on a regular mesh).
+const GEODESIC_SLACK: f64 = 1.5;
+
+/// Detours (as multiples of the pair's distance) of the discs tried around a pair, in
+/// order: the ellipse of vertices `v` with `d(a, v) + d(v, b) <= width d(a, b)`.
+const WIDTHS: [f64; 3] = [1.25, 1.5, 2.0];
+
+/// Replaces the field on the disc of vertices with `inside(v)` (found among
+/// `candidates`) around the pair `pair` by the smoothest field matching its boundary,
+/// if the disc is a topological disc, every net singularity it touches lies wholly in
+/// it, their indices sum to zero, and no singular face is left after the solve. Marks
+/// the clusters removed as `gone` and returns their count (0: the field is unchanged).
+#[allow(clippy::too_many_arguments)]
+fn cancel_inside(
+    mesh: &TriMesh,
+    system: &Connection,
+    z: &mut [c64],
+    held: &[bool],
+    clusters: &[Cluster],
+    gone: &mut [bool],
+    pair: [usize; 2],
+    inside: impl Fn(u32) -> bool,
+    candidates: &[u32],
+) -> Result<usize, LineFieldError> {
+    let mut faces: Vec<u32> = Vec::new();
+    for &v in candidates {
+        if !inside(v) {
+            continue;
+        }
+        for &f in mesh.vertex_faces(v) {
+            let t = mesh.triangles()[f as usize];
+            // Each face once: from its lowest corner.
+            let corners = t.iter().filter(|&&w| inside(w)).count();
+            let lowest = t.iter().filter(|&&w| inside(w)).min() == Some(&v);
+            if corners >= 2 && lowest {
+                faces.push(f);
+            }
+        }
+    }
+    faces.sort_unstable();
+    let holds = |f: &u32| faces.binary_search(f).is_ok();
+    let mut enclosed = Vec::new();
+    let mut index = 0;
+    for (k, c) in clusters.iter().enumerate() {
+        if gone[k] || !c.faces.iter().any(holds) {
+            continue;
+        }
+        if !c.faces.iter().all(holds) {
+            return Ok(0);
+        }
+        enclosed.push(k);
+        index += c.index;
+    }
+    if index != 0 || !pair.iter().all(|k| enclosed.contains(k)) || !is_disc(mesh, &faces) {
+        return Ok(0);
+    }
+    // Free: the disc's vertices all of whose faces lie in it.
+    let mut free: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.triangles()[f as usize])
+        .filter(|&v| !held[v as usize] && mesh.vertex_faces(v).iter().all(holds))
+        .collect();
+    free.sort_unstable();
+    free.dedup();
+    if free.is_empty() {
+        return Ok(0);
+    }
+    let Some(angles) = angles_inside(mesh, system, z, held, &faces, &free)? else {
+        return Ok(0);
+    };
+    let before: Vec<c64> = free.iter().map(|&v| z[v as usize]).collect();
+    for (&v, value) in free.iter().zip(angles) {
+        z[v as usize] = value;
+    }
+    let singular_left = free
+        .iter()
+        .flat_map(|&v| mesh.vertex_faces(v))
+        .any(|&f| face_double_index(mesh, &system.edges, z, f as usize) != 0);
+    if singular_left {
+        for (&v, &old) in free.iter().zip(&before) {
+            z[v as usize] = old;
+        }
+        return Ok(0);
+    }
+    for &k in &enclosed {
+        gone[k] = true;
+    }
+    Ok(enclosed.len())
+}
+
+/// The field on the `free` vertices (ascending; those whose faces all lie in the disc
+/// `faces`, ascending) with no singularity: its doubled angle `theta` is lifted to
+/// real numbers along the disc's boundary (the field winds zero times around it) and
+/// interpolated inside by the connection Laplacian,
+/// `sum_u w_uv (theta_v - theta_u - rho_uv) = 0`, and its magnitude likewise. Where
+/// every edge turns the field by less than `pi` against the transport `rho`, each
+/// face's index is 0. `None` where that cannot be set up: a held vertex inside the
+/// disc, a face whose connection angles do not sum to its holonomy (a frame spinning
+/// across it), a non-zero index sum in the disc, or a boundary not joined by edges.
+fn angles_inside(
+    mesh: &TriMesh,
+    system: &Connection,
+    z: &[c64],
+    held: &[bool],
+    faces: &[u32],
+    free: &[u32],
+) -> Result<Option<Vec<c64>>, LineFieldError> {
+    let mut edges: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.face_edges()[f as usize])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let in_disc = |e: u32| edges.binary_search(&e).is_ok();
+    let is_free = |v: u32| free.binary_search(&v).is_ok();
+    // Interior vertices that are held would need the lift through them.
+    let held_inside = faces
+        .iter()
+        .flat_map(|&f| mesh.triangles()[f as usize])
+        .any(|v| {
+            held[v as usize]
+                && !is_free(v)
+                && mesh
+                    .vertex_faces(v)
+                    .iter()
+                    .all(|g| faces.binary_search(g).is_ok())
+        });
+    if held_inside {
+        return Ok(None);
+    }
+    let index_sum: i32 = faces
+        .iter()
+        .map(|&f| face_double_index(mesh, &system.edges, z, f as usize))
+        .sum();
+    if index_sum != 0 {
+        return Ok(None);
+    }
+    let Some(lifted_rotation) = lifted_rotations(mesh, system, faces, &edges) else {
+        return Ok(None);
+    };
+    // The connection angle of disc edge e walked from u.
+    let rho = |e: u32, u: u32| {
+        let r = lifted_rotation[edges.binary_search(&e).expect("a disc edge")];
+        if system.edges[e as usize].a == u as usize {
+            r
+        } else {
+            -r
+        }
+    };
+    // Lift the boundary's angles: breadth first along the disc's edges between fixed
+    // vertices, each step taking the turn nearest the transport.
+    let mut boundary: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.triangles()[f as usize])
+        .filter(|&v| !is_free(v))
+        .collect();
+    boundary.sort_unstable();
+    boundary.dedup();
+    if boundary.is_empty() {
+        return Ok(None);
+    }
+    let mut lifted = vec![f64::NAN; boundary.len()];
+    lifted[0] = angle(z[boundary[0] as usize]);
+    let mut queue = std::collections::VecDeque::from([0usize]);
+    while let Some(i) = queue.pop_front() {
+        let u = boundary[i];
+        for &e in mesh.vertex_edges(u) {
+            if !in_disc(e) {
+                continue;
+            }
+            let [a, b] = mesh.edges()[e as usize];
+            let v = if a == u { b } else { a };
+            let Ok(j) = boundary.binary_search(&v) else {
+                continue;
+            };
+            if lifted[j].is_nan() {
+                let step = rho(e, u);
+                let turn = angle(
+                    z[v as usize] * (c64::new(step.cos(), step.sin()) * z[u as usize]).conj(),
+                );
+                lifted[j] = lifted[i] + step + turn;
+                queue.push_back(j);
+            }
+        }
+    }
+    if lifted.iter().any(|t| t.is_nan()) {
+        return Ok(None);
+    }
+    // The cotangent Laplacian on the free vertices (definite: the boundary is held),
+    // two right-hand sides: the angle
+    // and the magnitude.
+    let k = free.len();
+    let mut lower = Vec::with_capacity(4 * k);
+    let mut rhs = vec![0.0; 2 * k];
+    for (i, &v) in free.iter().enumerate() {
+        let mut diagonal = 0.0;
+        for &e in mesh.vertex_edges(v) {
+            let [a, b] = mesh.edges()[e as usize];
+            let u = if a == v { b } else { a };
+            let w = system.edges[e as usize].weight;
+            diagonal += w;
+            // theta_v - theta_u = rho_uv at rest.
+            rhs[i] += w * rho(e, u);
+            match free.binary_search(&u) {
+                Ok(j) if j < i => lower.push(Triplet::new(i, j, -w)),
+                Ok(_) => {}
+                Err(_) => {
+                    let j = boundary
+                        .binary_search(&u)
+                        .expect("a free vertex's neighbour is in the disc");
+                    rhs[i] += w * lifted[j];
+                    rhs[k + i] += w * z[u as usize].norm();
+                }
+            }
+        }
+        lower.push(Triplet::new(i, i, diagonal));
+    }
+    let matrix = SparseColMat::try_new_from_triplets(k, k, &lower)
+        .map_err(|_| LineFieldError::Factorization { stage: "assembly" })?;
+    let mut llt = Cholesky::new(
+        cholesky::symbolic(matrix.symbolic())?,
+        matrix.as_ref(),
+        None,
+    )?;
+    llt.solve(MatMut::from_column_major_slice_mut(&mut rhs, k, 2))?;
+    if rhs.iter().any(|x| !x.is_finite()) {
+        return Err(LineFieldError::Factorization {
+            stage: "disc solve",
+        });
+    }
+    Ok(Some(
+        (0..k)
+            .map(|i| {
+                let (s, c) = rhs[i].sin_cos();
+                c64::new(c, s) * rhs[k + i].max(0.0)
+            })
+            .collect(),
+    ))
+}
+
+/// The angle of `z`, in `(-pi, pi]`.
+fn angle(z: c64) -> f64 {
+    z.im.atan2(z.re)
+}
+
+/// Per edge of the disc `faces` (`edges`, ascending), the connection's rotation angle
+/// from its first vertex to its second as a real number: `arg r` plus a multiple of
+/// `2 pi`, chosen so that around every face the angles sum to the face's holonomy
+/// (`arg` of the product of its rotations). Near the pole of the tangent frames (where
+/// they spin) `arg r` alone does not. A dual spanning tree from a face on the disc's
+/// boundary sets each face's edge toward its parent, leaves first. `None` where the
+/// disc's faces are not joined through edges or none lies on its boundary.
+fn lifted_rotations(
+    mesh: &TriMesh,
+    system: &Connection,
+    faces: &[u32],
+    edges: &[u32],
+) -> Option<Vec<f64>> {
+    let in_disc = |f: u32| faces.binary_search(&f).is_ok();
+    let across = |f: u32, e: u32| {
+        let [g, h] = mesh.edge_faces()[e as usize];
+        if g == f { h } else { g }
+    };
+    let root = faces.iter().position(|&f| {
+        mesh.face_edges()[f as usize]
+            .iter()
+            .any(|&e| !in_disc(across(f, e)))
+    })?;
+    let f = faces[root];
+    let root_edge = *mesh.face_edges()[f as usize]
+        .iter()
+        .find(|&&e| !in_disc(across(f, e)))?;
+    let mut parent = vec![u32::MAX; faces.len()];
+    parent[root] = root_edge;
+    let mut order = vec![root];
+    let mut next = 0;
+    while next < order.len() {
+        let f = faces[order[next]];
+        next += 1;
+        for &e in &mesh.face_edges()[f as usize] {
+            if let Ok(j) = faces.binary_search(&across(f, e))
+                && parent[j] == u32::MAX
+            {
+                parent[j] = e;
+                order.push(j);
+            }
+        }
+    }
+    if order.len() != faces.len() {
+        return None;
+    }
+    let mut lifted: Vec<f64> = edges
+        .iter()
+        .map(|&e| angle(system.edges[e as usize].rotation))
+        .collect();
+    let slot = |e: u32| edges.binary_search(&e).expect("a disc edge");
+    for &i in order.iter().rev() {
+        let f = faces[i];
+        let t = mesh.triangles()[f as usize];
+        let fe = mesh.face_edges()[f as usize];
+        let mut holonomy = c64::new(1.0, 0.0);
+        let mut sum = 0.0;
+        let mut own = 1.0;
+        for k in 0..3 {
+            let term = &system.edges[fe[k] as usize];
+            let sign = if term.a == t[k] as usize { 1.0 } else { -1.0 };
+            holonomy *= if sign > 0.0 {
+                term.rotation
+            } else {
+                term.rotation.conj()
+            };
+            sum += sign * lifted[slot(fe[k])];
+            if fe[k] == parent[i] {
+                own = sign;
+            }
+        }
+        let turns = ((angle(holonomy) - sum) / TAU).round();
+        lifted[slot(parent[i])] += own * turns * TAU;
+    }
+    Some(lifted)
+}
+
+/// Whether `faces` (ascending) form one topological disc: Euler characteristic 1
+/// (`V - E + F`) and connected.
+fn is_disc(mesh: &TriMesh, faces: &[u32]) -> bool {
+    let mut vertices: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.triangles()[f as usize])
+        .collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    let mut edges: Vec<u32> = faces
+        .iter()
+        .flat_map(|&f| mesh.face_edges()[f as usize])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let euler = vertices.len() as i64 - edges.len() as i64 + faces.len() as i64;
+    if euler != 1 || faces.is_empty() {
+        return false;
+    }
+    // Connected through shared edges.
+    let mut seen = vec![false; faces.len()];
+    let mut stack = vec![0usize];
+    seen[0] = true;
+    let mut reached = 1;
+    while let Some(i) = stack.pop() {
+        for &g in &mesh.face_neighbors()[faces[i] as usize] {
+            if let Ok(k) = faces.binary_search(&g)
+                && !seen[k]
+            {
+                seen[k] = true;
+                reached += 1;
+                stack.push(k);
+            }
+        }
+    }
+    reached == faces.len()
+}
+
+#[cfg(test)]
+#[path = "cancel_tests.rs"]
+mod tests;
