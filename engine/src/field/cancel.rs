@@ -52,8 +52,7 @@ pub(crate) fn face_double_indices(mesh: &TriMesh, system: &Connection, z: &[c64]
 fn face_double_index(mesh: &TriMesh, edges: &[EdgeTerm], z: &[c64], f: usize) -> i32 {
     let t = mesh.triangles()[f];
     let fe = mesh.face_edges()[f];
-    let mut turn = 0.0;
-    let mut holonomy = c64::new(1.0, 0.0);
+    let mut turns = [c64::new(1.0, 0.0); 4];
     for k in 0..3 {
         let (u, v) = (t[k] as usize, t[(k + 1) % 3] as usize);
         let e = &edges[fe[k] as usize];
@@ -63,11 +62,15 @@ fn face_double_index(mesh: &TriMesh, edges: &[EdgeTerm], z: &[c64], f: usize) ->
         } else {
             e.rotation.conj()
         };
-        holonomy *= r;
-        let d = z[v] * (r * z[u]).conj();
-        turn += d.im.atan2(d.re);
+        turns[3] *= r;
+        turns[k] = z[v] * (r * z[u]).conj();
     }
-    ((turn + holonomy.im.atan2(holonomy.re)) / TAU).round() as i32
+    // Four angles under pi/4 each sum to less than pi: index 0 without any arctangent
+    // (most faces of a smooth field).
+    if turns.iter().all(|c| c.re > c.im.abs()) {
+        return 0;
+    }
+    (turns.iter().map(|&c| angle(c)).sum::<f64>() / TAU).round() as i32
 }
 
 /// Singular faces that share a vertex, with a non-zero net index.
@@ -130,6 +133,18 @@ fn net_clusters(mesh: &TriMesh, double: &[i32]) -> Vec<Cluster> {
     out
 }
 
+/// For the corners `vertices` (non-empty), a lower bound on the distance along edges
+/// from a point to the nearest of them: its distance to their bounding ball.
+fn ball(mesh: &TriMesh, vertices: &[u32]) -> impl Fn(DVec3) -> f64 + use<> {
+    let pos = mesh.positions();
+    let centre = vertices.iter().map(|&v| pos[v as usize]).sum::<DVec3>() / vertices.len() as f64;
+    let radius = vertices
+        .iter()
+        .map(|&v| pos[v as usize].distance(centre))
+        .fold(0.0, f64::max);
+    move |p: DVec3| (p.distance(centre) - radius).max(0.0)
+}
+
 /// A Dijkstra queue entry, ordered so that the heap pops the nearest vertex first
 /// (the lowest index among ties).
 #[derive(PartialEq)]
@@ -165,8 +180,18 @@ impl Distances {
 
     /// Distances from `sources` along the mesh's edges, up to `limit`; with `targets`
     /// (ascending) the search stops at the first target it reaches and returns its
-    /// distance.
-    fn search(&mut self, mesh: &TriMesh, sources: &[u32], limit: f64, targets: &[u32]) -> f64 {
+    /// distance. Only vertices `v` whose distance plus `toward(v)` is within `limit`
+    /// are reached: with `toward` a lower bound on the distance from `v` to the other
+    /// end of an ellipse, that is every vertex of the ellipse and of the shortest paths
+    /// to them, and far fewer than a ball of radius `limit` holds.
+    fn search(
+        &mut self,
+        mesh: &TriMesh,
+        sources: &[u32],
+        limit: f64,
+        targets: &[u32],
+        toward: impl Fn(u32) -> f64,
+    ) -> f64 {
         for &v in &self.touched {
             self.dist[v as usize] = f64::INFINITY;
         }
@@ -189,7 +214,7 @@ impl Distances {
             }
             for &u in mesh.vertex_neighbors(v) {
                 let du = d + pos[v as usize].distance(pos[u as usize]);
-                if du <= limit && du < self.dist[u as usize] {
+                if du + toward(u) <= limit && du < self.dist[u as usize] {
                     if self.dist[u as usize] == f64::INFINITY {
                         self.touched.push(u);
                     }
@@ -260,16 +285,23 @@ pub(crate) fn cancel_pairs(
         // The disc: vertices whose detour through them from one singularity to the
         // other is at most `reach` (an ellipse with the two as foci). Along edges the
         // pair may lie up to `GEODESIC_SLACK` times farther apart than in space.
-        let apart = from_a.search(mesh, &a, GEODESIC_SLACK * distance, &b);
+        let (ball_a, ball_b) = (ball(mesh, &a), ball(mesh, &b));
+        let apart = from_a.search(mesh, &a, GEODESIC_SLACK * distance, &b, |v| {
+            ball_b(mesh.positions()[v as usize])
+        });
         if !apart.is_finite() {
             continue;
         }
         // The narrowest disc that works: wider ones change more of the field. Both
-        // searches reach exactly as far as the disc.
+        // searches reach no farther than the disc (its ellipse, bounded in space).
         for width in WIDTHS {
             let reach = (width * apart).max(apart + 2.0 * margin);
-            from_a.search(mesh, &a, reach, &[]);
-            from_b.search(mesh, &b, reach, &[]);
+            from_a.search(mesh, &a, reach, &[], |v| {
+                ball_b(mesh.positions()[v as usize])
+            });
+            from_b.search(mesh, &b, reach, &[], |v| {
+                ball_a(mesh.positions()[v as usize])
+            });
             let removed = cancel_inside(
                 mesh,
                 system,

@@ -290,7 +290,11 @@ impl Connection {
     /// vertex frames (no smoothing), for evaluation only (no factorization is
     /// prepared): where a field is compared with the segmentation's view of it.
     pub(crate) fn unsmoothed(&self, mesh: &TriMesh) -> Self {
-        let frames = vertex_frames(mesh);
+        let frames: Vec<(DVec3, DVec3)> = mesh
+            .vertex_normals()
+            .par_iter()
+            .map(|n| tangent_frame(*n))
+            .collect();
         let edges = edge_terms(mesh, &frames, self.edges.iter().map(|e| e.weight));
         Self {
             frames,
