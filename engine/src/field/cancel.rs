@@ -16,12 +16,14 @@
 //!
 //! Input: a mesh, its [`Connection`], a doubled-angle field `z` per vertex and a
 //! distance. Output: `z` changed on the discs of the cancelled pairs, and their count.
-//! Cost: O(F) to find the singularities, then per candidate pair two bounded Dijkstra
-//! searches and one sparse Cholesky of the disc's vertices (a few thousand on the
-//! bunny). Deterministic: pairs are taken by increasing distance, ties by cluster.
+//! Cost: O(F) to find the singularities, then per candidate pair (at most
+//! [`MAX_PARTNERS`] per singularity) bounded Dijkstra searches and one sparse Cholesky
+//! of the disc's vertices (a few hundred on the bunny, 10 ms in all; 0.2 s at 1.1M
+//! faces with the mesh-frame connection). Deterministic: pairs are taken by increasing
+//! distance, ties by cluster.
 
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+use std::collections::{BinaryHeap, HashMap};
 use std::f64::consts::TAU;
 
 use faer::MatMut;
@@ -133,6 +135,53 @@ fn net_clusters(mesh: &TriMesh, double: &[i32]) -> Vec<Cluster> {
     out
 }
 
+/// Most partners a singularity is paired with, and most pairs it is tried in: with
+/// many singularities close together (a field that follows noise) the work stays
+/// linear in their number.
+const MAX_PARTNERS: usize = 4;
+
+/// The opposite pairs of `clusters` whose centres lie at most `distance` apart, each
+/// cluster with at most its [`MAX_PARTNERS`] nearest, as `(distance, i, j)` with
+/// `i < j`, nearest first (ties by index). Neighbours are found in a grid of cells of
+/// side `distance`.
+fn candidate_pairs(clusters: &[Cluster], distance: f64) -> Vec<(f64, usize, usize)> {
+    let cell = |p: DVec3| (p / distance).floor().as_i64vec3().to_array();
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (i, c) in clusters.iter().enumerate() {
+        grid.entry(cell(c.centre)).or_default().push(i);
+    }
+    let mut pairs = Vec::new();
+    let mut near = Vec::new();
+    for (i, a) in clusters.iter().enumerate() {
+        near.clear();
+        let [x, y, z] = cell(a.centre);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(members) = grid.get(&[x + dx, y + dy, z + dz]) else {
+                        continue;
+                    };
+                    for &j in members {
+                        let d = a.centre.distance(clusters[j].centre);
+                        if clusters[j].index == -a.index && d <= distance {
+                            near.push((d, j));
+                        }
+                    }
+                }
+            }
+        }
+        near.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        pairs.extend(
+            near.iter()
+                .take(MAX_PARTNERS)
+                .map(|&(d, j)| (d, i.min(j), i.max(j))),
+        );
+    }
+    pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    pairs.dedup_by(|x, y| (x.1, x.2) == (y.1, y.2));
+    pairs
+}
+
 /// For the corners `vertices` (non-empty), a lower bound on the distance along edges
 /// from a point to the nearest of them: its distance to their bounding ball.
 fn ball(mesh: &TriMesh, vertices: &[u32]) -> impl Fn(DVec3) -> f64 + use<> {
@@ -228,8 +277,9 @@ impl Distances {
 }
 
 /// Cancels the opposite net singularity pairs of `z` whose centres lie at most
-/// `distance` apart (see the [module docs](self)), nearest pairs first, each cluster at
-/// most once; vertices with `held[v]` keep their value. Returns the number of
+/// `distance` apart (see the [module docs](self)), nearest pairs first, each cluster
+/// tried with at most its [`MAX_PARTNERS`] nearest partners and cancelled at most
+/// once; vertices with `held[v]` keep their value. Returns the number of
 /// singularities removed (two per pair, more where a disc holds several whose indices
 /// sum to zero). A pair is left alone when no disc of [`WIDTHS`] around it works: one
 /// that is not a topological disc, cuts through a singularity, holds singularities
@@ -248,29 +298,23 @@ pub(crate) fn cancel_pairs(
         return Ok(0);
     }
     let clusters = net_clusters(mesh, &face_double_indices(mesh, system, z));
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-    for (i, a) in clusters.iter().enumerate() {
-        for (j, b) in clusters.iter().enumerate().skip(i + 1) {
-            let d = a.centre.distance(b.centre);
-            if a.index == -b.index && d <= distance {
-                pairs.push((d, i, j));
-            }
-        }
-    }
+    let pairs = candidate_pairs(&clusters, distance);
     if pairs.is_empty() {
         return Ok(0);
     }
-    pairs.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
     let n = mesh.vertex_count();
     let mut from_a = Distances::new(n);
     let mut from_b = Distances::new(n);
     let mut gone = vec![false; clusters.len()];
     let margin = 3.0 * mesh.mean_edge_length();
     let mut cancelled = 0;
+    let mut tries = vec![0usize; clusters.len()];
     for (_, i, j) in pairs {
-        if gone[i] || gone[j] {
+        if gone[i] || gone[j] || tries[i] >= MAX_PARTNERS || tries[j] >= MAX_PARTNERS {
             continue;
         }
+        tries[i] += 1;
+        tries[j] += 1;
         let corners = |c: &Cluster| {
             let mut v: Vec<u32> = c
                 .faces
@@ -397,9 +441,9 @@ fn cancel_inside(
     for (&v, value) in free.iter().zip(angles) {
         z[v as usize] = value;
     }
-    let singular_left = free
+    // Every face of the disc: one whose corners are all held keeps its index.
+    let singular_left = faces
         .iter()
-        .flat_map(|&v| mesh.vertex_faces(v))
         .any(|&f| face_double_index(mesh, &system.edges, z, f as usize) != 0);
     if singular_left {
         for (&v, &old) in free.iter().zip(&before) {

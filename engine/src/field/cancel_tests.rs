@@ -173,3 +173,49 @@ fn cancelling_on_a_closed_surface_keeps_the_index_sum() {
     cancel_pairs(&mesh, &system, &mut again, &held, 0.5).expect("cancel");
     assert_eq!(again, z);
 }
+
+#[test]
+fn many_close_singularities_stay_bounded_and_do_not_depend_on_the_thread_count() {
+    // A noisy field: 54 net singularities (34 cancel), most within the distance of many
+    // others; every one is tried with at most MAX_PARTNERS partners.
+    let mesh = shapes::sphere(1.0, 24).expect("sphere");
+    let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
+    let mut state = 11u64;
+    let z0: Vec<c64> = (0..mesh.vertex_count())
+        .map(|v| {
+            let p = mesh.positions()[v];
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let noise = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let angle = 3.0 * p.x + 2.0 * p.y * p.z + 2.5 * noise;
+            c64::new(angle.cos(), angle.sin())
+        })
+        .collect();
+    let before = net_clusters(&mesh, &face_double_indices(&mesh, &system, &z0)).len();
+    assert!(before > 40, "{before} net clusters");
+    let held = vec![false; mesh.vertex_count()];
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            // The system is not Sync: each pool builds its own (the same values).
+            let system =
+                Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
+            let mut z = z0.clone();
+            let removed = cancel_pairs(&mesh, &system, &mut z, &held, 1.0).expect("cancel");
+            (z, removed)
+        })
+    };
+    let (z1, removed) = run(1);
+    let (z4, removed4) = run(4);
+    assert_eq!(removed, removed4);
+    assert!(removed > 0);
+    assert!(z1 == z4, "the thread count changed the field");
+    let after = face_double_indices(&mesh, &system, &z1);
+    assert_eq!(after.iter().sum::<i32>(), 4);
+    assert_eq!(net_clusters(&mesh, &after).len(), before - removed);
+    println!("noisy sphere: {before} net singularities, {removed} cancelled");
+}
