@@ -23,6 +23,7 @@ mod connection;
 mod curvature;
 pub mod design;
 mod designed;
+mod disc_angles;
 mod eigen;
 mod eigenpair;
 mod error;
