@@ -148,8 +148,10 @@ pub struct LineFieldOptions {
     pub solver: LinearSolver,
     /// Opposite singularities (`+1/2` and `-1/2`) whose centres lie at most this far
     /// apart, as a fraction of the area radius `R`, are cancelled after the solve: the
-    /// field on a disc around both becomes the smoothest field matching its boundary
-    /// (see the [module docs](self)). Range `[0, inf)`, 0 cancelling none; default 0.
+    /// field's angle on a disc around both is interpolated afresh from the disc's
+    /// boundary, around which it winds zero times (see the [module docs](self)). With
+    /// it the result's directions lie in the mesh's own tangent planes. Range
+    /// `[0, inf)`, 0 cancelling none; default 0.
     pub cancel_distance: f64,
 }
 

@@ -130,13 +130,17 @@ pub enum LinearSolver {
 #[derive(Clone, Debug, PartialEq)]
 pub struct LineField {
     /// Unit direction per vertex, in the vertex's tangent plane (the first axis of the
-    /// tangent frame where the magnitude is 0).
+    /// tangent frame where the magnitude is 0): the smoothed normal's plane with
+    /// [`LineFieldOptions::smoothing`](super::LineFieldOptions::smoothing), the
+    /// mesh's own with pair cancellation
+    /// ([`LineFieldOptions::cancel_distance`](super::LineFieldOptions::cancel_distance)).
     pub directions: Vec<DVec3>,
     /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1`; for a
     /// guided field about 1 where it follows confident guidance or a constraint, smaller
     /// where guidance is contradictory (near singularities).
     pub magnitudes: Vec<f64>,
-    /// The smoothness energy `E(z) = z^H A z` of the solution.
+    /// The smoothness energy `E(z) = z^H A z` of the solution, under the connection of
+    /// the frames its directions are given in.
     pub energy: f64,
     /// The Rayleigh quotient `E(z) / (z^H M z)` (0 for a zero field); for the smoothest
     /// field, the estimate of the smallest eigenvalue.
