@@ -31,9 +31,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::connection::{Connection, EdgeTerm};
-use super::disc_angles::{angle, angles_inside, is_disc};
+use super::disc_angles::{angle, angles_inside, corners, distinct, is_disc};
 use super::line_field::LineFieldError;
-use crate::mesh::TriMesh;
+use crate::mesh::{TriMesh, touching_groups};
 
 /// Twice the index of every face of the line field `z` (doubled angles in the
 /// connection's vertex frames): the turn of the field against the connection's
@@ -90,47 +90,23 @@ fn net_clusters(mesh: &TriMesh, double: &[i32]) -> Vec<Cluster> {
     let singular: Vec<u32> = (0..mesh.face_count() as u32)
         .filter(|&f| double[f as usize] != 0)
         .collect();
-    let mut parent: Vec<usize> = (0..singular.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for (i, &f) in singular.iter().enumerate() {
-        for &v in &mesh.triangles()[f as usize] {
-            for g in mesh.vertex_faces(v) {
-                if let Ok(j) = singular.binary_search(g) {
-                    let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                    parent[a.max(b)] = a.min(b);
-                }
+    touching_groups(mesh, &singular)
+        .into_iter()
+        .map(|faces| {
+            let index = faces.iter().map(|&f| double[f as usize]).sum();
+            let centre = faces
+                .iter()
+                .map(|&f| mesh.face_positions(f).iter().sum::<DVec3>() / 3.0)
+                .sum::<DVec3>()
+                / faces.len() as f64;
+            Cluster {
+                faces,
+                index,
+                centre,
             }
-        }
-    }
-    let mut out: Vec<Cluster> = Vec::new();
-    let mut slot = vec![usize::MAX; singular.len()];
-    for (i, &f) in singular.iter().enumerate() {
-        let root = find(&mut parent, i);
-        if slot[root] == usize::MAX {
-            slot[root] = out.len();
-            out.push(Cluster {
-                faces: Vec::new(),
-                index: 0,
-                centre: DVec3::ZERO,
-            });
-        }
-        let c = &mut out[slot[root]];
-        c.faces.push(f);
-        c.index += double[f as usize];
-        let [a, b, d] = mesh.face_positions(f);
-        c.centre += (a + b + d) / 3.0;
-    }
-    out.retain(|c| c.index != 0);
-    for c in &mut out {
-        c.centre /= c.faces.len() as f64;
-    }
-    out
+        })
+        .filter(|c| c.index != 0)
+        .collect()
 }
 
 /// Most partners a singularity is paired with, and most pairs it is tried in: with
@@ -313,17 +289,10 @@ pub(crate) fn cancel_pairs(
         }
         tries[i] += 1;
         tries[j] += 1;
-        let corners = |c: &Cluster| {
-            let mut v: Vec<u32> = c
-                .faces
-                .iter()
-                .flat_map(|&f| mesh.triangles()[f as usize])
-                .collect();
-            v.sort_unstable();
-            v.dedup();
-            v
-        };
-        let (a, b) = (corners(&clusters[i]), corners(&clusters[j]));
+        let (a, b) = (
+            distinct(corners(mesh, &clusters[i].faces)),
+            distinct(corners(mesh, &clusters[j].faces)),
+        );
         // The disc: vertices whose detour through them from one singularity to the
         // other is at most `reach` (an ellipse with the two as foci). Along edges the
         // pair may lie up to `GEODESIC_SLACK` times farther apart than in space.
@@ -422,13 +391,10 @@ fn cancel_inside(
         return Ok(0);
     }
     // Free: the disc's vertices all of whose faces lie in it.
-    let mut free: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.triangles()[f as usize])
-        .filter(|&v| !held[v as usize] && mesh.vertex_faces(v).iter().all(holds))
-        .collect();
-    free.sort_unstable();
-    free.dedup();
+    let free = distinct(
+        corners(mesh, &faces)
+            .filter(|&v| !held[v as usize] && mesh.vertex_faces(v).iter().all(holds)),
+    );
     if free.is_empty() {
         return Ok(0);
     }

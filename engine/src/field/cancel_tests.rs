@@ -37,6 +37,23 @@ fn planted_pair(mesh: &TriMesh, p: DVec3, q: DVec3) -> Vec<c64> {
         .collect()
 }
 
+/// A smooth field on `mesh` (angle `3x + 2yz`) with uniform angle noise of width
+/// `noise` radians from a fixed seed: singularities in pairs, close together.
+fn noisy_field(mesh: &TriMesh, seed: u64, noise: f64) -> Vec<c64> {
+    let mut state = seed;
+    (0..mesh.vertex_count())
+        .map(|v| {
+            let p = mesh.positions()[v];
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            let angle = 3.0 * p.x + 2.0 * p.y * p.z + noise * u;
+            c64::new(angle.cos(), angle.sin())
+        })
+        .collect()
+}
+
 fn singular(double: &[i32]) -> Vec<(usize, i32)> {
     double
         .iter()
@@ -142,18 +159,7 @@ fn cancelling_on_a_closed_surface_keeps_the_index_sum() {
     // A noisy field on a sphere: many pairs, whatever is cancelled the sum stays 2 chi.
     let mesh = shapes::sphere(1.0, 12).expect("sphere");
     let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
-    let mut state = 7u64;
-    let z0: Vec<c64> = (0..mesh.vertex_count())
-        .map(|v| {
-            let p = mesh.positions()[v];
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let noise = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            let angle = 3.0 * p.x + 2.0 * p.y * p.z + 1.5 * noise;
-            c64::new(angle.cos(), angle.sin())
-        })
-        .collect();
+    let z0 = noisy_field(&mesh, 7, 1.5);
     let before = singular(&face_double_indices(&mesh, &system, &z0));
     assert!(before.len() > 6, "{} singular faces", before.len());
     let held = vec![false; mesh.vertex_count()];
@@ -180,18 +186,7 @@ fn many_close_singularities_stay_bounded_and_do_not_depend_on_the_thread_count()
     // others; every one is tried with at most MAX_PARTNERS partners.
     let mesh = shapes::sphere(1.0, 24).expect("sphere");
     let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
-    let mut state = 11u64;
-    let z0: Vec<c64> = (0..mesh.vertex_count())
-        .map(|v| {
-            let p = mesh.positions()[v];
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let noise = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            let angle = 3.0 * p.x + 2.0 * p.y * p.z + 2.5 * noise;
-            c64::new(angle.cos(), angle.sin())
-        })
-        .collect();
+    let z0 = noisy_field(&mesh, 11, 2.5);
     let before = net_clusters(&mesh, &face_double_indices(&mesh, &system, &z0)).len();
     assert!(before > 40, "{before} net clusters");
     let held = vec![false; mesh.vertex_count()];

@@ -37,26 +37,18 @@ pub(super) fn angles_inside(
     faces: &[u32],
     free: &[u32],
 ) -> Result<Option<Vec<c64>>, LineFieldError> {
-    let mut edges: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.face_edges()[f as usize])
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
+    let edges = distinct(faces.iter().flat_map(|&f| mesh.face_edges()[f as usize]));
     let in_disc = |e: u32| edges.binary_search(&e).is_ok();
     let is_free = |v: u32| free.binary_search(&v).is_ok();
     // Interior vertices that are held would need the lift through them.
-    let held_inside = faces
-        .iter()
-        .flat_map(|&f| mesh.triangles()[f as usize])
-        .any(|v| {
-            held[v as usize]
-                && !is_free(v)
-                && mesh
-                    .vertex_faces(v)
-                    .iter()
-                    .all(|g| faces.binary_search(g).is_ok())
-        });
+    let held_inside = corners(mesh, faces).any(|v| {
+        held[v as usize]
+            && !is_free(v)
+            && mesh
+                .vertex_faces(v)
+                .iter()
+                .all(|g| faces.binary_search(g).is_ok())
+    });
     if held_inside {
         return Ok(None);
     }
@@ -81,13 +73,7 @@ pub(super) fn angles_inside(
     };
     // Lift the boundary's angles: breadth first along the disc's edges between fixed
     // vertices, each step taking the turn nearest the transport.
-    let mut boundary: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.triangles()[f as usize])
-        .filter(|&v| !is_free(v))
-        .collect();
-    boundary.sort_unstable();
-    boundary.dedup();
+    let boundary = distinct(corners(mesh, faces).filter(|&v| !is_free(v)));
     if boundary.is_empty() {
         return Ok(None);
     }
@@ -255,18 +241,8 @@ fn lifted_rotations(
 /// Whether `faces` (ascending) form one topological disc: Euler characteristic 1
 /// (`V - E + F`) and connected.
 pub(super) fn is_disc(mesh: &TriMesh, faces: &[u32]) -> bool {
-    let mut vertices: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.triangles()[f as usize])
-        .collect();
-    vertices.sort_unstable();
-    vertices.dedup();
-    let mut edges: Vec<u32> = faces
-        .iter()
-        .flat_map(|&f| mesh.face_edges()[f as usize])
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
+    let vertices = distinct(corners(mesh, faces));
+    let edges = distinct(faces.iter().flat_map(|&f| mesh.face_edges()[f as usize]));
     let euler = vertices.len() as i64 - edges.len() as i64 + faces.len() as i64;
     if euler != 1 || faces.is_empty() {
         return false;
@@ -288,4 +264,17 @@ pub(super) fn is_disc(mesh: &TriMesh, faces: &[u32]) -> bool {
         }
     }
     reached == faces.len()
+}
+
+/// The corners of `faces`, with repeats.
+pub(super) fn corners<'a>(mesh: &'a TriMesh, faces: &'a [u32]) -> impl Iterator<Item = u32> + 'a {
+    faces.iter().flat_map(|&f| mesh.triangles()[f as usize])
+}
+
+/// The distinct values of `items`, ascending.
+pub(super) fn distinct(items: impl Iterator<Item = u32>) -> Vec<u32> {
+    let mut out: Vec<u32> = items.collect();
+    out.sort_unstable();
+    out.dedup();
+    out
 }

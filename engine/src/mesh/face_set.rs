@@ -327,6 +327,54 @@ pub fn group_by_label(labels: &[u32], faces: impl IntoIterator<Item = u32>) -> V
     groups.into_values().collect()
 }
 
+/// `faces` (ascending, no repeats) grouped into sets that touch through shared
+/// vertices (union-find), each ascending, in order of their lowest face: the clusters
+/// of singular faces of the segmentation and of field design.
+///
+/// ```
+/// use strata_engine::mesh::{shapes, touching_groups};
+/// let mesh = shapes::plane(1.0, 4)?;
+/// // Faces 0 and 1 share an edge; face 31 is the far corner's.
+/// assert_eq!(touching_groups(&mesh, &[0, 1, 31]), vec![vec![0, 1], vec![31]]);
+/// # Ok::<(), strata_engine::mesh::MeshError>(())
+/// ```
+///
+/// Cost O(sum of the faces' vertex valences, times log of their count).
+pub fn touching_groups(mesh: &TriMesh, faces: &[u32]) -> Vec<Vec<u32>> {
+    debug_assert!(faces.windows(2).all(|w| w[0] < w[1]), "ascending faces");
+    let mut parent: Vec<usize> = (0..faces.len()).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for (i, &f) in faces.iter().enumerate() {
+        for &v in &mesh.triangles()[f as usize] {
+            for g in mesh.vertex_faces(v) {
+                if let Ok(j) = faces.binary_search(g) {
+                    let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                    // The root is the lowest member, so groups come out in order of
+                    // their lowest face.
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+    }
+    let mut groups: Vec<Vec<u32>> = Vec::new();
+    let mut group_of = vec![usize::MAX; faces.len()];
+    for (i, &f) in faces.iter().enumerate() {
+        let root = find(&mut parent, i);
+        if group_of[root] == usize::MAX {
+            group_of[root] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[group_of[root]].push(f);
+    }
+    groups
+}
+
 /// Whether edge `e` joins exactly two faces.
 #[inline]
 pub(crate) fn is_interior(mesh: &TriMesh, e: usize) -> bool {

@@ -19,7 +19,7 @@ pub(crate) mod topology;
 
 pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};
-pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label};
+pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label, touching_groups};
 pub use subdivide::loop_subdivide;
 pub use topology::{MAX_COORDINATE, MIN_EXTENT};
 

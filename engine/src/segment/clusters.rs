@@ -8,11 +8,11 @@
 //! (isotropically), but they say nothing about the field's topology.
 //!
 //! Input: a mesh and its [`Singularity`] list. Output: [`SingularityCluster`]s in
-//! order of their lowest face. Cost: O(F + V) with a union-find over the singular
-//! faces.
+//! order of their lowest face. Cost: a union-find over the singular faces
+//! ([`touching_groups`]).
 
 use super::Singularity;
-use crate::mesh::TriMesh;
+use crate::mesh::{TriMesh, touching_groups};
 
 /// A group of singular faces joined through shared vertices.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,47 +51,20 @@ pub fn singularity_clusters(
 ) -> Vec<SingularityCluster> {
     let mut faces: Vec<(u32, f64)> = singularities.iter().map(|s| (s.face, s.index)).collect();
     faces.sort_by_key(|&(f, _)| f);
-    let mut slot = vec![u32::MAX; mesh.face_count()];
-    for (i, &(f, _)) in faces.iter().enumerate() {
-        slot[f as usize] = i as u32;
-    }
-    let mut parent: Vec<usize> = (0..faces.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for (i, &(f, _)) in faces.iter().enumerate() {
-        for &v in &mesh.triangles()[f as usize] {
-            for &g in mesh.vertex_faces(v) {
-                let j = slot[g as usize];
-                if j != u32::MAX {
-                    let (a, b) = (find(&mut parent, i), find(&mut parent, j as usize));
-                    // The root is the lowest member, so clusters come out in order of
-                    // their lowest face.
-                    parent[a.max(b)] = a.min(b);
-                }
+    let ids: Vec<u32> = faces.iter().map(|&(f, _)| f).collect();
+    touching_groups(mesh, &ids)
+        .into_iter()
+        .map(|group| {
+            let index = group
+                .iter()
+                .map(|f| faces[ids.binary_search(f).expect("a listed face")].1)
+                .sum();
+            SingularityCluster {
+                faces: group,
+                index,
             }
-        }
-    }
-    let mut out: Vec<SingularityCluster> = Vec::new();
-    let mut cluster_of = vec![usize::MAX; faces.len()];
-    for (i, &(face, index)) in faces.iter().enumerate() {
-        let root = find(&mut parent, i);
-        if cluster_of[root] == usize::MAX {
-            cluster_of[root] = out.len();
-            out.push(SingularityCluster {
-                faces: Vec::new(),
-                index: 0.0,
-            });
-        }
-        let c = &mut out[cluster_of[root]];
-        c.faces.push(face);
-        c.index += index;
-    }
-    out
+        })
+        .collect()
 }
 
 #[cfg(test)]
