@@ -54,6 +54,20 @@ fn noisy_field(mesh: &TriMesh, seed: u64, noise: f64) -> Vec<c64> {
         .collect()
 }
 
+/// The flat square `[0, 2]^2` (40 x 40 quads), its system, and a planted pair 0.3
+/// apart away from the border (off-vertex positions): the `+1/2` singularity's
+/// position and the field.
+fn planted() -> (TriMesh, Connection, DVec3, Vec<c64>) {
+    let mesh = shapes::plane(2.0, 40).expect("plane");
+    let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
+    let (p, q) = (
+        DVec3::new(0.8487, 1.0217, 0.0),
+        DVec3::new(1.1487, 1.0191, 0.0),
+    );
+    let z0 = planted_pair(&mesh, p, q);
+    (mesh, system, p, z0)
+}
+
 fn singular(double: &[i32]) -> Vec<(usize, i32)> {
     double
         .iter()
@@ -87,14 +101,7 @@ fn face_indices_agree_with_the_segmentation_and_sum_to_twice_the_euler_character
 
 #[test]
 fn a_planted_pair_is_cancelled_only_when_close_enough() {
-    let mesh = shapes::plane(2.0, 40).expect("plane");
-    let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
-    // Off-vertex positions, 0.3 apart, away from the border.
-    let (p, q) = (
-        DVec3::new(0.8487, 1.0217, 0.0),
-        DVec3::new(1.1487, 1.0191, 0.0),
-    );
-    let z0 = planted_pair(&mesh, p, q);
+    let (mesh, system, _, z0) = planted();
     let before = singular(&face_double_indices(&mesh, &system, &z0));
     assert_eq!(before.len(), 2, "{before:?}");
     assert_eq!(before.iter().map(|s| s.1).sum::<i32>(), 0);
@@ -129,13 +136,7 @@ fn a_planted_pair_is_cancelled_only_when_close_enough() {
 
 #[test]
 fn held_vertices_keep_their_values_and_can_keep_a_pair() {
-    let mesh = shapes::plane(2.0, 40).expect("plane");
-    let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
-    let (p, q) = (
-        DVec3::new(0.8487, 1.0217, 0.0),
-        DVec3::new(1.1487, 1.0191, 0.0),
-    );
-    let z0 = planted_pair(&mesh, p, q);
+    let (mesh, system, p, z0) = planted();
     // Hold a ring around the +1/2 singularity: the smoothest field inside the disc
     // must still wind around it, so the pair stays.
     let held: Vec<bool> = mesh

@@ -327,6 +327,16 @@ pub fn group_by_label(labels: &[u32], faces: impl IntoIterator<Item = u32>) -> V
     groups.into_values().collect()
 }
 
+/// The root of `i` in the union-find forest `parent` (`parent[r] == r` at a root),
+/// halving the path on the way.
+pub(crate) fn find(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
 /// `faces` (ascending, no repeats) grouped into sets that touch through shared
 /// vertices (union-find), each ascending, in order of their lowest face: the clusters
 /// of singular faces of the segmentation and of field design.
@@ -343,13 +353,6 @@ pub fn group_by_label(labels: &[u32], faces: impl IntoIterator<Item = u32>) -> V
 pub fn touching_groups(mesh: &TriMesh, faces: &[u32]) -> Vec<Vec<u32>> {
     debug_assert!(faces.windows(2).all(|w| w[0] < w[1]), "ascending faces");
     let mut parent: Vec<usize> = (0..faces.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
     for (i, &f) in faces.iter().enumerate() {
         for &v in &mesh.triangles()[f as usize] {
             for g in mesh.vertex_faces(v) {

@@ -69,6 +69,7 @@ use rayon::prelude::*;
 use super::Singularity;
 use crate::field::{TensorField, frame_angle, vertex_frames};
 use crate::mesh::TriMesh;
+use crate::mesh::face_set::find;
 
 /// How the line field turns along edges and how the tangent planes turn around faces,
 /// under the discrete connection of the [module docs](self).
@@ -226,13 +227,6 @@ fn closed_fans(mesh: &TriMesh, v: u32) -> Option<usize> {
     let faces = mesh.vertex_faces(v);
     // Tiny union-find over the faces around v (a handful).
     let mut parent: Vec<usize> = (0..faces.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
     for (i, &f) in faces.iter().enumerate() {
         let t = mesh.triangles()[f as usize];
         for k in 0..3 {
