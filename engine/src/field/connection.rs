@@ -557,19 +557,14 @@ fn smoothed_normals(
         let all: Vec<usize> = (0..n).collect();
         let lower = triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]);
         let amg = Amg::new(hermitian_csr(n, &lower), None, &AmgOptions::default())?;
-        // The three coordinates are independent solves: one per thread.
-        let solved: Vec<Vec<f64>> = (0..3)
-            .into_par_iter()
-            .map(|k| {
-                let b: Vec<f64> = (0..n).map(|v| mass[v] * normals[v][k]).collect();
-                let mut x = vec![0.0; n];
-                pcg::solve(&amg, &b, &mut x, NORMALS_TOLERANCE, MAX_CG_ITERATIONS)?;
-                Ok(x)
-            })
-            .collect::<Result<_, LineFieldError>>()?;
-        for (k, x) in solved.into_iter().enumerate() {
-            for (v, x) in x.into_iter().enumerate() {
-                rhs[(v, k)] = x;
+        // The three coordinates side by side: one pass over the hierarchy for all
+        // three, each column solved as it would be alone.
+        let b: Vec<DVec3> = (0..n).map(|v| normals[v] * mass[v]).collect();
+        let mut x = vec![DVec3::ZERO; n];
+        pcg::solve_three(&amg, &b, &mut x, NORMALS_TOLERANCE, MAX_CG_ITERATIONS)?;
+        for (v, x) in x.into_iter().enumerate() {
+            for k in 0..3 {
+                rhs[(v, k)] = x[k];
             }
         }
     }

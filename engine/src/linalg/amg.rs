@@ -40,7 +40,7 @@ use rayon::prelude::*;
 use super::csr::{Csr, PARALLEL_ROWS};
 use super::dense::DenseCholesky;
 use super::error::LinalgError;
-use super::scalar::Scalar;
+use super::scalar::{Scalar, Vector};
 
 /// Settings of the hierarchy.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -142,7 +142,7 @@ impl<S: Scalar> Amg<S> {
 
     /// One V-cycle for `A x = b` in the caller's numbering (see [`cycle`](Self::cycle)):
     /// an approximate inverse of `A`, the preconditioner of eigenvalue iterations.
-    pub fn apply(&self, b: &[S], x: &mut [S], work: &mut Workspace<S>) {
+    pub fn apply<V: Vector<S>>(&self, b: &[V], x: &mut [V], work: &mut Workspace<V>) {
         // The finest level's scratch holds the renumbered vectors: no allocation.
         self.to_internal(b, &mut work.levels[0][0]);
         self.descend(0, work);
@@ -150,14 +150,14 @@ impl<S: Scalar> Amg<S> {
     }
 
     /// `x` in the internal numbering, into `out`.
-    pub fn to_internal(&self, x: &[S], out: &mut [S]) {
+    pub fn to_internal<V: Copy>(&self, x: &[V], out: &mut [V]) {
         for (o, &old) in out.iter_mut().zip(&self.order) {
             *o = x[old as usize];
         }
     }
 
     /// `x` from the internal numbering back to the caller's, into `out`.
-    pub fn from_internal(&self, x: &[S], out: &mut [S]) {
+    pub fn from_internal<V: Copy>(&self, x: &[V], out: &mut [V]) {
         for (v, &old) in x.iter().zip(&self.order) {
             out[old as usize] = *v;
         }
@@ -180,29 +180,29 @@ impl<S: Scalar> Amg<S> {
     }
 
     /// A workspace for [`cycle`](Self::cycle), allocated once per solve.
-    pub fn workspace(&self) -> Workspace<S> {
+    pub fn workspace<V: Vector<S>>(&self) -> Workspace<V> {
         Workspace {
             levels: self
                 .levels
                 .iter()
                 .map(|l| {
                     let n = l.a.rows();
-                    [vec![S::ZERO; n], vec![S::ZERO; n], vec![S::ZERO; n]]
+                    [vec![V::zero(); n], vec![V::zero(); n], vec![V::zero(); n]]
                 })
                 .collect(),
         }
     }
 
     /// One V-cycle from zero for `A x = b`: `x ~ A^-1 b` (a symmetric positive
-    /// definite linear map of `b`).
-    pub fn cycle(&self, b: &[S], x: &mut [S], work: &mut Workspace<S>) {
+    /// definite linear map of `b`; each column of a [`Vector`] as if alone).
+    pub fn cycle<V: Vector<S>>(&self, b: &[V], x: &mut [V], work: &mut Workspace<V>) {
         work.levels[0][0].copy_from_slice(b);
         self.descend(0, work);
         x.copy_from_slice(&work.levels[0][1]);
     }
 
     /// V-cycle on level `l`: right-hand side in `work[l][0]`, solution to `work[l][1]`.
-    fn descend(&self, l: usize, work: &mut Workspace<S>) {
+    fn descend<V: Vector<S>>(&self, l: usize, work: &mut Workspace<V>) {
         let level = &self.levels[l];
         let Some((p, r)) = &level.transfer else {
             let [b, x, _] = &mut work.levels[l];
@@ -212,7 +212,7 @@ impl<S: Scalar> Amg<S> {
         };
         {
             let [b, x, _] = &mut work.levels[l];
-            x.iter_mut().for_each(|v| *v = S::ZERO);
+            x.iter_mut().for_each(|v| *v = V::zero());
             gauss_seidel(&level.a, &level.inverse_diagonal, b, x, None, false);
         }
         {
@@ -245,8 +245,8 @@ impl<S: Scalar> Amg<S> {
 
 /// Scratch vectors of a V-cycle: per level the right-hand side, the solution and a
 /// residual or correction.
-pub struct Workspace<S> {
-    levels: Vec<[Vec<S>; 3]>,
+pub struct Workspace<V> {
+    levels: Vec<[Vec<V>; 3]>,
 }
 
 fn levels_with_coarse<S: Scalar>(
@@ -297,23 +297,23 @@ const SWEEP_BLOCK_ROWS: usize = PARALLEL_ROWS;
 /// sweep are the same, so the two are adjoint and the V-cycle stays symmetric. The
 /// unknowns are in breadth-first order, so few couplings cross a block's edge and the
 /// sweep smooths almost as a sequential one.
-fn gauss_seidel<S: Scalar>(
+fn gauss_seidel<S: Scalar, V: Vector<S>>(
     a: &Csr<S>,
     inverse_diagonal: &[f64],
-    b: &[S],
-    x: &mut [S],
-    before: Option<&mut [S]>,
+    b: &[V],
+    x: &mut [V],
+    before: Option<&mut [V]>,
     backward: bool,
 ) {
     // One block reads no value from outside itself: no copy needed.
-    let before: &[S] = match before {
+    let before: &[V] = match before {
         Some(copy) if x.len() > SWEEP_BLOCK_ROWS => {
             copy.copy_from_slice(x);
             copy
         }
         _ => &[],
     };
-    let sweep = |block: usize, xs: &mut [S]| {
+    let sweep = |block: usize, xs: &mut [V]| {
         let first = block * SWEEP_BLOCK_ROWS;
         let len = xs.len();
         let mut relax = |k: usize| {
@@ -324,12 +324,12 @@ fn gauss_seidel<S: Scalar>(
                 // One unsigned comparison: is column `c` inside this block?
                 let inside = c.wrapping_sub(first);
                 if inside < len {
-                    sum -= v * xs[inside];
+                    sum -= V::times(v, xs[inside]);
                 } else if let Some(&old) = before.get(c) {
-                    sum -= v * old;
+                    sum -= V::times(v, old);
                 }
             }
-            xs[k] += sum.scale(inverse_diagonal[first + k]);
+            xs[k] += sum.scaled(inverse_diagonal[first + k]);
         };
         if backward {
             (0..len).rev().for_each(&mut relax);

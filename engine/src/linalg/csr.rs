@@ -10,7 +10,7 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::scalar::Scalar;
+use super::scalar::{Scalar, Vector};
 
 /// Matrices with at least this many rows multiply and renumber on every thread (below
 /// it the rayon hand-off costs more than it saves).
@@ -145,15 +145,16 @@ impl<S: Scalar> Csr<S> {
         cols.binary_search(&(r as u32)).map_or(S::ZERO, |k| vals[k])
     }
 
-    /// `y = A x` (on every thread from [`PARALLEL_ROWS`] rows).
-    pub fn mul_into(&self, x: &[S], y: &mut [S]) {
+    /// `y = A x` (on every thread from [`PARALLEL_ROWS`] rows), `x` and `y` of scalars
+    /// or of several columns side by side ([`Vector`]).
+    pub fn mul_into<V: Vector<S>>(&self, x: &[V], y: &mut [V]) {
         let y = &mut y[..self.rows];
-        let rows_from = |first: usize, out: &mut [S]| {
+        let rows_from = |first: usize, out: &mut [V]| {
             for (k, out) in out.iter_mut().enumerate() {
                 let (cols, vals) = self.row(first + k);
-                let mut sum = S::ZERO;
+                let mut sum = V::zero();
                 for (&c, &v) in cols.iter().zip(vals) {
-                    sum += v * x[c as usize];
+                    sum += V::times(v, x[c as usize]);
                 }
                 *out = sum;
             }

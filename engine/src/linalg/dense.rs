@@ -2,7 +2,7 @@
 //! hundred unknowns).
 
 use super::error::LinalgError;
-use super::scalar::Scalar;
+use super::scalar::{Scalar, Vector};
 
 /// The factor `L` (lower, row-major) of a Hermitian positive definite `A = L L^H`.
 #[derive(Clone, Debug)]
@@ -47,19 +47,22 @@ impl<S: Scalar> DenseCholesky<S> {
         self.n == 0
     }
 
-    /// Solves `A x = b` in place.
-    pub fn solve(&self, x: &mut [S]) {
+    /// Solves `A x = b` in place (`x` of scalars or of several columns, [`Vector`]).
+    pub fn solve<V: Vector<S>>(&self, x: &mut [V]) {
         let n = self.n;
         for i in 0..n {
             let row = &self.l[i * n..i * n + i];
-            let s = row.iter().zip(&x[..i]).fold(x[i], |s, (l, x)| s - *l * *x);
-            x[i] = s.scale(1.0 / self.l[i * n + i].re());
+            let s = row
+                .iter()
+                .zip(&x[..i])
+                .fold(x[i], |s, (l, x)| s - V::times(*l, *x));
+            x[i] = s.scaled(1.0 / self.l[i * n + i].re());
         }
         for i in (0..n).rev() {
             let s = (i + 1..n)
                 .zip(&x[i + 1..])
-                .fold(x[i], |s, (k, x)| s - self.l[k * n + i].conj() * *x);
-            x[i] = s.scale(1.0 / self.l[i * n + i].re());
+                .fold(x[i], |s, (k, x)| s - V::times(self.l[k * n + i].conj(), *x));
+            x[i] = s.scaled(1.0 / self.l[i * n + i].re());
         }
     }
 }

@@ -44,7 +44,7 @@ pub use amg::{Amg, AmgOptions, Workspace};
 pub use csr::{Csr, PARALLEL_ROWS};
 pub use dense::DenseCholesky;
 pub use error::LinalgError;
-pub use scalar::{Scalar, dot, norm2};
+pub use scalar::{Scalar, Vector, dot, norm2};
 
 #[cfg(test)]
 mod tests;

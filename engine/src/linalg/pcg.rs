@@ -1,7 +1,10 @@
 //! Preconditioned conjugate gradients for Hermitian positive definite systems.
 
+use glam::DVec3;
+use rayon::prelude::*;
+
 use super::amg::Amg;
-use super::csr::Csr;
+use super::csr::{Csr, PARALLEL_ROWS};
 use super::error::LinalgError;
 use super::scalar::{Scalar, dot, norm2};
 
@@ -80,6 +83,175 @@ pub fn solve_with_diagonal<S: Scalar>(
     let report = solve_internal(&a, amg, &bi, &mut xi, tolerance, max_iterations);
     amg.from_internal(&xi, x);
     report
+}
+
+/// Solves `A X = B` for three real right-hand sides at once (the columns of `b`'s
+/// [`DVec3`]s), each by its own conjugate-gradient recurrence to `|b - A x| <= tolerance
+/// |b|`, as [`solve`] would solve it alone, to the same bits. The products and
+/// V-cycles read the matrices once for the three columns; a column that has
+/// converged stops changing. Returns each column's report. Errors as [`solve`].
+pub fn solve_three(
+    amg: &Amg<f64>,
+    b: &[DVec3],
+    x: &mut [DVec3],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<[PcgReport; 3], LinalgError> {
+    let a = amg.matrix();
+    let n = a.rows();
+    assert!(
+        b.len() == n && x.len() == n,
+        "pcg: vector lengths differ from the matrix"
+    );
+    let mut bi = vec![DVec3::ZERO; n];
+    let mut xi = vec![DVec3::ZERO; n];
+    amg.to_internal(b, &mut bi);
+    amg.to_internal(x, &mut xi);
+    let reports = three_internal(a, amg, &bi, &mut xi, tolerance, max_iterations);
+    amg.from_internal(&xi, x);
+    reports
+}
+
+/// `sum x_k y_k` of column `k`, in [`dot`]'s order.
+fn column_dot(x: &[DVec3], y: &[DVec3], k: usize) -> f64 {
+    x.iter().zip(y).fold(0.0, |acc, (a, b)| acc + a[k] * b[k])
+}
+
+/// `sum x_k^2` of column `k`, in [`norm2`]'s order.
+fn column_norm2(x: &[DVec3], k: usize) -> f64 {
+    x.iter().map(|v| v[k] * v[k]).sum()
+}
+
+/// Rows per block of the element-wise updates of [`solve_three`] on every thread.
+const UPDATE_BLOCK: usize = 8192;
+
+/// `f(first_i, second_i, i)` over the rows of two equal-length slices, by fixed blocks on
+/// every thread from [`PARALLEL_ROWS`] rows (each row's arithmetic is independent of the
+/// cut).
+fn each_row<T: Send + Sync>(
+    first: &mut [DVec3],
+    second: &mut [T],
+    f: impl Fn(&mut DVec3, &mut T, usize) + Sync + Send,
+) {
+    if first.len() < PARALLEL_ROWS {
+        for (i, (a, b)) in first.iter_mut().zip(second.iter_mut()).enumerate() {
+            f(a, b, i);
+        }
+    } else {
+        first
+            .par_chunks_mut(UPDATE_BLOCK)
+            .zip(second.par_chunks_mut(UPDATE_BLOCK))
+            .enumerate()
+            .for_each(|(block, (a, b))| {
+                for (i, (a, b)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+                    f(a, b, block * UPDATE_BLOCK + i);
+                }
+            });
+    }
+}
+
+fn three_internal(
+    a: &Csr<f64>,
+    amg: &Amg<f64>,
+    b: &[DVec3],
+    x: &mut [DVec3],
+    tolerance: f64,
+    max_iterations: usize,
+) -> Result<[PcgReport; 3], LinalgError> {
+    let n = a.rows();
+    let b_norm: [f64; 3] = std::array::from_fn(|k| column_norm2(b, k).sqrt());
+    if b_norm.iter().any(|v| !v.is_finite()) || x.iter().any(|v| !v.is_finite()) {
+        return Err(LinalgError::NonFinite);
+    }
+    for (k, norm) in b_norm.iter().enumerate() {
+        if *norm == 0.0 {
+            x.iter_mut().for_each(|v| v[k] = 0.0);
+        }
+    }
+    let mut work = amg.workspace();
+    let mut r = vec![DVec3::ZERO; n];
+    a.mul_into(x, &mut r);
+    for (r, b) in r.iter_mut().zip(b) {
+        *r = *b - *r;
+    }
+    let mut z = vec![DVec3::ZERO; n];
+    let mut q = vec![DVec3::ZERO; n];
+    amg.cycle(&r, &mut z, &mut work);
+    let mut p = z.clone();
+    let mut rz: [f64; 3] = std::array::from_fn(|k| column_dot(&r, &z, k));
+    let mut residual: [f64; 3] = std::array::from_fn(|k| {
+        if b_norm[k] == 0.0 {
+            0.0
+        } else {
+            column_norm2(&r, k).sqrt() / b_norm[k]
+        }
+    });
+    let mut iterations = [0usize; 3];
+    loop {
+        let active: [bool; 3] = std::array::from_fn(|k| residual[k] > tolerance);
+        if !active.contains(&true) {
+            break;
+        }
+        for k in (0..3).filter(|&k| active[k]) {
+            if iterations[k] >= max_iterations {
+                return Err(LinalgError::NotConverged {
+                    iterations: iterations[k],
+                    residual: residual[k],
+                    tolerance,
+                });
+            }
+        }
+        a.mul_into(&p, &mut q);
+        let mut alpha = [0.0; 3];
+        for k in (0..3).filter(|&k| active[k]) {
+            let curvature = column_dot(&p, &q, k);
+            if !(curvature > 0.0) {
+                return Err(if curvature.is_finite() {
+                    LinalgError::Indefinite {
+                        iteration: iterations[k],
+                    }
+                } else {
+                    LinalgError::NonFinite
+                });
+            }
+            alpha[k] = rz[k] / curvature;
+        }
+        let (p_ref, q_ref) = (&p, &q);
+        each_row(x, &mut r, |x, r, i| {
+            for k in (0..3).filter(|&k| active[k]) {
+                x[k] += p_ref[i][k] * alpha[k];
+                r[k] -= q_ref[i][k] * alpha[k];
+            }
+        });
+        for k in (0..3).filter(|&k| active[k]) {
+            iterations[k] += 1;
+            residual[k] = column_norm2(&r, k).sqrt() / b_norm[k];
+            if !residual[k].is_finite() {
+                return Err(LinalgError::NonFinite);
+            }
+        }
+        // A column that just converged needs no new direction.
+        let next: [bool; 3] = std::array::from_fn(|k| residual[k] > tolerance);
+        if !next.contains(&true) {
+            break;
+        }
+        amg.cycle(&r, &mut z, &mut work);
+        let mut beta = [0.0; 3];
+        for k in (0..3).filter(|&k| next[k]) {
+            let rz_next = column_dot(&r, &z, k);
+            beta[k] = rz_next / rz[k];
+            rz[k] = rz_next;
+        }
+        each_row(&mut p, &mut z, |p, z, _| {
+            for k in (0..3).filter(|&k| next[k]) {
+                p[k] = z[k] + p[k] * beta[k];
+            }
+        });
+    }
+    Ok(std::array::from_fn(|k| PcgReport {
+        iterations: iterations[k],
+        residual: residual[k],
+    }))
 }
 
 fn solve_internal<S: Scalar>(

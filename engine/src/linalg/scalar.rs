@@ -1,8 +1,11 @@
-//! The two scalar types of the solvers, real and complex, behind one small trait.
+//! The two scalar types of the solvers, real and complex, behind one small trait, and
+//! what their matrices multiply ([`Vector`]): the scalar itself, or for real matrices
+//! three columns side by side.
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
 use faer::c64;
+use glam::DVec3;
 
 /// A real (`f64`) or complex (`c64`) number, as the solvers need it.
 pub trait Scalar:
@@ -97,6 +100,45 @@ impl Scalar for c64 {
     }
     fn is_finite(self) -> bool {
         self.re.is_finite() && self.im.is_finite()
+    }
+}
+
+/// One entry of the vectors a matrix over `S` multiplies: `S` itself, or for a real
+/// matrix a [`DVec3`], three right-hand sides at once, so that a product or a smoothing
+/// sweep reads the matrix once for all three. Each column gets exactly the operations,
+/// in the same order, that it would get alone.
+pub trait Vector<S>:
+    Copy + Send + Sync + Add<Output = Self> + Sub<Output = Self> + AddAssign + SubAssign + 'static
+{
+    /// Zero.
+    fn zero() -> Self;
+    /// The entry multiplied by the matrix value `s`: `s x`.
+    fn times(s: S, x: Self) -> Self;
+    /// `x r` for a real `r`.
+    fn scaled(self, r: f64) -> Self;
+}
+
+impl<S: Scalar> Vector<S> for S {
+    fn zero() -> Self {
+        S::ZERO
+    }
+    fn times(s: S, x: Self) -> Self {
+        s * x
+    }
+    fn scaled(self, r: f64) -> Self {
+        self.scale(r)
+    }
+}
+
+impl Vector<f64> for DVec3 {
+    fn zero() -> Self {
+        DVec3::ZERO
+    }
+    fn times(s: f64, x: Self) -> Self {
+        DVec3::new(s * x.x, s * x.y, s * x.z)
+    }
+    fn scaled(self, r: f64) -> Self {
+        DVec3::new(self.x * r, self.y * r, self.z * r)
     }
 }
 

@@ -477,3 +477,45 @@ fn blocked_sweeps_keep_the_cycle_symmetric_and_thread_independent() {
     assert!(residual(&a, &z, &b) < 2e-10);
     assert!(report.iterations <= 17, "{report:?}");
 }
+
+#[test]
+fn three_columns_solve_as_three_single_solves_to_the_bit() {
+    // 200 x 200 = 40,000 unknowns: the parallel products, sweeps and updates run.
+    let a = grid(200, 0.01, |_, _| 1.0);
+    let n = a.rows();
+    let amg = Amg::new(a.clone(), None, &AmgOptions::default()).expect("valid test input");
+    let columns = [
+        rhs(n, |x, _| x),
+        rhs(n, |_, y| y),
+        // A smooth right-hand side needs another number of iterations, so a column
+        // stops while another goes on.
+        (0..n).map(|v| 1.0 + (v % 200) as f64 * 1e-3).collect(),
+    ];
+    let b: Vec<glam::DVec3> = (0..n)
+        .map(|v| glam::DVec3::new(columns[0][v], columns[1][v], columns[2][v]))
+        .collect();
+    let mut x = vec![glam::DVec3::ZERO; n];
+    let reports = pcg::solve_three(&amg, &b, &mut x, 1e-8, 200).expect("converges");
+    for (k, column) in columns.iter().enumerate() {
+        let mut alone = vec![0.0; n];
+        let report = pcg::solve(&amg, column, &mut alone, 1e-8, 200).expect("converges");
+        assert_eq!(reports[k], report, "column {k}");
+        assert!(
+            x.iter()
+                .zip(&alone)
+                .all(|(x, y)| x[k].to_bits() == y.to_bits()),
+            "column {k} differs from its own solve"
+        );
+        assert!(residual(&a, &alone, column) <= 1e-8);
+    }
+    assert!(
+        reports[2].iterations != reports[0].iterations,
+        "{reports:?}: a column should stop before another"
+    );
+    // A zero column stays zero and takes no iteration.
+    let zero: Vec<glam::DVec3> = b.iter().map(|v| glam::DVec3::new(v.x, 0.0, v.z)).collect();
+    let mut y = vec![glam::DVec3::ONE; n];
+    let reports = pcg::solve_three(&amg, &zero, &mut y, 1e-8, 200).expect("converges");
+    assert_eq!(reports[1].iterations, 0);
+    assert!(y.iter().all(|v| v.y == 0.0));
+}
