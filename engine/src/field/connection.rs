@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use super::cholesky::{self, Cholesky, Storage, Symbolic};
 use super::pattern::VertexPattern;
+use super::vertex_graph::VertexGraph;
 
 use super::line_field::{
     LAMBDA_MULTIGRID_VERTICES, LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT,
@@ -69,6 +70,8 @@ pub(crate) struct Connection {
     pub(crate) mass: Vec<f64>,
     /// The lower-triangle pattern of the whole mesh (direct solves only).
     pattern: Option<VertexPattern>,
+    /// The vertex graph in the hierarchies' order (whenever a hierarchy may be built).
+    graph: Option<VertexGraph>,
     /// The symbolic Cholesky of the whole mesh's pattern, made by `build` when asked to
     /// prepare, else on first use (an energy evaluation never needs it).
     symbolic: OnceCell<Symbolic>,
@@ -234,15 +237,26 @@ impl Connection {
             Some(VertexPattern::new(mesh)?)
         };
         let eager = pattern.as_ref().filter(|_| prepare || smoothing > 0.0);
-        let (symbolic, (weights, mass)) = match eager {
+        let (symbolic, (weights, mass), graph) = match eager {
             Some(pattern) => {
-                let (made, weights_and_mass) = rayon::join(
+                let (made, (weights_and_mass, graph)) = rayon::join(
                     || cholesky::symbolic(pattern.symbolic()),
+                    || {
+                        (
+                            weights_and_mass(mesh),
+                            lambda_multigrid.then(|| VertexGraph::new(mesh)),
+                        )
+                    },
+                );
+                (Some(made?), weights_and_mass, graph)
+            }
+            None => {
+                let (graph, weights_and_mass) = rayon::join(
+                    || (multigrid || lambda_multigrid).then(|| VertexGraph::new(mesh)),
                     || weights_and_mass(mesh),
                 );
-                (Some(made?), weights_and_mass)
+                (None, weights_and_mass, graph)
             }
-            None => (None, weights_and_mass(mesh)),
         };
         if !(mass.iter().sum::<f64>() > 0.0) {
             return Err(LineFieldError::EmptyMesh);
@@ -250,8 +264,12 @@ impl Connection {
         let (frames, spare) = rayon::join(
             || -> Result<Vec<(DVec3, DVec3)>, LineFieldError> {
                 Ok(if smoothing > 0.0 {
-                    let direct = pattern.as_ref().zip(symbolic.as_ref());
-                    smoothed_normals(mesh, &weights, &mass, smoothing, direct)?
+                    let solver = match (pattern.as_ref().zip(symbolic.as_ref()), &graph) {
+                        (Some(direct), _) => Normals::Direct(direct),
+                        (None, Some(graph)) => Normals::Multigrid(graph),
+                        (None, None) => Normals::Multigrid(&VertexGraph::new(mesh)),
+                    };
+                    smoothed_normals(mesh, &weights, &mass, smoothing, solver)?
                         .into_iter()
                         .map(tangent_frame)
                         .collect()
@@ -279,6 +297,7 @@ impl Connection {
             diagonal,
             mass,
             pattern,
+            graph,
             symbolic: symbolic.map_or_else(OnceCell::new, OnceCell::from),
             spare: RefCell::new(spare),
             multigrid,
@@ -302,6 +321,7 @@ impl Connection {
             diagonal: self.diagonal.clone(),
             mass: self.mass.clone(),
             pattern: None,
+            graph: None,
             symbolic: OnceCell::new(),
             spare: RefCell::new(None),
             multigrid: self.multigrid,
@@ -383,6 +403,20 @@ impl Connection {
         slots: &[usize],
         free: usize,
     ) -> Result<Amg<c64>, LineFieldError> {
+        if let Some(graph) = self.graph.as_ref().filter(|_| free == self.len()) {
+            // Every vertex free: the unknowns are the vertices (see `design`).
+            debug_assert!(slots.iter().enumerate().all(|(v, &s)| v == s));
+            let (diagonal, edges) = (&self.diagonal, &self.edges);
+            return Ok(graph.hierarchy(
+                |v| c64::new(diagonal[v] + extra[v], 0.0),
+                |e, larger| {
+                    let term = &edges[e];
+                    let c = -term.rotation * term.weight;
+                    if larger { c } else { c.conj() }
+                },
+                mesh,
+            )?);
+        }
         let lower = self.lower_triplets(mesh, extra, slots, free);
         Ok(Amg::new(
             hermitian_csr(free, &lower),
@@ -527,6 +561,13 @@ fn solve(llt: &mut Cholesky<c64>, z: &mut [c64]) -> Result<(), LineFieldError> {
     }
 }
 
+/// How the normals' heat step is solved: on the direct solver's pattern and symbolic
+/// factorization, or by multigrid on the vertex graph.
+enum Normals<'a> {
+    Direct((&'a VertexPattern, &'a Symbolic)),
+    Multigrid(&'a VertexGraph),
+}
+
 /// The vertex normals after one implicit heat step of time `length^2`,
 /// `(M + length^2 L) N = M N0` with the (clamped) cotangent Laplacian `L`, normalised:
 /// details of the surface smaller than about `length` no longer turn the normals, and
@@ -538,7 +579,7 @@ fn smoothed_normals(
     weights: &[f64],
     mass: &[f64],
     length: f64,
-    direct: Option<(&VertexPattern, &Symbolic)>,
+    solver: Normals<'_>,
 ) -> Result<Vec<DVec3>, LineFieldError> {
     let t = length * length;
     let n = mesh.vertex_count();
@@ -549,14 +590,18 @@ fn smoothed_normals(
     }
     let normals = mesh.vertex_normals();
     let mut rhs = Mat::from_fn(n, 3, |v, k| mass[v] * normals[v][k]);
-    if let Some((pattern, symbolic)) = direct {
-        let values = pattern.values(|v| diagonal[v], |e| -t * weights[e]);
-        let mut llt = Cholesky::new(symbolic.clone(), pattern.matrix(&values), None)?;
-        llt.solve(rhs.as_mut())?;
-    } else {
-        let all: Vec<usize> = (0..n).collect();
-        let lower = triplets(mesh, &all, n, |v| diagonal[v], |e, _| -t * weights[e]);
-        let amg = Amg::new(hermitian_csr(n, &lower), None, &AmgOptions::default())?;
+    let amg = match solver {
+        Normals::Direct((pattern, symbolic)) => {
+            let values = pattern.values(|v| diagonal[v], |e| -t * weights[e]);
+            let mut llt = Cholesky::new(symbolic.clone(), pattern.matrix(&values), None)?;
+            llt.solve(rhs.as_mut())?;
+            None
+        }
+        Normals::Multigrid(graph) => {
+            Some(graph.hierarchy(|v| diagonal[v], |e, _| -t * weights[e], mesh)?)
+        }
+    };
+    if let Some(amg) = amg {
         // The three coordinates side by side: one pass over the hierarchy for all
         // three, each column solved as it would be alone.
         let b: Vec<DVec3> = (0..n).map(|v| normals[v] * mass[v]).collect();

@@ -36,6 +36,7 @@ mod params;
 mod pattern;
 mod shading;
 mod spec;
+mod vertex_graph;
 mod warp;
 
 pub use curvature::{

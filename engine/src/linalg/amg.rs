@@ -100,7 +100,30 @@ impl<S: Scalar> Amg<S> {
         for (k, &old) in order.iter().enumerate() {
             position[old as usize] = k as u32;
         }
-        let mut a = a.permuted(&order, &position);
+        Self::ordered(a.permuted(&order, &position), order, near_null, options)
+    }
+
+    /// The hierarchy [`new`](Self::new) makes, from the matrix already renumbered:
+    /// `a`'s row `k` is the caller's unknown `order[k]`, with `order` the
+    /// [breadth-first order](Csr::breadth_first_order) of the matrix in the caller's
+    /// numbering (any permutation works; that one keeps memory accesses local).
+    /// `near_null` is in the caller's numbering. Panics if `order` is not a permutation
+    /// of `a`'s rows (a caller bug). Errors as [`new`](Self::new).
+    pub fn ordered(
+        a: Csr<S>,
+        order: Vec<u32>,
+        near_null: Option<&[f64]>,
+        options: &AmgOptions,
+    ) -> Result<Self, LinalgError> {
+        let mut seen = vec![false; a.rows()];
+        assert!(
+            order.len() == a.rows()
+                && order.iter().all(|&k| seen
+                    .get_mut(k as usize)
+                    .is_some_and(|s| !std::mem::replace(s, true))),
+            "multigrid: the order is not a permutation of the rows"
+        );
+        let mut a = a;
         let mut b: Vec<f64> = match near_null {
             Some(b) => order.iter().map(|&old| b[old as usize]).collect(),
             None => vec![1.0; a.rows()],

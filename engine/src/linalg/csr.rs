@@ -112,6 +112,42 @@ impl<S: Scalar> Csr<S> {
         }
     }
 
+    /// The `rows x cols` matrix of the given compressed rows: `starts` (one more than
+    /// the rows, from 0, non-decreasing, ending at the entries), and per entry its
+    /// column (increasing within each row, below `cols`) and value. Panics where they
+    /// break that form (a caller bug, as an out-of-range triplet is).
+    pub fn from_sorted_rows(
+        rows: usize,
+        cols: usize,
+        starts: Vec<usize>,
+        indices: Vec<u32>,
+        values: Vec<S>,
+    ) -> Self {
+        assert!(
+            starts.len() == rows + 1
+                && starts.first() == Some(&0)
+                && starts.last() == Some(&indices.len())
+                && indices.len() == values.len()
+                && starts.windows(2).all(|w| w[0] <= w[1]),
+            "compressed rows of inconsistent lengths"
+        );
+        assert!(
+            starts.windows(2).all(|w| {
+                let row = &indices[w[0]..w[1]];
+                row.windows(2).all(|c| c[0] < c[1])
+                    && row.last().is_none_or(|&c| (c as usize) < cols)
+            }),
+            "compressed rows with unsorted or out-of-range columns"
+        );
+        Self {
+            rows,
+            cols,
+            starts,
+            indices,
+            values,
+        }
+    }
+
     /// Rows.
     pub fn rows(&self) -> usize {
         self.rows
