@@ -22,6 +22,7 @@
 
 pub mod analysis;
 pub mod curve;
+mod fast_map;
 pub mod field;
 pub mod io;
 pub mod linalg;

@@ -1,11 +1,9 @@
 //! Construction of a [`TriMesh`]: validation, repairs and adjacency.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use glam::DVec3;
 
 use super::{MeshError, MeshWarning, NONE, TriMesh};
+use crate::fast_map::{FastMap, fast_map};
 
 /// How many offending items a warning lists.
 const LIST_FIRST: usize = 8;
@@ -267,63 +265,6 @@ where
         sorted[bucket[0] as usize..bucket[1] as usize].sort_unstable();
     }
     (starts, sorted)
-}
-
-/// A `HashMap` with [`FastHasher`]: construction hashes every vertex once, and std's
-/// SipHash (built against hash flooding, which cannot change what these maps return,
-/// only how fast) cost more than the lookups.
-type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
-
-fn fast_map<K, V>(capacity: usize) -> FastMap<K, V> {
-    FastMap::with_capacity_and_hasher(capacity, BuildHasherDefault::default())
-}
-
-/// A multiply-add hash over 8-byte words (rustc-hash 2's scheme): fast on the short
-/// fixed-size integer keys used here (position bits, sorted vertex triples).
-#[derive(Default)]
-struct FastHasher(u64);
-
-impl FastHasher {
-    const K: u64 = 0xf135_7aea_2e62_a9c5;
-
-    fn add(&mut self, word: u64) {
-        self.0 = self.0.wrapping_add(word).wrapping_mul(Self::K);
-    }
-}
-
-impl Hasher for FastHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        let mut chunks = bytes.chunks_exact(8);
-        for c in &mut chunks {
-            let mut word = [0u8; 8];
-            word.copy_from_slice(c);
-            self.add(u64::from_le_bytes(word));
-        }
-        let rest = chunks.remainder();
-        if !rest.is_empty() {
-            let mut word = [0u8; 8];
-            word[..rest.len()].copy_from_slice(rest);
-            self.add(u64::from_le_bytes(word) ^ ((rest.len() as u64) << 59));
-        }
-    }
-
-    fn write_u32(&mut self, i: u32) {
-        self.add(u64::from(i));
-    }
-
-    fn write_u64(&mut self, i: u64) {
-        self.add(i);
-    }
-
-    fn write_usize(&mut self, i: usize) {
-        self.add(i as u64);
-    }
-
-    fn finish(&self) -> u64 {
-        // The product's high bits are the well-mixed ones; hashbrown indexes buckets
-        // with the low bits.
-        self.0.rotate_left(26)
-    }
 }
 
 /// Edges, edge-to-face, face-to-edge and face neighbours, from the half-edges in

@@ -6,7 +6,7 @@
 //! faces to local faces, or a per-mesh-face table for a segment that is a large share
 //! of the mesh).
 
-use std::collections::HashMap;
+use crate::fast_map::{FastMap, fast_map};
 use std::collections::hash_map::Entry;
 
 use crate::mesh::{NONE, TriMesh};
@@ -61,7 +61,7 @@ enum LocalFaces {
     /// Local face per mesh face, `NONE` outside the segment.
     Table(Vec<u32>),
     /// Local face by mesh face.
-    Map(HashMap<u32, u32>),
+    Map(FastMap<u32, u32>),
 }
 
 impl LocalFaces {
@@ -70,7 +70,7 @@ impl LocalFaces {
         if len * DENSE_SHARE >= face_count {
             Self::Table(vec![NONE; face_count])
         } else {
-            Self::Map(HashMap::with_capacity(len))
+            Self::Map(fast_map(len))
         }
     }
 

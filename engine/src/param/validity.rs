@@ -9,8 +9,8 @@
 //! Cost: O(F) for flips and angles, O(B + pairs) for the boundary (O(B) when the
 //! boundary is spread evenly; edges piled into a few cells degrade towards O(B^2)).
 
+use crate::fast_map::{FastMap, fast_map};
 use std::cmp::Ordering;
-use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
 use glam::{DVec2, DVec3};
@@ -43,7 +43,7 @@ pub fn count_flipped(uv: &[DVec2], triangles: &[[u32; 3]]) -> usize {
 /// Boundary edges of a triangle mesh: directed sides `[a, b]` (in the triangles'
 /// orientation) whose reverse `[b, a]` is no triangle's side, in order of appearance.
 pub fn boundary_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
-    let mut sides: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * triangles.len());
+    let mut sides: FastMap<(u32, u32), u32> = fast_map(3 * triangles.len());
     for t in triangles {
         for k in 0..3 {
             *sides.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
@@ -237,12 +237,12 @@ pub(crate) fn with_closed_seams(
         .iter()
         .map(|e| e.map(|v| canonical[v as usize]))
         .collect();
-    let mut count: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut count: FastMap<(u32, u32), usize> = fast_map(0);
     for [a, b] in &welded {
         *count.entry((*a, *b)).or_insert(0) += 1;
     }
     // Per direction, how many edges survive gluing against the reverse direction.
-    let mut quota: HashMap<(u32, u32), usize> = HashMap::with_capacity(count.len());
+    let mut quota: FastMap<(u32, u32), usize> = fast_map(count.len());
     for (&(a, b), &n) in &count {
         let reverse = count.get(&(b, a)).copied().unwrap_or(0);
         quota.insert((a, b), n - n.min(reverse));

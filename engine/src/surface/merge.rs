@@ -20,7 +20,9 @@
 //! their failed parent and parameterized again. The result depends on the pieces (and
 //! those names) alone, never on the thread count.
 
-use std::collections::{BTreeSet, HashMap, HashSet};
+use std::collections::{BTreeSet, HashSet};
+
+use crate::fast_map::{FastMap, fast_map};
 
 use rayon::prelude::*;
 
@@ -200,7 +202,7 @@ fn acceptable(p: &SegmentParam, options: &SurfaceOptions) -> bool {
 /// Pairs `(i, j)`, `i < j`, of pieces that share an edge that is not cut, ascending.
 fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<(usize, usize)> {
     let size: usize = pieces.iter().map(|p| p.faces.len()).sum();
-    let mut owner: HashMap<u32, u32> = HashMap::with_capacity(size);
+    let mut owner: FastMap<u32, u32> = fast_map(size);
     for (i, p) in pieces.iter().enumerate() {
         for &f in &p.faces {
             owner.insert(f, i as u32);
