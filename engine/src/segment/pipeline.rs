@@ -4,7 +4,7 @@ use rayon::prelude::*;
 
 use super::comb_flips::comb_flip_vertices;
 use super::paths::{field_edge_costs_with, singularity_tree_to};
-use super::seeds::{face_frames, place_seeds_sized};
+use super::seeds::{MAX_REGION_SHARE, RegionLimits, face_frames, place_seeds_sized};
 use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, is_disc, patch_topology};
 use super::walk::{random_walk, walk_weights};
@@ -129,7 +129,10 @@ pub(crate) fn segment_sized(
         all.mask(),
         options.beta,
         options.seed,
-        surface_area,
+        RegionLimits {
+            surface_area,
+            max_share: MAX_REGION_SHARE,
+        },
     );
     let walked = random_walk(mesh, &weights, all.mask(), &seeds)?;
     let mut labels = connected_parts(mesh, &walked, &cut);

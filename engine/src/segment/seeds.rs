@@ -8,7 +8,9 @@
 //!
 //! Seeding steps out in rings (breadth-first) from a random first triangle of each
 //! connected part of the mask; a face whose major direction has turned more than `beta`
-//! from the reference of the region being grown becomes a candidate, and once the
+//! from the reference of the region being grown (or, in the segmentation, that would
+//! take the region past [`MAX_REGION_SHARE`] of the surface's area) becomes a
+//! candidate, and once the
 //! region can grow no further the earliest-found candidate not yet taken starts the
 //! next region, with its own direction as reference. Each region's seed is its most
 //! interior face. See [`place_seeds`] for the exact reading of the paper's rule, the
@@ -63,6 +65,28 @@ pub const MIN_REGION_FACES: usize = 4;
 /// but made the subdivided bunny with a projected constant field 1.5 times slower to
 /// preprocess (284 splits of invalid segments instead of 144); this share did not.
 pub const MIN_REGION_SHARE: f64 = 1e-4;
+
+/// Largest share of the whole surface's area one seeding region may cover: a face the
+/// region could take once it holds this share becomes a candidate seed instead, as
+/// if the field had turned there.
+///
+/// Where the field barely turns (a smooth designed field, a projected direction on a
+/// gently curved surface) the paper's rule lets one region grow over most of the
+/// surface: on the bunny with its designed curvature-aligned field the walk started
+/// from 4 seeds, one segment covering 73% to 95% of the mesh. No field-aligned map of
+/// such a segment is valid, so the surface pipeline parameterized it, found it folded,
+/// halved it and tried again: at 1.1M faces pieces of 812k, 471k, 342k and 305k faces
+/// all failed, about 4 s of one core's work before any piece was accepted. Regions of
+/// at most an eighth of the surface give the walk 22 to 25 seeds there and leave the
+/// parameterization little to split (bench/README.md, "Seeding regions of at most an
+/// eighth of the surface").
+pub const MAX_REGION_SHARE: f64 = 0.125;
+
+/// A region past [`MAX_REGION_SHARE`] still takes the faces whose normals lie within
+/// this cosine (60 degrees) of its first face's: a nearly flat region parameterizes
+/// validly at any size (a plane with a constant field stays one segment), while the
+/// regions that fold wrap around the surface.
+pub const MAX_REGION_TILT_COS: f64 = 0.5;
 
 /// The major direction and spacing ratio of the tensor field at each face's barycentre.
 #[derive(Clone, Debug, PartialEq)]
@@ -175,6 +199,13 @@ pub(crate) fn for_each_walk_neighbor(
 /// them with regions of 1 to 3 faces, to 248; the area share makes the rule
 /// independent of the mesh's resolution.
 ///
+/// **Deviation, in the segmentation only: bounded regions.** The segmentation
+/// ([`segment`](super::segment)) seeds with regions stopped at [`MAX_REGION_SHARE`] of
+/// the surface's area: the faces a full region would take next become candidates, as
+/// if the field had turned there. Where the field barely turns this gives the walk
+/// seeds a parameterizable distance apart instead of one region over most of the
+/// surface. This function keeps the paper's unbounded regions.
+///
 /// **Deviation: centred seeds.** The seed returned for a region is not the face where
 /// its growth started (which lies on the border of the previous region) but the face
 /// deepest inside the region: the most rings from its border, ties to the barycentre
@@ -211,12 +242,42 @@ pub fn place_seeds(
     beta: f64,
     seed: u64,
 ) -> Vec<u32> {
-    place_seeds_sized(mesh, faces, weights, mask, beta, seed, mesh.area())
+    place_seeds_sized(
+        mesh,
+        faces,
+        weights,
+        mask,
+        beta,
+        seed,
+        RegionLimits::unbounded(mesh.area()),
+    )
 }
 
-/// [`place_seeds`] with [`MIN_REGION_SHARE`] taken of `surface_area` instead of the
-/// mesh's area: a region cut out of a larger surface
-/// ([`segment_region`](super::segment_region)) keeps the whole surface's rule.
+/// The area rules of seeding: a kept region covers at least [`MIN_REGION_SHARE`] of
+/// `surface_area`, the whole surface's area (a region cut out of a larger surface by
+/// [`segment_region`](super::segment_region) keeps the whole surface's rule), and
+/// grows past `max_share` of it only through faces within [`MAX_REGION_TILT_COS`] of
+/// its first face's normal (1 or more: unbounded, the paper's rule; the segmentation
+/// passes [`MAX_REGION_SHARE`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RegionLimits {
+    /// The whole surface's area.
+    pub(crate) surface_area: f64,
+    /// The largest share of it one region covers, past the tilt rule.
+    pub(crate) max_share: f64,
+}
+
+impl RegionLimits {
+    /// The paper's unbounded regions on a surface of `surface_area`.
+    pub(crate) fn unbounded(surface_area: f64) -> Self {
+        Self {
+            surface_area,
+            max_share: 1.0,
+        }
+    }
+}
+
+/// [`place_seeds`] with the area rules of `limits`.
 pub(crate) fn place_seeds_sized(
     mesh: &TriMesh,
     faces: &FaceField,
@@ -224,9 +285,9 @@ pub(crate) fn place_seeds_sized(
     mask: &[bool],
     beta: f64,
     seed: u64,
-    surface_area: f64,
+    limits: RegionLimits,
 ) -> Vec<u32> {
-    grow_regions(mesh, faces, weights, mask, beta, seed, surface_area).seeds
+    grow_regions(mesh, faces, weights, mask, beta, seed, limits).seeds
 }
 
 /// The seeding regions behind [`place_seeds`] (the tests check the bound on them).
@@ -249,8 +310,12 @@ pub(crate) fn grow_regions(
     mask: &[bool],
     beta: f64,
     seed: u64,
-    surface_area: f64,
+    limits: RegionLimits,
 ) -> Regions {
+    let RegionLimits {
+        surface_area,
+        max_share,
+    } = limits;
     let n = mesh.face_count();
     assert_eq!(faces.major.len(), n, "one major direction per face");
     assert_eq!(faces.anisotropy.len(), n, "one spacing ratio per face");
@@ -286,6 +351,11 @@ pub(crate) fn grow_regions(
     let mut grown = Vec::new();
     let mut component_count = 0u64;
     let min_area = MIN_REGION_SHARE * surface_area;
+    let max_area = if max_share < 1.0 {
+        max_share * surface_area
+    } else {
+        f64::INFINITY
+    };
     let areas = mesh.face_areas();
     for (i, &start) in members_of_mask.iter().enumerate() {
         if component[i] != NONE {
@@ -319,6 +389,7 @@ pub(crate) fn grow_regions(
             region[at(s)] = id;
             ring.push_back(s);
             grown.clear();
+            let mut area = areas[s as usize];
             while let Some(f) = ring.pop_front() {
                 grown.push(f);
                 let lf = at(f);
@@ -328,9 +399,12 @@ pub(crate) fn grow_regions(
                         return;
                     }
                     let reference = unfold(carried[lf], normals[f as usize], normals[g as usize]);
-                    if turn(reference, g) <= beta {
+                    let bounded = area + areas[g as usize] > max_area
+                        && normals[g as usize].dot(normals[s as usize]) < MAX_REGION_TILT_COS;
+                    if turn(reference, g) <= beta && !bounded {
                         carried[lg] = reference;
                         region[lg] = id;
+                        area += areas[g as usize];
                         ring.push_back(g);
                     } else {
                         candidates.push_back(g);
@@ -594,7 +668,15 @@ pub(crate) mod tests {
         let mask = vec![true; mesh.face_count()];
         for beta in [FRAC_PI_4, PI / 8.0] {
             for seed in 0..4 {
-                let regions = grow_regions(&mesh, &faces, &w, &mask, beta, seed, mesh.area());
+                let regions = grow_regions(
+                    &mesh,
+                    &faces,
+                    &w,
+                    &mask,
+                    beta,
+                    seed,
+                    RegionLimits::unbounded(mesh.area()),
+                );
                 let Regions {
                     seeds,
                     origins,
@@ -677,7 +759,15 @@ pub(crate) mod tests {
             let wt = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
             let mask = vec![true; mesh.face_count()];
             // Seed 0 starts outside the patch.
-            let regions = grow_regions(&mesh, &faces, &wt, &mask, FRAC_PI_4, 0, mesh.area());
+            let regions = grow_regions(
+                &mesh,
+                &faces,
+                &wt,
+                &mask,
+                FRAC_PI_4,
+                0,
+                RegionLimits::unbounded(mesh.area()),
+            );
             assert!(!turned.contains(&regions.origins[0]));
             assert_eq!(regions.seeds.len(), expected, "{n}: patch {w} x {h}");
             if expected == 1 {
@@ -699,9 +789,71 @@ pub(crate) mod tests {
                     &mask,
                     FRAC_PI_4,
                     0,
-                    1000.0 * mesh.area(),
+                    RegionLimits::unbounded(1000.0 * mesh.area()),
                 );
                 assert_eq!(within.len(), 1, "{n}: patch {w} x {h}");
+            }
+        }
+    }
+
+    #[test]
+    fn bounded_regions_stop_where_they_wrap_past_their_share() {
+        // A constant field along y never turns, on a plane or on a half cylinder (a
+        // developable surface: unfolding carries the direction exactly), so the paper's
+        // rule grows one region over each. Bounded to an eighth of the area, the plane
+        // (normals all equal) stays one region; the half cylinder, whose normals turn
+        // through 180 degrees, takes more seeds.
+        let plane = shapes::plane(1.0, 48).expect("plane");
+        let bent: Vec<DVec3> = plane
+            .positions()
+            .iter()
+            .map(|p| {
+                let theta = p.x * std::f64::consts::PI;
+                DVec3::new(
+                    theta.sin() / std::f64::consts::PI,
+                    p.y,
+                    theta.cos() / std::f64::consts::PI,
+                )
+            })
+            .collect();
+        let half_cylinder = TriMesh::new(bent, plane.triangles().to_vec()).expect("half cylinder");
+        for (mesh, bounded_seeds_at_least) in [(plane, 1), (half_cylinder, 2)] {
+            let field = FieldSpec::Constant {
+                direction: [0.0, 1.0, 0.0],
+                anisotropy: 3.0,
+                density: 1.0,
+            }
+            .build(&mesh)
+            .expect("field");
+            let faces = face_frames(&mesh, &field);
+            let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
+            let mask = vec![true; mesh.face_count()];
+            let area = mesh.area();
+            let eighth = RegionLimits {
+                surface_area: area,
+                max_share: 0.125,
+            };
+            for seed in 0..3 {
+                let free = grow_regions(
+                    &mesh,
+                    &faces,
+                    &w,
+                    &mask,
+                    FRAC_PI_4,
+                    seed,
+                    RegionLimits::unbounded(area),
+                );
+                assert_eq!(free.seeds.len(), 1);
+                let bounded = grow_regions(&mesh, &faces, &w, &mask, FRAC_PI_4, seed, eighth);
+                if bounded_seeds_at_least == 1 {
+                    assert_eq!(bounded.seeds.len(), 1, "the plane is one region");
+                } else {
+                    assert!(bounded.seeds.len() >= 2, "seed {seed}: {:?}", bounded.seeds);
+                }
+                assert_eq!(
+                    place_seeds_sized(&mesh, &faces, &w, &mask, FRAC_PI_4, seed, eighth),
+                    bounded.seeds
+                );
             }
         }
     }
@@ -725,7 +877,15 @@ pub(crate) mod tests {
         let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
         let mask = vec![true; mesh.face_count()];
         for seed in 0..4 {
-            let regions = grow_regions(&mesh, &faces, &w, &mask, FRAC_PI_4, seed, mesh.area());
+            let regions = grow_regions(
+                &mesh,
+                &faces,
+                &w,
+                &mask,
+                FRAC_PI_4,
+                seed,
+                RegionLimits::unbounded(mesh.area()),
+            );
             for (f, &r) in regions.region.iter().enumerate() {
                 if r == NONE {
                     continue;
