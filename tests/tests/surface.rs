@@ -501,9 +501,9 @@ fn designed_bunny_segments_do_not_depend_on_the_resolution() {
     // Issue 17: the bunny Loop-subdivided once gives segments within 1.3x of the
     // bunny's with the same designed field. One seed's count jumps with small changes
     // (the default options' seed gave 12 and 20 after trees moved before the walk),
-    // so the medians over segmentation seeds 1 to 5 are compared: 14 and 17 since
-    // singularity pairs are cancelled (16 and 18 before; bench/README.md, "Pair
-    // cancellation").
+    // so the medians over segmentation seeds 1 to 5 are compared: 32 and 38 since
+    // seeding regions stop at an eighth of the surface where they wrap (14 and 17
+    // before; bench/README.md, "Seeding regions of at most an eighth of the surface").
     let Some(dir) = shared_mesh_dir() else {
         eprintln!("shared meshes not found: skipping");
         return;
