@@ -13,7 +13,7 @@
 
 use rayon::prelude::*;
 
-use crate::linalg::{Amg, AmgOptions, Csr, LinalgError, Scalar};
+use crate::linalg::{Amg, AmgOptions, Csr, LinalgError, Scalar, breadth_first};
 use crate::mesh::TriMesh;
 
 /// The source of an entry that is a diagonal, not an edge.
@@ -59,26 +59,7 @@ impl VertexGraph {
             fill[b as usize] += 1;
         }
         let around = |v: usize| &neighbours[first[v]..first[v + 1]];
-        let mut visited = vec![false; n];
-        let mut order: Vec<u32> = Vec::with_capacity(n);
-        for start in 0..n {
-            if visited[start] {
-                continue;
-            }
-            visited[start] = true;
-            let mut head = order.len();
-            order.push(start as u32);
-            while head < order.len() {
-                let v = order[head] as usize;
-                head += 1;
-                for &(w, _) in around(v) {
-                    if !visited[w as usize] {
-                        visited[w as usize] = true;
-                        order.push(w);
-                    }
-                }
-            }
-        }
+        let order = breadth_first(n, |v| around(v).iter().map(|&(w, _)| w));
         let mut position = vec![0u32; n];
         for (k, &v) in order.iter().enumerate() {
             position[v as usize] = k as u32;

@@ -353,27 +353,36 @@ impl<S: Scalar> Csr<S> {
     /// keeps the solvers' memory accesses local whatever the input order. `order[k]` is
     /// the old index of new row `k`.
     pub fn breadth_first_order(&self) -> Vec<u32> {
-        let n = self.rows;
-        let mut visited = vec![false; n];
-        let mut order = Vec::with_capacity(n);
-        for start in 0..n {
-            if visited[start] {
-                continue;
-            }
-            visited[start] = true;
-            let mut head = order.len();
-            order.push(start as u32);
-            while head < order.len() {
-                let r = order[head] as usize;
-                head += 1;
-                for &c in self.row(r).0 {
-                    if !visited[c as usize] {
-                        visited[c as usize] = true;
-                        order.push(c);
-                    }
+        breadth_first(self.rows, |r| self.row(r).0.iter().copied())
+    }
+}
+
+/// A breadth-first (Cuthill-McKee) order of a graph of `n` nodes, `neighbours(v)`
+/// listing node `v`'s: each connected part from its lowest node, neighbours visited in
+/// the order listed. `order[k]` is the node visited `k`-th. O(nodes + edges).
+pub fn breadth_first<I: IntoIterator<Item = u32>>(
+    n: usize,
+    neighbours: impl Fn(usize) -> I,
+) -> Vec<u32> {
+    let mut visited = vec![false; n];
+    let mut order = Vec::with_capacity(n);
+    for start in 0..n {
+        if visited[start] {
+            continue;
+        }
+        visited[start] = true;
+        let mut head = order.len();
+        order.push(start as u32);
+        while head < order.len() {
+            let v = order[head] as usize;
+            head += 1;
+            for w in neighbours(v) {
+                if !visited[w as usize] {
+                    visited[w as usize] = true;
+                    order.push(w);
                 }
             }
         }
-        order
     }
+    order
 }

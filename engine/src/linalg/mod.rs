@@ -41,7 +41,7 @@ pub mod pcg;
 mod scalar;
 
 pub use amg::{Amg, AmgOptions, Workspace};
-pub use csr::{Csr, PARALLEL_ROWS};
+pub use csr::{Csr, PARALLEL_ROWS, breadth_first};
 pub use dense::DenseCholesky;
 pub use error::LinalgError;
 pub use scalar::{Scalar, Vector, dot, norm2};

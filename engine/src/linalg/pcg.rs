@@ -3,10 +3,10 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::amg::Amg;
+use super::amg::{Amg, Workspace};
 use super::csr::{Csr, PARALLEL_ROWS};
 use super::error::LinalgError;
-use super::scalar::{Scalar, dot, norm2};
+use super::scalar::{Scalar, Vector, dot, norm2};
 
 /// How a solve went.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,7 +158,6 @@ fn three_internal(
     tolerance: f64,
     max_iterations: usize,
 ) -> Result<[PcgReport; 3], LinalgError> {
-    let n = a.rows();
     let b_norm: [f64; 3] = std::array::from_fn(|k| column_norm2(b, k).sqrt());
     if b_norm.iter().any(|v| !v.is_finite()) || x.iter().any(|v| !v.is_finite()) {
         return Err(LinalgError::NonFinite);
@@ -168,16 +167,13 @@ fn three_internal(
             x.iter_mut().for_each(|v| v[k] = 0.0);
         }
     }
-    let mut work = amg.workspace();
-    let mut r = vec![DVec3::ZERO; n];
-    a.mul_into(x, &mut r);
-    for (r, b) in r.iter_mut().zip(b) {
-        *r = *b - *r;
-    }
-    let mut z = vec![DVec3::ZERO; n];
-    let mut q = vec![DVec3::ZERO; n];
-    amg.cycle(&r, &mut z, &mut work);
-    let mut p = z.clone();
+    let Start {
+        mut work,
+        mut r,
+        mut z,
+        mut q,
+        mut p,
+    } = start(a, amg, b, x);
     let mut rz: [f64; 3] = std::array::from_fn(|k| column_dot(&r, &z, k));
     let mut residual: [f64; 3] = std::array::from_fn(|k| {
         if b_norm[k] == 0.0 {
@@ -254,6 +250,36 @@ fn three_internal(
     }))
 }
 
+/// Conjugate gradients' first step from `x`: the residual `r = b - A x`, its
+/// preconditioned `z` (one V-cycle), the first direction `p = z`, scratch `q` for
+/// `A p`, and the cycle's workspace.
+struct Start<V> {
+    work: Workspace<V>,
+    r: Vec<V>,
+    z: Vec<V>,
+    q: Vec<V>,
+    p: Vec<V>,
+}
+
+fn start<S: Scalar, V: Vector<S>>(a: &Csr<S>, amg: &Amg<S>, b: &[V], x: &[V]) -> Start<V> {
+    let n = a.rows();
+    let mut work = amg.workspace();
+    let mut r = vec![V::zero(); n];
+    a.mul_into(x, &mut r);
+    for (r, b) in r.iter_mut().zip(b) {
+        *r = *b - *r;
+    }
+    let mut z = vec![V::zero(); n];
+    amg.cycle(&r, &mut z, &mut work);
+    Start {
+        work,
+        p: z.clone(),
+        q: vec![V::zero(); n],
+        r,
+        z,
+    }
+}
+
 fn solve_internal<S: Scalar>(
     a: &Csr<S>,
     amg: &Amg<S>,
@@ -278,16 +304,13 @@ fn solve_internal<S: Scalar>(
             residual: 0.0,
         });
     }
-    let mut work = amg.workspace();
-    let mut r = vec![S::ZERO; n];
-    a.mul_into(x, &mut r);
-    for (r, b) in r.iter_mut().zip(b) {
-        *r = *b - *r;
-    }
-    let mut z = vec![S::ZERO; n];
-    let mut q = vec![S::ZERO; n];
-    amg.cycle(&r, &mut z, &mut work);
-    let mut p = z.clone();
+    let Start {
+        mut work,
+        mut r,
+        mut z,
+        mut q,
+        mut p,
+    } = start(a, amg, b, x);
     let mut rz = dot(&r, &z).re();
     let mut residual = norm2(&r).sqrt() / b_norm;
     let mut iterations = 0;

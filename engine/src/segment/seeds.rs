@@ -529,6 +529,14 @@ pub(crate) mod tests {
     use crate::mesh::shapes;
     use crate::segment::walk::walk_weights;
 
+    /// The seeding's inputs over the whole of `mesh`: face frames, the walk's weights
+    /// with no edge cut, and a mask of every face.
+    fn whole_mesh_inputs(mesh: &TriMesh, field: &TensorField) -> (FaceField, Vec<f64>, Vec<bool>) {
+        let faces = face_frames(mesh, field);
+        let w = walk_weights(mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
+        (faces, w, vec![true; mesh.face_count()])
+    }
+
     /// A plane on `[0, 1]^2` whose major direction turns by `pi` from `x = 0` to
     /// `x = 1` (`theta = pi x`), spacing ratio 3.
     pub(crate) fn turning_plane(resolution: u32) -> (TriMesh, TensorField) {
@@ -663,9 +671,7 @@ pub(crate) mod tests {
     #[test]
     fn seeding_regions_turn_at_most_beta() {
         let (mesh, field) = turning_plane(40);
-        let faces = face_frames(&mesh, &field);
-        let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
-        let mask = vec![true; mesh.face_count()];
+        let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         for beta in [FRAC_PI_4, PI / 8.0] {
             for seed in 0..4 {
                 let regions = grow_regions(
@@ -825,9 +831,7 @@ pub(crate) mod tests {
             }
             .build(&mesh)
             .expect("field");
-            let faces = face_frames(&mesh, &field);
-            let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
-            let mask = vec![true; mesh.face_count()];
+            let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
             let area = mesh.area();
             let eighth = RegionLimits {
                 surface_area: area,
@@ -873,9 +877,7 @@ pub(crate) mod tests {
         }
         .build(&mesh)
         .expect("field");
-        let faces = face_frames(&mesh, &field);
-        let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
-        let mask = vec![true; mesh.face_count()];
+        let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         for seed in 0..4 {
             let regions = grow_regions(
                 &mesh,
@@ -906,9 +908,7 @@ pub(crate) mod tests {
     #[test]
     fn seeds_are_deterministic_and_depend_on_the_seed() {
         let (mesh, field) = turning_plane(24);
-        let faces = face_frames(&mesh, &field);
-        let w = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
-        let mask = vec![true; mesh.face_count()];
+        let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         let a = place_seeds(&mesh, &faces, &w, &mask, FRAC_PI_4, 3);
         let b = place_seeds(&mesh, &faces, &w, &mask, FRAC_PI_4, 3);
         assert_eq!(a, b);
