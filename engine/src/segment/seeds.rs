@@ -8,9 +8,9 @@
 //!
 //! Seeding steps out in rings (breadth-first) from a random first triangle of each
 //! connected part of the mask; a face whose major direction has turned more than `beta`
-//! from the reference of the region being grown (or, in the segmentation, that would
-//! take the region past [`MAX_REGION_SHARE`] of the surface's area) becomes a
-//! candidate, and once the
+//! from the reference of the region being grown (or, in the segmentation, that a
+//! region past [`MAX_REGION_SHARE`] of the surface's area would take where it wraps)
+//! becomes a candidate, and once the
 //! region can grow no further the earliest-found candidate not yet taken starts the
 //! next region, with its own direction as reference. Each region's seed is its most
 //! interior face. See [`place_seeds`] for the exact reading of the paper's rule, the
@@ -66,9 +66,11 @@ pub const MIN_REGION_FACES: usize = 4;
 /// preprocess (284 splits of invalid segments instead of 144); this share did not.
 pub const MIN_REGION_SHARE: f64 = 1e-4;
 
-/// Largest share of the whole surface's area one seeding region may cover: a face the
-/// region could take once it holds this share becomes a candidate seed instead, as
-/// if the field had turned there.
+/// Largest share of the whole surface's area one seeding region of the segmentation
+/// covers before it stops wherever it wraps: once it holds this share, a face it could
+/// take becomes a candidate seed instead unless its normal lies within
+/// [`MAX_REGION_TILT_COS`] of the region's first face's, as if the field had turned
+/// there.
 ///
 /// Where the field barely turns (a smooth designed field, a projected direction on a
 /// gently curved surface) the paper's rule lets one region grow over most of the
@@ -76,10 +78,10 @@ pub const MIN_REGION_SHARE: f64 = 1e-4;
 /// from 4 seeds, one segment covering 73% to 95% of the mesh. No field-aligned map of
 /// such a segment is valid, so the surface pipeline parameterized it, found it folded,
 /// halved it and tried again: at 1.1M faces pieces of 812k, 471k, 342k and 305k faces
-/// all failed, about 4 s of one core's work before any piece was accepted. Regions of
-/// at most an eighth of the surface give the walk 22 to 25 seeds there and leave the
-/// parameterization little to split (bench/README.md, "Seeding regions of at most an
-/// eighth of the surface").
+/// all failed, about 4 s of one core's work before any piece was accepted. With
+/// regions bounded so, the walk leaves 25 to 27 segments there at every resolution,
+/// and splitting turns them into 31 to 37 (bench/README.md, "Seeding regions of at most
+/// an eighth of the surface").
 pub const MAX_REGION_SHARE: f64 = 0.125;
 
 /// A region past [`MAX_REGION_SHARE`] still takes the faces whose normals lie within
@@ -200,11 +202,13 @@ pub(crate) fn for_each_walk_neighbor(
 /// independent of the mesh's resolution.
 ///
 /// **Deviation, in the segmentation only: bounded regions.** The segmentation
-/// ([`segment`](super::segment)) seeds with regions stopped at [`MAX_REGION_SHARE`] of
-/// the surface's area: the faces a full region would take next become candidates, as
-/// if the field had turned there. Where the field barely turns this gives the walk
-/// seeds a parameterizable distance apart instead of one region over most of the
-/// surface. This function keeps the paper's unbounded regions.
+/// ([`segment`](super::segment)) seeds with regions that, past [`MAX_REGION_SHARE`] of
+/// the surface's area, take only faces whose normals lie within
+/// [`MAX_REGION_TILT_COS`] of their first face's: the others become candidates, as if
+/// the field had turned there. Where the field barely turns this gives the walk seeds
+/// a parameterizable distance apart instead of one region wrapped over most of the
+/// surface, and a flat region still grows whole. This function keeps the paper's
+/// unbounded regions.
 ///
 /// **Deviation: centred seeds.** The seed returned for a region is not the face where
 /// its growth started (which lies on the border of the previous region) but the face
