@@ -33,13 +33,9 @@ pub fn solve<S: Scalar>(
         b.len() == n && x.len() == n,
         "pcg: vector lengths differ from the matrix"
     );
-    let mut bi = vec![S::ZERO; n];
-    let mut xi = vec![S::ZERO; n];
-    amg.to_internal(b, &mut bi);
-    amg.to_internal(x, &mut xi);
-    let report = solve_internal(amg.matrix(), amg, &bi, &mut xi, tolerance, max_iterations);
-    amg.from_internal(&xi, x);
-    report
+    internally(amg, b, x, |b, x| {
+        solve_internal(amg.matrix(), amg, b, x, tolerance, max_iterations)
+    })
 }
 
 /// Solves `(A + diag(delta)) x = b` (`A` the matrix `amg` was built from, `delta` in
@@ -76,13 +72,9 @@ pub fn solve_with_diagonal<S: Scalar>(
             Err(_) => return Err(LinalgError::NotPositiveDefinite { pivot: r }),
         }
     }
-    let mut bi = vec![S::ZERO; n];
-    let mut xi = vec![S::ZERO; n];
-    amg.to_internal(b, &mut bi);
-    amg.to_internal(x, &mut xi);
-    let report = solve_internal(&a, amg, &bi, &mut xi, tolerance, max_iterations);
-    amg.from_internal(&xi, x);
-    report
+    internally(amg, b, x, |b, x| {
+        solve_internal(&a, amg, b, x, tolerance, max_iterations)
+    })
 }
 
 /// Solves `A X = B` for three real right-hand sides at once (the columns of `b`'s
@@ -103,13 +95,9 @@ pub fn solve_three(
         b.len() == n && x.len() == n,
         "pcg: vector lengths differ from the matrix"
     );
-    let mut bi = vec![DVec3::ZERO; n];
-    let mut xi = vec![DVec3::ZERO; n];
-    amg.to_internal(b, &mut bi);
-    amg.to_internal(x, &mut xi);
-    let reports = three_internal(a, amg, &bi, &mut xi, tolerance, max_iterations);
-    amg.from_internal(&xi, x);
-    reports
+    internally(amg, b, x, |b, x| {
+        three_internal(a, amg, b, x, tolerance, max_iterations)
+    })
 }
 
 /// `sum x_k y_k` of column `k`, in [`dot`]'s order.
@@ -248,6 +236,23 @@ fn three_internal(
         iterations: iterations[k],
         residual: residual[k],
     }))
+}
+
+/// `solve(b, x)` on `b` and `x` moved into `amg`'s internal numbering, `x` moved back.
+fn internally<S: Scalar, V: Vector<S>, R>(
+    amg: &Amg<S>,
+    b: &[V],
+    x: &mut [V],
+    solve: impl FnOnce(&[V], &mut [V]) -> R,
+) -> R {
+    let n = b.len();
+    let mut bi = vec![V::zero(); n];
+    let mut xi = vec![V::zero(); n];
+    amg.to_internal(b, &mut bi);
+    amg.to_internal(x, &mut xi);
+    let out = solve(&bi, &mut xi);
+    amg.from_internal(&xi, x);
+    out
 }
 
 /// Conjugate gradients' first step from `x`: the residual `r = b - A x`, its
