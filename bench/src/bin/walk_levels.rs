@@ -1,10 +1,11 @@
 //! The multilevel random walk against the exact one (`segment::multilevel`):
 //! `cargo run --release -p strata-bench --bin walk_levels [-- repeats [levels]]`.
 //!
-//! On the shared bunny Loop-subdivided once and twice (278k and 1.1M faces, made in
-//! code), for the fields of `stanford-bunny-anisotropic.ron` (a constant direction
-//! projected, 3:1) and `stanford-bunny-smooth.ron` (designed, curvature-aligned): the
-//! first random walk of the segmentation (seeds of `beta = pi/4` over the whole mesh),
+//! On the shared bunny and the bunny Loop-subdivided, `levels` meshes in all (default
+//! 3: 69k, 278k and 1.1M faces, the larger two made in code), for the fields of
+//! `stanford-bunny-anisotropic.ron` (a constant direction projected, 3:1) and
+//! `stanford-bunny-smooth.ron` (designed, curvature-aligned): the first random walk of
+//! the segmentation (seeds of `beta = pi/4` over the whole mesh),
 //! solved by [`random_walk`] (multilevel from `MULTILEVEL_FACES` faces) and by
 //! [`WalkSystem`] (always exact). Per walk: seconds (median of `repeats`, default 1),
 //! the mean turn between a face's major direction and its seed's (radians; lower
@@ -61,15 +62,17 @@ fn boundary_weight(mesh: &TriMesh, weights: &[f64], labels: &[u32]) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(1)?;
-    let levels = strata_bench::levels_arg(2)?;
+    let levels = strata_bench::levels_arg(3)?;
     let scenes = strata_bench::bundled_scenes(&SCENES)?;
     let mut mesh = Arc::new(strata_systems::scene::load_mesh(&scenes[0].1)?);
     println!(
         "| field | faces | seeds | walk | time (s) | mean turn to seed (rad) | boundary weight | connected parts | same label |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    for _ in 0..levels {
-        mesh = Arc::new(loop_subdivide(&mesh)?);
+    for level in 0..levels {
+        if level > 0 {
+            mesh = Arc::new(loop_subdivide(&mesh)?);
+        }
         for (name, config) in &scenes {
             let options = config.surface_options().segment;
             let field = config.field.build(&mesh)?;

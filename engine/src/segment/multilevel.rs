@@ -16,13 +16,15 @@
 //!    as its seed; every fine node takes its aggregate's label.
 //!
 //! Compared with the exact walk by `cargo run --release -p strata-bench --bin
-//! walk_levels` (the first walk of the segmentation of the bunny Loop-subdivided once
-//! and twice, with the settings of the constant 3:1 and the smooth curvature-aligned
-//! scenes): the mean turn between a face and its seed is 4% and 6% lower at 278k
-//! faces and 1% higher at 1.1M (0.716, 0.780, 0.640, 0.798 rad against 0.748,
-//! 0.827, 0.632, 0.789), the boundaries between labels weigh 8% to 46% less, and the
-//! labels have as many connected parts (99, 16, 188, 30 against 102, 15, 190, 31), at
-//! 1/4.2 to 1/6.8 of the time (1.18 s against 8.04 s for 176 seeds at 1.1M faces).
+//! walk_levels` (the first walk of the segmentation of the bunny and the bunny
+//! Loop-subdivided once and twice, with the settings of the constant 3:1 and the
+//! smooth curvature-aligned scenes): the mean turn between a face and its seed is 6%
+//! lower and the same at 69k faces (0.856, 0.870 rad against 0.915, 0.871), 4% and 6%
+//! lower at 278k and 1% higher at 1.1M (0.716, 0.780, 0.640, 0.798 against 0.748,
+//! 0.827, 0.632, 0.789), the boundaries between labels weigh up to 46% less, and the
+//! labels have about as many connected parts (21, 9, 99, 16, 188, 30 against 26, 8,
+//! 102, 15, 190, 31), at 1/3.5 to 1/6.8 of the time (1.18 s against 8.04 s for 176
+//! seeds at 1.1M faces).
 //! Labels agree on 75% to 87% of the faces: where the field barely turns, a boundary
 //! sits where two seeds' probabilities balance on a flat landscape, and any change to
 //! the system moves it.
@@ -42,10 +44,13 @@ use rayon::prelude::*;
 use super::graph_walk::{GraphWalk, GraphWalkError, WalkGraph, first_unseeded};
 use crate::mesh::NONE;
 
-/// Masks from this many faces are walked by the multilevel walk. Below it the exact
-/// walk is fast (0.3 s for the whole 69k-face bunny, segmentation included) and its
-/// labels are kept bit for bit.
-pub const MULTILEVEL_FACES: usize = 150_000;
+/// Masks from this many faces are walked by the multilevel walk; smaller ones (every
+/// shared mesh but the bunny, and the pieces the segmentation re-walks) by the exact
+/// walk. On the 69k-face bunny the aggregated walk takes a quarter of the exact
+/// walk's time (0.02-0.03 s against 0.09-0.11 s) with as low a turn to the seeds and
+/// as light borders (`walk_levels`), and the segmentation's segment counts over seeds
+/// stay (bench/README.md, "The multilevel walk from 50,000 faces").
+pub const MULTILEVEL_FACES: usize = 50_000;
 
 /// How many fine nodes make one node of the coarsest graph, about. 8 keeps the
 /// walk's quality on the subdivided bunnies (module documentation); coarser graphs
