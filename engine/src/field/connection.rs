@@ -23,8 +23,8 @@ use super::pattern::VertexPattern;
 use super::vertex_graph::VertexGraph;
 
 use super::line_field::{
-    LAMBDA_MULTIGRID_VERTICES, LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT,
-    MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
+    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
+    SOLVE_TOLERANCE,
 };
 use super::{tangent_frame, vertex_frames};
 use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
@@ -70,7 +70,7 @@ pub(crate) struct Connection {
     pub(crate) mass: Vec<f64>,
     /// The lower-triangle pattern of the whole mesh (direct solves only).
     pattern: Option<VertexPattern>,
-    /// The vertex graph in the hierarchies' order (whenever a hierarchy may be built).
+    /// The vertex graph in the hierarchies' order (multigrid solves only).
     graph: Option<VertexGraph>,
     /// The symbolic Cholesky of the whole mesh's pattern, made by `build` when asked to
     /// prepare, else on first use (an energy evaluation never needs it).
@@ -79,8 +79,6 @@ pub(crate) struct Connection {
     spare: RefCell<Option<Storage<c64>>>,
     /// Whether solves use multigrid (else sparse Cholesky).
     pub(crate) multigrid: bool,
-    /// Whether the estimate of `lambda_1` uses multigrid (always when `multigrid`).
-    pub(crate) lambda_multigrid: bool,
 }
 
 /// Most conjugate-gradient iterations of one multigrid-preconditioned solve (a mesh
@@ -226,10 +224,10 @@ impl Connection {
         if n == 0 {
             return Err(LineFieldError::EmptyMesh);
         }
-        let (multigrid, lambda_multigrid) = match solver {
-            LinearSolver::Auto => (n >= MULTIGRID_VERTICES, n >= LAMBDA_MULTIGRID_VERTICES),
-            LinearSolver::Direct => (false, false),
-            LinearSolver::Multigrid => (true, true),
+        let multigrid = match solver {
+            LinearSolver::Auto => n >= MULTIGRID_VERTICES,
+            LinearSolver::Direct => false,
+            LinearSolver::Multigrid => true,
         };
         let pattern = if multigrid {
             None
@@ -239,20 +237,15 @@ impl Connection {
         let eager = pattern.as_ref().filter(|_| prepare || smoothing > 0.0);
         let (symbolic, (weights, mass), graph) = match eager {
             Some(pattern) => {
-                let (made, (weights_and_mass, graph)) = rayon::join(
+                let (made, weights_and_mass) = rayon::join(
                     || cholesky::symbolic(pattern.symbolic()),
-                    || {
-                        (
-                            weights_and_mass(mesh),
-                            lambda_multigrid.then(|| VertexGraph::new(mesh)),
-                        )
-                    },
+                    || weights_and_mass(mesh),
                 );
-                (Some(made?), weights_and_mass, graph)
+                (Some(made?), weights_and_mass, None)
             }
             None => {
                 let (graph, weights_and_mass) = rayon::join(
-                    || (multigrid || lambda_multigrid).then(|| VertexGraph::new(mesh)),
+                    || multigrid.then(|| VertexGraph::new(mesh)),
                     || weights_and_mass(mesh),
                 );
                 (None, weights_and_mass, graph)
@@ -301,7 +294,6 @@ impl Connection {
             symbolic: symbolic.map_or_else(OnceCell::new, OnceCell::from),
             spare: RefCell::new(spare),
             multigrid,
-            lambda_multigrid,
         })
     }
 
@@ -325,7 +317,6 @@ impl Connection {
             symbolic: OnceCell::new(),
             spare: RefCell::new(None),
             multigrid: self.multigrid,
-            lambda_multigrid: self.lambda_multigrid,
         }
     }
 

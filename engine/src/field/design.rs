@@ -33,9 +33,7 @@
 //! conjugate gradients preconditioned with algebraic multigrid ([`crate::linalg`]) to
 //! [`SOLVE_TOLERANCE`], since a factor's fill grows faster than the mesh; the
 //! eigen-solves then take one V-cycle on the eigen-residual per step instead of a
-//! solve (the Davidson method, Rayleigh-Ritz on the space of those corrections). The
-//! estimate of `lambda_1` uses such a hierarchy from [`LAMBDA_MULTIGRID_VERTICES`]
-//! already, where it costs less than a factorization.
+//! solve (the Davidson method, Rayleigh-Ritz on the space of those corrections).
 //!
 //! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the frames and
 //! the rotations `r_ab` are measured in the tangent planes of the vertex normals after
@@ -77,7 +75,7 @@
 //! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
 //! solve with that factor per Krylov step. With a smoothness shift the estimate of
 //! `lambda_1` adds one factorization and a few solves (Rayleigh-Ritz on a Krylov space,
-//! `lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`LAMBDA_MULTIGRID_VERTICES`] a
+//! `lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`MULTIGRID_VERTICES`] a
 //! multigrid hierarchy and a few V-cycles. Measured on the Stanford bunny (35k
 //! vertices, 2 cores, release, `field_design`): the designed (curvature-aligned,
 //! shifted) field 0.15 s, the smoothest field 0.21 s (12 solves). Two threads:
@@ -97,8 +95,8 @@ use super::cancel::cancel_pairs;
 use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
 pub use super::line_field::{
-    LAMBDA_MULTIGRID_VERTICES, LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT,
-    MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
+    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
+    SOLVE_TOLERANCE,
 };
 use crate::mesh::TriMesh;
 

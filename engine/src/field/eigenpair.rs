@@ -28,33 +28,11 @@ pub(crate) fn start_value(i: u64) -> f64 {
 /// to [`LAMBDA_TOLERANCE`] in at most [`LAMBDA_ITERATIONS`] solves (see
 /// [`smallest_eigenpair`]), and with multigrid solves the hierarchy of `A + shift M`
 /// it built, for a caller whose next system differs from it by the diagonal only.
-/// From [`LAMBDA_MULTIGRID_VERTICES`](super::line_field::LAMBDA_MULTIGRID_VERTICES)
-/// with [`LinearSolver::Auto`](super::LinearSolver::Auto) the estimate is made with a
-/// hierarchy even where the solves use a factor: to 2% it needs 5 V-cycles, cheaper
-/// than a complex factorization and 4 solves (the bunny's estimate is then 484.8
-/// against 483.4 by the factor and 482.0 converged).
 pub(crate) fn smallest_eigenvalue(
     mesh: &TriMesh,
     system: &Connection,
     shift: f64,
 ) -> Result<(f64, Option<Amg<c64>>), LineFieldError> {
-    if system.lambda_multigrid && !system.multigrid {
-        // Solves by a factor, the estimate by a hierarchy (cheaper from
-        // LAMBDA_MULTIGRID_VERTICES); the shifted solve factors its own matrix.
-        let n = system.len();
-        let extra: Vec<f64> = system.mass.iter().map(|m| shift * m).collect();
-        let identity: Vec<usize> = (0..n).collect();
-        let amg = system.hierarchy(mesh, &extra, &identity, n)?;
-        let (value, _, _) = davidson(
-            system,
-            &amg,
-            LAMBDA_ITERATIONS,
-            LAMBDA_TOLERANCE,
-            shift,
-            false,
-        )?;
-        return Ok((value, None));
-    }
     let ((_, value, _), factor) = smallest_eigenpair(
         mesh,
         system,

@@ -86,19 +86,13 @@ pub enum LineFieldError {
 pub const SHIFT: f64 = 1e-8;
 
 /// Vertices from which [`LinearSolver::Auto`] switches from sparse Cholesky to
-/// multigrid. Below it a Cholesky factor is the faster of the two (on the 35k-vertex
-/// bunny 0.05 s to factor a connection Laplacian against 0.09 s for a multigrid setup
-/// and solve); above it the factor's fill grows faster than the mesh and multigrid's
-/// linear cost wins (about even at 139k vertices).
-pub const MULTIGRID_VERTICES: usize = 100_000;
-
-/// Vertices from which [`LinearSolver::Auto`] estimates `lambda_1` (the smoothness
-/// shift's smallest eigenvalue, needed to 2%) with a multigrid hierarchy while its
-/// solves keep sparse Cholesky below [`MULTIGRID_VERTICES`]: the hierarchy and 5
-/// V-cycles cost less than a complex factorization and 4 solves from about here
-/// (bunny, 35k vertices: designed field 0.18-0.19 -> 0.15-0.16 s; rocker arm, 10k:
-/// 0.036 -> 0.047 s, so not below; bench/README.md, "lambda_1 by multigrid").
-pub const LAMBDA_MULTIGRID_VERTICES: usize = 25_000;
+/// multigrid. Below it the factors are the faster (the rocker arm, 10k vertices: its
+/// designed field in 0.046 s direct, 0.065 s by multigrid); above it a factor's fill
+/// grows faster than the mesh while multigrid's setup is linear, and the hierarchy
+/// built to estimate `lambda_1` also preconditions the shifted solve (the bunny, 35k
+/// vertices: 0.225 s direct, 0.18 s by multigrid; `strata field`, medians of 5;
+/// bench/README.md, "One solver threshold").
+pub const MULTIGRID_VERTICES: usize = 25_000;
 
 /// Relative residual `|b - A x| / |b|` at which a multigrid-preconditioned solve
 /// ([`LinearSolver::Multigrid`]) stops. The designed bunny field Loop-subdivided once
@@ -113,8 +107,7 @@ pub const SOLVE_TOLERANCE: f64 = 1e-6;
 #[non_exhaustive]
 pub enum LinearSolver {
     /// [`Direct`](Self::Direct) below [`MULTIGRID_VERTICES`] vertices,
-    /// [`Multigrid`](Self::Multigrid) from there; the estimate of `lambda_1` by
-    /// multigrid from [`LAMBDA_MULTIGRID_VERTICES`].
+    /// [`Multigrid`](Self::Multigrid) from there.
     #[default]
     Auto,
     /// faer's sparse Cholesky: exact, but its fill and time grow faster than the mesh.

@@ -43,9 +43,9 @@ pub use curvature::{
     CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
 };
 pub use design::{
-    LAMBDA_MULTIGRID_VERTICES, LineConstraint, LineField, LineFieldError, LineFieldOptions,
-    LinearSolver, MULTIGRID_VERTICES, SOLVE_TOLERANCE, constrained_line_field, guided_line_field,
-    line_field_energy, smoothest_line_field,
+    LineConstraint, LineField, LineFieldError, LineFieldOptions, LinearSolver, MULTIGRID_VERTICES,
+    SOLVE_TOLERANCE, constrained_line_field, guided_line_field, line_field_energy,
+    smoothest_line_field,
 };
 pub use designed::{Anisotropy, Constraint, Density, Design, Guidance, Site};
 pub use eigen::{
