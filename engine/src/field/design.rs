@@ -76,9 +76,10 @@
 //! solve with that factor per Krylov step. With a smoothness shift the estimate of
 //! `lambda_1` adds one factorization and a few solves (Rayleigh-Ritz on a Krylov space,
 //! `lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`MULTIGRID_VERTICES`] a
-//! multigrid hierarchy and a few V-cycles. Measured on the Stanford bunny (35k
-//! vertices, 2 cores, release, `field_design`): the designed (curvature-aligned,
-//! shifted) field 0.15 s, the smoothest field 0.21 s (12 solves). Two threads:
+//! multigrid hierarchy and a few V-cycles. Measured (2 cores, release, `field_design`):
+//! the rocker arm (10k vertices, factored) 0.04 s; the Stanford bunny (35k vertices,
+//! multigrid) 0.16-0.17 s for the designed (curvature-aligned, shifted) field and
+//! 0.17-0.18 s for the smoothest field. Two threads:
 //! the AMD ordering beside the weights, the factor buffers' allocation beside the
 //! normals' smoothing, the guidance (the designed field's curvature) beside the
 //! estimate of `lambda_1`; the factors reuse one set of buffers (`cholesky.rs`).
