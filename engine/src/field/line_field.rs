@@ -86,12 +86,14 @@ pub enum LineFieldError {
 pub const SHIFT: f64 = 1e-8;
 
 /// Vertices from which [`LinearSolver::Auto`] switches from sparse Cholesky to
-/// multigrid. Below it the factors are the faster (the rocker arm, 10k vertices: its
-/// designed field in 0.046 s direct, 0.065 s by multigrid); above it a factor's fill
-/// grows faster than the mesh while multigrid's setup is linear, and the hierarchy
-/// built to estimate `lambda_1` also preconditions the shifted solve (the bunny, 35k
-/// vertices: 0.225 s direct, 0.18 s by multigrid; `strata field`, medians of 5;
-/// bench/README.md, "One solver threshold").
+/// multigrid. A factor's fill grows faster than the mesh while multigrid's setup is
+/// linear, and the hierarchy built to estimate `lambda_1` also preconditions the
+/// shifted solve. `cargo run --release -p strata-bench --bin field_solvers` (the
+/// designed fields of the shared meshes and their Loop subdivisions): from 25k
+/// vertices multigrid is the faster on every mesh (the bunny, 35k vertices: 0.19 s
+/// direct, 0.16-0.17 s by multigrid); below, the direct solver mostly is, or they tie (the wing
+/// subdivided once, 20k: 0.09 s against 0.16 s; homer subdivided once, 24k: 0.11 s
+/// either way), with exceptions (the fandisk and the spot subdivided once).
 pub const MULTIGRID_VERTICES: usize = 25_000;
 
 /// Relative residual `|b - A x| / |b|` at which a multigrid-preconditioned solve
