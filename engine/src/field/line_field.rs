@@ -91,9 +91,10 @@ pub const SHIFT: f64 = 1e-8;
 /// shifted solve. `cargo run --release -p strata-bench --bin field_solvers` (the
 /// designed fields of the shared meshes and their Loop subdivisions): from 25k
 /// vertices multigrid is the faster on every mesh (the bunny, 35k vertices: 0.19 s
-/// direct, 0.16-0.17 s by multigrid); below, the direct solver mostly is, or they tie (the wing
-/// subdivided once, 20k: 0.09 s against 0.16 s; homer subdivided once, 24k: 0.11 s
-/// either way), with exceptions (the fandisk and the spot subdivided once).
+/// direct, 0.16-0.17 s by multigrid); below, the direct solver mostly is, or they
+/// tie (the wing subdivided once, 20k: 0.09 s against 0.16 s; homer subdivided once,
+/// 24k: 0.11 s either way), with exceptions (the fandisk and the spot subdivided
+/// once).
 pub const MULTIGRID_VERTICES: usize = 25_000;
 
 /// Relative residual `|b - A x| / |b|` at which a multigrid-preconditioned solve

@@ -25,7 +25,7 @@
 //! labels have about as many connected parts (21, 9, 99, 16, 188, 30 against 26, 8,
 //! 102, 15, 190, 31), at 1/3.5 to 1/6.8 of the time (1.18 s against 8.04 s for 176
 //! seeds at 1.1M faces).
-//! Labels agree on 75% to 87% of the faces: where the field barely turns, a boundary
+//! Labels agree on 75% to 93% of the faces: where the field barely turns, a boundary
 //! sits where two seeds' probabilities balance on a flat landscape, and any change to
 //! the system moves it.
 //!
