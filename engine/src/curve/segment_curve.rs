@@ -75,6 +75,28 @@ impl SegmentCurve {
         &self.candidates[off[0] as usize..off[1] as usize]
     }
 
+    /// Calls `f` with each triangle of leaf `leaf` ([`leaf_triangles`](Self::leaf_triangles))
+    /// and the barycentric coordinates, in that triangle, of each corner of its part
+    /// inside the leaf's square (the triangle clipped to the square, a convex polygon).
+    /// Every point of the leaf in the domain has coordinates that are a convex
+    /// combination of the corners of its triangle's part, up to round-off: what bounds
+    /// a function that is convex or linear in them over the leaf (the level-of-detail
+    /// pool's spheres and normal cones) more tightly than the triangles' own corners.
+    /// Panics when `leaf` is out of range.
+    pub fn leaf_part_corners(&self, leaf: usize, mut f: impl FnMut(u32, [f64; 3])) {
+        let key = self.keys[leaf];
+        for &t in self.leaf_triangles(leaf) {
+            let corners = self.triangle_corners(t as usize);
+            let part = super::clip::clip_triangle(&corners, key.origin(), key.size());
+            for &p in part.points() {
+                // On the triangle up to round-off: clamped into it.
+                let b = super::locate::barycentric(&corners, p).map(|x| x.clamp(0.0, 1.0));
+                let sum = b[0] + b[1] + b[2];
+                f(t, b.map(|x| x / sum));
+            }
+        }
+    }
+
     /// The options the cells were built with.
     pub fn options(&self) -> &CurveOptions {
         &self.options

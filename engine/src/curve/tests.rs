@@ -523,3 +523,85 @@ fn boundary_leaf_without_levels_follows_the_piece_measures() {
         "{checked} boundary leaves with several triangles"
     );
 }
+
+#[test]
+fn leaf_parts_cover_each_leaf_and_hold_its_points() {
+    let (uv, t, d) = disc(48);
+    let c = SegmentCurve::build(
+        &CurveDomain {
+            uv: &uv,
+            triangles: &t,
+            corner_density: &d,
+        },
+        &CurveOptions {
+            max_cell_share: 1e-3,
+            boundary_level: 6,
+            ..Default::default()
+        },
+    )
+    .expect("valid");
+    let corners = |tri: u32| t[tri as usize].map(|v| uv[v as usize]);
+    let (mut full, mut boundary) = (0, 0);
+    for leaf in 0..c.cell_count() {
+        let key = c.cells()[leaf];
+        let (lo, size) = (key.origin(), key.size());
+        // Per triangle, its part's corners mapped back to the plane.
+        let mut parts: Vec<(u32, Vec<DVec2>)> = Vec::new();
+        c.leaf_part_corners(leaf, |tri, b| {
+            assert!(b.iter().all(|&x| x >= 0.0) && (b.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            let p = corners(tri);
+            let q = p[0] * b[0] + p[1] * b[1] + p[2] * b[2];
+            assert!(
+                q.cmpge(lo - 1e-12).all() && q.cmple(lo + size + 1e-12).all(),
+                "leaf {leaf}: corner {q} outside the cell"
+            );
+            match parts.last_mut() {
+                Some((last, pts)) if *last == tri => pts.push(q),
+                _ => parts.push((tri, vec![q])),
+            }
+        });
+        // The parts tile the leaf's share of the domain: the whole cell when full.
+        let area: f64 = parts
+            .iter()
+            .map(|(_, pts)| {
+                let n = pts.len();
+                (0..n)
+                    .map(|i| pts[i].perp_dot(pts[(i + 1) % n]))
+                    .sum::<f64>()
+                    / 2.0
+            })
+            .sum();
+        if key.full() {
+            assert!(
+                (area - size * size).abs() < 1e-9 * size * size,
+                "leaf {leaf}"
+            );
+            full += 1;
+        } else {
+            assert!(
+                area > 0.0 && area < size * size * (1.0 + 1e-9),
+                "leaf {leaf}"
+            );
+            boundary += 1;
+        }
+        // Points placed in the leaf are convex combinations of their part's corners:
+        // inside the part's polygon.
+        for k in 0..8 {
+            let p = c.point_in_leaf(leaf, (k as f64 + 0.5) / 8.0);
+            let (_, pts) = parts
+                .iter()
+                .find(|(tri, _)| *tri == p.triangle)
+                .expect("a point's triangle has a part in its leaf");
+            let n = pts.len();
+            assert!(
+                (0..n).all(|i| (pts[(i + 1) % n] - pts[i]).perp_dot(p.uv - pts[i]) >= -1e-12),
+                "leaf {leaf}: point {} outside its part",
+                p.uv
+            );
+        }
+    }
+    assert!(
+        full > 10 && boundary > 10,
+        "{full} full, {boundary} boundary"
+    );
+}
