@@ -69,9 +69,24 @@ pub enum PoolChange {
     Rebuilt,
 }
 
+/// A copy of `items` with room for `capacity` entries, the room written once so that
+/// its memory is committed: appending into it later takes no page fault. On the test
+/// machine (2 cores, a virtual machine) the faults of an update appending 15k
+/// entries took about 0.15 ms, a tenth of the update.
+fn with_room<T: Copy + Default>(items: &[T], capacity: usize) -> Vec<T> {
+    let mut v = Vec::with_capacity(capacity.max(items.len()));
+    v.resize(v.capacity(), T::default());
+    v.truncate(0);
+    v.extend_from_slice(items);
+    v
+}
+
 /// Progressive sample sites for one sampler and seed: a prefix of the sequence plus
 /// ranks drawn per segment where views need them. See the module docs.
-#[derive(Clone, Debug)]
+///
+/// A clone keeps the original's room for more entries, its memory committed (as
+/// [`new`](Self::new) commits it), so that it updates as the original would.
+#[derive(Debug)]
 pub struct LodPool {
     seed: u64,
     prefix: u32,
@@ -100,6 +115,28 @@ pub struct LodPool {
     /// Per chunk of [`DRAW_CHUNK`] bins drawn in, the lists of a parallel update
     /// (kept, so that updates stop allocating).
     lists: Vec<BinList>,
+}
+
+impl Clone for LodPool {
+    fn clone(&self) -> Self {
+        Self {
+            seed: self.seed,
+            prefix: self.prefix,
+            budget: self.budget,
+            ahead: self.ahead,
+            sites: with_room(&self.sites, self.sites.capacity()),
+            ranks: with_room(&self.ranks, self.ranks.capacity()),
+            bins: self.bins.clone(),
+            bounds: self.bounds.clone(),
+            reach: self.reach.clone(),
+            needs: self.needs.clone(),
+            multipliers: self.multipliers.clone(),
+            bounded: self.bounded,
+            todo: self.todo.clone(),
+            runs: self.runs.clone(),
+            lists: self.lists.clone(),
+        }
+    }
 }
 
 /// Bins drawn in per task of a parallel update.
@@ -219,14 +256,15 @@ impl LodPool {
     /// The pool of `sampler`'s progressive sequence for `seed` holding ranks
     /// `0..prefix`, with room for `budget` more ranks drawn per segment, drawing ahead
     /// by [`DRAW_AHEAD`]. Memory: 20 bytes per entry. Room for `min(budget, prefix)`
-    /// more entries is reserved up front, and the pool grows geometrically beyond, so
-    /// that updates soon stop allocating.
+    /// more entries is reserved and committed up front (written once, so that
+    /// appending into it takes no page fault), and the pool grows geometrically
+    /// beyond, so that updates soon stop allocating.
     pub fn new(sampler: &Sampler, seed: u64, prefix: u32, budget: usize) -> Self {
         let capacity = prefix as usize + budget.min(prefix as usize);
-        let mut sites = Vec::with_capacity(capacity);
+        let mut sites = with_room(&[], capacity);
         sites.resize(prefix as usize, SampleSite::default());
         sampler.progressive_sites_into(seed, 0, &mut sites);
-        let mut ranks = Vec::with_capacity(capacity);
+        let mut ranks = with_room(&[], capacity);
         ranks.extend(0..prefix);
         let made: Vec<(Bin, RegionBound)> = sampler
             .segments()
@@ -787,6 +825,25 @@ mod tests {
         }
         let v = view(DVec3::new(0.3, 0.1, 2.5), 10.0);
         assert_eq!(pool.update(&s, &v, base), PoolChange::Unchanged);
+    }
+
+    #[test]
+    fn a_clone_updates_as_the_original() {
+        let s = torus_sampler();
+        let mut pool = LodPool::new(&s, 5, 10_000, 200_000).with_draw_ahead(0.1);
+        pool.update(&s, &view(DVec3::new(0.3, 0.1, 3.0), 10.0), 10_000.0);
+        let mut twin = pool.clone();
+        let closer = view(DVec3::new(0.3, 0.1, 2.0), 10.0);
+        assert_eq!(
+            pool.update(&s, &closer, 10_000.0),
+            twin.update(&s, &closer, 10_000.0)
+        );
+        assert_eq!((pool.ranks(), pool.sites()), (twin.ranks(), twin.sites()));
+        assert_eq!(
+            (twin.seed(), twin.prefix(), twin.draw_ahead()),
+            (5, 10_000, 0.1)
+        );
+        assert!(twin.len() > pool.prefix() as usize);
     }
 
     #[test]
