@@ -97,6 +97,9 @@ pub struct LodPool {
     ranks: Vec<u32>,
     /// The bins, in segment order and cell order within a segment.
     bins: Vec<Bin>,
+    /// Per bin, its share of the total measure (of the sequence's values): a column
+    /// of its own, read for every bin that lacks ranks before any of them is drawn.
+    shares: Vec<f64>,
     /// Their bounds, as columns.
     bounds: BoundSet,
     /// Per bin: every rank below it that falls in the bin is held.
@@ -127,6 +130,7 @@ impl Clone for LodPool {
             sites: with_room(&self.sites, self.sites.capacity()),
             ranks: with_room(&self.ranks, self.ranks.capacity()),
             bins: self.bins.clone(),
+            shares: self.shares.clone(),
             bounds: self.bounds.clone(),
             reach: self.reach.clone(),
             needs: self.needs.clone(),
@@ -167,8 +171,6 @@ struct Bin {
     segment: u32,
     /// Leaves of the segment's curve.
     leaves: Range<u32>,
-    /// The bin's share of the total measure (of the sequence's values).
-    share: f64,
     /// The dyadic intervals over the bin's values.
     cover: RankCover,
 }
@@ -266,7 +268,7 @@ impl LodPool {
         sampler.progressive_sites_into(seed, 0, &mut sites);
         let mut ranks = with_room(&[], capacity);
         ranks.extend(0..prefix);
-        let made: Vec<(Bin, RegionBound)> = sampler
+        let made: Vec<(Bin, f64, RegionBound)> = sampler
             .segments()
             .par_iter()
             .enumerate()
@@ -286,22 +288,23 @@ impl LodPool {
                 runs.into_iter().map(move |leaves| {
                     let mesh = sampler.mesh();
                     let bound = bin_bound(sampler, mesh, i, leaves.clone(), true, &mut buffers);
+                    let share = (cumulative[leaves.end] - cumulative[leaves.start])
+                        / sampler.total_measure();
                     let bin = Bin {
                         segment: i as u32,
-                        share: (cumulative[leaves.end] - cumulative[leaves.start])
-                            / sampler.total_measure(),
                         leaves: leaves.start as u32..leaves.end as u32,
                         cover: sampler.progressive_cover(seed, i, leaves),
                     };
-                    (bin, bound)
+                    (bin, share, bound)
                 })
             })
             .collect();
         let mut bounds = BoundSet::default();
-        for (_, bound) in &made {
+        for (_, _, bound) in &made {
             bounds.push(bound);
         }
-        let bins: Vec<Bin> = made.into_iter().map(|(bin, _)| bin).collect();
+        let shares = made.iter().map(|&(_, share, _)| share).collect();
+        let bins: Vec<Bin> = made.into_iter().map(|(bin, _, _)| bin).collect();
         Self {
             seed,
             prefix,
@@ -310,6 +313,7 @@ impl LodPool {
             sites,
             ranks,
             reach: vec![prefix; bins.len()],
+            shares,
             needs: vec![0; bins.len()],
             multipliers: Vec::new(),
             bounded: None,
@@ -523,7 +527,7 @@ impl LodPool {
         for b in 0..self.bins.len() {
             if self.needs[b] > self.reach[b] {
                 let target = self.ahead_of(b, self.needs[b]);
-                expected += f64::from(target - self.reach[b]) * self.bins[b].share + COVER_SLACK;
+                expected += f64::from(target - self.reach[b]) * self.shares[b] + COVER_SLACK;
                 self.todo.push(b as u32);
             }
         }
@@ -539,11 +543,11 @@ impl LodPool {
         let total: usize = lists[..chunks]
             .par_iter_mut()
             .zip(this.todo.par_chunks(DRAW_CHUNK))
-            .map(|(list, todo)| {
+            // One scratch per task split, not per chunk: it is kilobytes to initialise.
+            .map_init(LeafScratch::default, |scratch, (list, todo)| {
                 list.ranks.clear();
                 list.sites.clear();
                 list.reach.clear();
-                let mut scratch = LeafScratch::default();
                 for &b in todo {
                     let (b, first) = (b as usize, list.ranks.len());
                     let cover = &this.bins[b].cover;
@@ -560,7 +564,7 @@ impl LodPool {
                         cover,
                         &list.ranks[first..],
                         &mut list.sites[first..],
-                        &mut scratch,
+                        scratch,
                     );
                 }
                 list.ranks.len()
