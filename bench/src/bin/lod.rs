@@ -118,6 +118,16 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames = strata_bench::repeats_arg(20)?.max(1);
+    // The frame loop runs on a worker of rayon's pool, as a renderer driving rayon
+    // from its frame thread would: an update's parallel work then starts on the
+    // calling thread, and the other worker joins when it wakes. `LOD_OUTSIDE_POOL=1`
+    // calls from outside the pool instead (see bench/README.md for what that costs).
+    let inside = std::env::var_os("LOD_OUTSIDE_POOL").is_none();
+    if inside {
+        rayon::ThreadPoolBuilder::new()
+            .use_current_thread()
+            .build_global()?;
+    }
     let file = match strata_bench::shared_mesh_dir() {
         Ok(_) => "stanford-bunny-anisotropic.ron",
         Err(e) => {
