@@ -24,7 +24,10 @@
 //! are computed on the CPU (`LodPool::fades_into`), outside the timing.
 //!
 //! `LOD_DRAW_AHEAD=a` sets the pool's draw-ahead fraction (default [`DRAW_AHEAD`]),
-//! to compare with and without it on one binary.
+//! to compare with and without it on one binary. The frame loop runs on a worker of
+//! rayon's global pool (`use_current_thread`), as in a renderer that drives rayon
+//! from its frame thread; `LOD_OUTSIDE_POOL=1` calls the update from outside the pool
+//! (bench/README.md: on a 2-core machine it then often waits for a worker to wake).
 //!
 //! For comparison, `stratified` redraws `N` and `1.01 N` samples in today's stratified
 //! order and counts the samples that kept their place.
