@@ -442,7 +442,15 @@ impl Sampler {
         let ml = (m - self.chain_cumulative[k]).clamp(0.0, curve.measure() * (1.0 - f64::EPSILON));
         // Leaves before `leaves` end at or below ml, leaves after it above; the last
         // leaf takes what rounding leaves past the end.
-        let leaf = leaves.start + cum[leaves.start + 1..leaves.end].partition_point(|&c| c <= ml);
+        let ends = &cum[leaves.start + 1..leaves.end];
+        // A bin's dozen cells: counting the ends at or below `ml` (the same number as
+        // the binary search finds in sorted ends) has no branch to mispredict.
+        let below = if ends.len() <= 32 {
+            ends.iter().map(|&c| usize::from(c <= ml)).sum()
+        } else {
+            ends.partition_point(|&c| c <= ml)
+        };
+        let leaf = leaves.start + below;
         let (w0, w1) = (cum[leaf], cum[leaf + 1]);
         (leaf, if w1 > w0 { (ml - w0) / (w1 - w0) } else { 0.0 })
     }
