@@ -26,6 +26,19 @@ fn disc_with_slope(k: usize, slope: f64) -> (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64
     (uv, tris, dens)
 }
 
+/// The curve of the domain `uv`, `t`, `d` with options `opts`, which must be valid.
+fn curve(uv: &[DVec2], t: &[[u32; 3]], d: &[[f64; 3]], opts: &CurveOptions) -> SegmentCurve {
+    SegmentCurve::build(
+        &CurveDomain {
+            uv,
+            triangles: t,
+            corner_density: d,
+        },
+        opts,
+    )
+    .expect("valid")
+}
+
 fn exact_measure(uv: &[DVec2], tris: &[[u32; 3]], dens: &[[f64; 3]]) -> f64 {
     tris.iter()
         .zip(dens)
@@ -51,15 +64,7 @@ fn uniform_square_has_a_regular_grid_of_full_cells() {
         max_cell_share: 1.0 / 4096.0,
         ..Default::default()
     };
-    let c = SegmentCurve::build(
-        &CurveDomain {
-            uv: &uv,
-            triangles: &t,
-            corner_density: &d,
-        },
-        &opts,
-    )
-    .expect("valid");
+    let c = curve(&uv, &t, &d, &opts);
     assert_eq!(c.cell_count(), 4096);
     assert!(c.cells().iter().all(|k| k.full() && k.level() == 6));
     assert!((c.measure() - 1.0).abs() < 1e-12);
@@ -77,15 +82,7 @@ fn disc_measure_is_exact_and_leaves_are_consecutive_neighbours() {
         boundary_level: 8,
         ..Default::default()
     };
-    let c = SegmentCurve::build(
-        &CurveDomain {
-            uv: &uv,
-            triangles: &t,
-            corner_density: &d,
-        },
-        &opts,
-    )
-    .expect("valid");
+    let c = curve(&uv, &t, &d, &opts);
     let exact = exact_measure(&uv, &t, &d);
     assert!(
         (c.measure() - exact).abs() < 1e-12 * exact,
@@ -115,15 +112,7 @@ fn adaptive_leaves_of_a_full_square_are_consecutive_neighbours() {
         max_cell_share: 1e-3,
         ..Default::default()
     };
-    let c = SegmentCurve::build(
-        &CurveDomain {
-            uv: &uv,
-            triangles: &t,
-            corner_density: &d,
-        },
-        &opts,
-    )
-    .expect("valid");
+    let c = curve(&uv, &t, &d, &opts);
     let levels: std::collections::BTreeSet<u8> = c.cells().iter().map(|k| k.level()).collect();
     assert!(levels.len() >= 3, "adaptive: {levels:?}");
     let area: f64 = c.cells().iter().map(|k| k.size() * k.size()).sum();
@@ -177,15 +166,7 @@ fn check_located_points(
     opts: CurveOptions,
     tolerance: f64,
 ) {
-    let c = SegmentCurve::build(
-        &CurveDomain {
-            uv: &uv,
-            triangles: &t,
-            corner_density: &d,
-        },
-        &opts,
-    )
-    .expect("valid");
+    let c = curve(&uv, &t, &d, &opts);
     let n = 20_000;
     let mut left = 0usize;
     for k in 0..n {
@@ -366,15 +347,7 @@ fn splitting_descent_matches_the_clipping_descent() {
         ),
     ];
     for ((uv, t, d), opts) in cases {
-        let c = SegmentCurve::build(
-            &CurveDomain {
-                uv: &uv,
-                triangles: &t,
-                corner_density: &d,
-            },
-            &opts,
-        )
-        .expect("valid");
+        let c = curve(&uv, &t, &d, &opts);
         let (mut checked, mut differ) = (0usize, 0usize);
         for leaf in (0..c.cell_count()).filter(|&i| !c.cells()[i].full()) {
             for k in 0..23 {
@@ -416,17 +389,7 @@ fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
         boundary_level: 4,
         ..Default::default()
     };
-    let build = |(uv, t, d): (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>)| {
-        SegmentCurve::build(
-            &CurveDomain {
-                uv: &uv,
-                triangles: &t,
-                corner_density: &d,
-            },
-            &opts,
-        )
-        .expect("valid")
-    };
+    let build = |(uv, t, d): (Vec<DVec2>, Vec<[u32; 3]>, Vec<[f64; 3]>)| curve(&uv, &t, &d, &opts);
     let curves = [
         build(disc_with_slope(9, 1.0)),
         build(disc_with_slope(13, 4.0)),
@@ -468,19 +431,16 @@ fn a_reused_scratch_gives_the_points_of_a_fresh_one() {
 #[test]
 fn boundary_leaf_without_levels_follows_the_piece_measures() {
     let (uv, t, d) = annulus(40);
-    let c = SegmentCurve::build(
-        &CurveDomain {
-            uv: &uv,
-            triangles: &t,
-            corner_density: &d,
-        },
+    let c = curve(
+        &uv,
+        &t,
+        &d,
         &CurveOptions {
             max_cell_share: 2e-3,
             boundary_level: 3,
             ..Default::default()
         },
-    )
-    .expect("valid");
+    );
     let mut checked = 0;
     for leaf in (0..c.cell_count()).filter(|&i| !c.cells()[i].full()) {
         let key = c.cells()[leaf];
@@ -527,19 +487,16 @@ fn boundary_leaf_without_levels_follows_the_piece_measures() {
 #[test]
 fn leaf_parts_cover_each_leaf_and_hold_its_points() {
     let (uv, t, d) = disc(48);
-    let c = SegmentCurve::build(
-        &CurveDomain {
-            uv: &uv,
-            triangles: &t,
-            corner_density: &d,
-        },
+    let c = curve(
+        &uv,
+        &t,
+        &d,
         &CurveOptions {
             max_cell_share: 1e-3,
             boundary_level: 6,
             ..Default::default()
         },
-    )
-    .expect("valid");
+    );
     let corners = |tri: u32| t[tri as usize].map(|v| uv[v as usize]);
     let (mut full, mut boundary) = (0, 0);
     for leaf in 0..c.cell_count() {
