@@ -4,10 +4,11 @@
 //! ([`BoundSet`]) so that one view is checked against thousands of them in a loop
 //! without branches, which the compiler turns into vector code.
 //!
-//! Input: a mesh and groups of its vertices; a [`ViewLod`]. Output: per region, an
-//! upper bound of [`ViewLod::multiplier`] over every point and interpolated normal of
-//! its faces (the pool turns it into the rank `ceil(N bound)` a base count `N` needs
-//! there). Cost: O(1) per region and view, no trigonometric call.
+//! Input: per region, points and unit normals whose convex combinations hold its
+//! surface (the pool's `bin_bound` gives them); a [`ViewLod`]. Output: per region, an
+//! upper bound of [`ViewLod::multiplier`] over every such point and normalised blend
+//! of the normals (the pool turns it into the rank `ceil(N bound)` a base count `N`
+//! needs there). Cost: O(1) per region and view, no trigonometric call.
 
 use glam::{DVec3, DVec4, Vec4Swizzles};
 
@@ -60,7 +61,7 @@ impl<'a> Frustum<'a> {
 impl RegionBound {
     /// The bound of points `points` and unit normals `normals` (a zero one leaves the
     /// normals unbounded), the cone's axis fitted by
-    /// [`enclosing_axis`] when `fit` (16 passes over the normals) or their mean
+    /// [`enclosing_axis`] when `fit` ([`AXIS_STEPS`] passes over the normals) or their mean
     /// direction otherwise. The sphere is widened by a millionth of the coordinates'
     /// size, more than the rounding of the points to the `f32` positions a renderer
     /// and the samples' records carry.
