@@ -13,16 +13,23 @@
 //!
 //! - `count`: base count times 1.01 per frame, camera still;
 //! - `dolly in` / `dolly out`: the distance to the centre times 0.99 / 1.01 per frame;
-//! - `orbit`: 1 degree per frame about the vertical axis through the centre.
+//! - `orbit`: 1 degree per frame about the vertical axis through the centre;
+//! - `dolly in` / `dolly out`, `shown held`: the same dollies with the samples shown
+//!   held at the first frame's, as a renderer with a point budget holds them: after
+//!   each frame the base count is scaled by the budget over the samples shown (what a
+//!   GPU cull's counter gives, one frame late).
 //!
 //! Per path: the visible samples of the first frame; the kept share (the samples of
 //! frame t visible in frame t+1 with the same rank and site, over those of frame t,
 //! worst and mean over the steps); the same share among the samples that stay in view
 //! (multiplier above 0 in frame t+1); whether a kept sample ever moved; the CPU time
 //! of `LodPool::update` per frame (median and mean: the whole per-frame CPU work of a
-//! renderer that culls on the GPU, besides a uniform write); and the bytes a GPU copy
-//! of the pool receives per frame (20 per new entry: site and rank). The visible sets
-//! are computed on the CPU (`LodPool::fades_into`), outside the timing.
+//! renderer that culls on the GPU, besides a uniform write); the samples newly visible
+//! per frame (visible in frame t+1 and not kept from frame t), those of them beyond
+//! the prefix (ranks from `base` on shown for the first time: what any update must
+//! place, unless it placed them ahead), the pool's new entries per frame, and the bytes a GPU copy of the pool
+//! receives per frame (20 per new entry: site and rank). The visible sets are computed
+//! on the CPU (`LodPool::fades_into`), outside the timing.
 //!
 //! `LOD_DRAW_AHEAD=a` sets the pool's draw-ahead fraction (default [`DRAW_AHEAD`]),
 //! to compare with and without it on one binary. The frame loop runs on a worker of
@@ -31,7 +38,10 @@
 //! (bench/README.md: on a 2-core machine it then often waits for a worker to wake).
 //!
 //! For comparison, `stratified` redraws `N` and `1.01 N` samples in today's stratified
-//! order and counts the samples that kept their place.
+//! order and counts the samples that kept their place, and times the sampler's
+//! cheapest placement (the stratified order's `N = 10^6` sites, consecutive values
+//! along the curves) per site: newly visible samples times that is the floor of an
+//! update.
 
 use std::time::Instant;
 
@@ -44,6 +54,8 @@ const WIDTH: f64 = 1280.0;
 const HEIGHT: f64 = 720.0;
 const FOV_Y: f64 = std::f64::consts::FRAC_PI_4;
 const SEED: u64 = 3;
+/// The samples the first frame shows.
+const SHOWN: f64 = 1e6;
 /// Untimed frames along each path before the timed ones: the camera was already
 /// moving, so the pool's draw-ahead is in its steady state (bins refilled at spread
 /// phases) rather than all filled together for a still first frame.
@@ -100,6 +112,22 @@ fn kept(a: &[(u32, SampleSite)], b: &[(u32, SampleSite)]) -> (usize, bool) {
         }
     }
     (same, moved)
+}
+
+/// Ranks of `b` at or above `from` that `a` lacks: samples newly shown that no pool
+/// holding ranks `0..from` had placed before they were first asked for.
+fn new_from(a: &[(u32, SampleSite)], b: &[(u32, SampleSite)], from: u32) -> usize {
+    let mut i = a.partition_point(|e| e.0 < from);
+    let mut count = 0;
+    for e in &b[b.partition_point(|e| e.0 < from)..] {
+        while i < a.len() && a[i].0 < e.0 {
+            i += 1;
+        }
+        if i == a.len() || a[i].0 != e.0 {
+            count += 1;
+        }
+    }
+    count
 }
 
 /// Samples of `a` whose multiplier under `v` is 0 (they left the view).
@@ -174,7 +202,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     probe.update(s, &first, probe_base);
     let mut fades = Vec::new();
     let shown = visible(&probe, s, &first, probe_base, &mut fades).len() as f64;
-    let base = (probe_base * 1e6 / shown).round();
+    let base = (probe_base * SHOWN / shown).round();
     println!(
         "{name} `{file}`: {} faces, {} segments; base count {base:.0}, reference {reference:.1} px^2 per unit area, {frames} frames per path.\n",
         scene.mesh.face_count(),
@@ -194,25 +222,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         prefix.len() as f64 * 20.0 / 1e6
     );
     println!(
-        "| path | visible (first frame) | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | upload KB per frame, mean | pool entries at end |"
+        "| path | visible (first frame) | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | newly visible per frame, mean | of them beyond the prefix | entries per frame, mean | upload KB per frame, mean | pool entries at end |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    let paths: [(&str, Path); 4] = [
-        ("count +1%", Box::new(|t| (first, base * 1.01f64.powi(t)))),
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let dolly = |factor: f64| -> Path {
+        Box::new(move |t| {
+            let eye = centre + (start - centre) * factor.powi(t);
+            (view(eye, centre, reference), base)
+        })
+    };
+    // The last two paths hold the samples shown at the first frame's count, as a
+    // renderer with a point budget does: the base count is scaled after each frame by
+    // the budget over the samples shown (a GPU cull's counter, one frame late).
+    let paths: [(&str, Path, bool); 6] = [
         (
-            "dolly in 1%",
-            Box::new(|t| {
-                let eye = centre + (start - centre) * 0.99f64.powi(t);
-                (view(eye, centre, reference), base)
-            }),
+            "count +1%",
+            Box::new(|t| (first, base * 1.01f64.powi(t))),
+            false,
         ),
-        (
-            "dolly out 1%",
-            Box::new(|t| {
-                let eye = centre + (start - centre) * 1.01f64.powi(t);
-                (view(eye, centre, reference), base)
-            }),
-        ),
+        ("dolly in 1%", dolly(0.99), false),
+        ("dolly out 1%", dolly(1.01), false),
         (
             "orbit 1 degree",
             Box::new(|t| {
@@ -222,22 +251,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     base,
                 )
             }),
+            false,
         ),
+        ("dolly in 1%, shown held", dolly(0.99), true),
+        ("dolly out 1%, shown held", dolly(1.01), true),
     ];
-    for (path, frame) in paths {
+    // The budget: the samples the base count was set to show.
+    let budget_shown = SHOWN;
+    for (path, frame, held) in paths {
         let mut pool = prefix.clone();
+        // The budget's scale of the base count, and its update from a frame's shown
+        // samples.
+        let mut scale = 1.0;
+        let rescale = |scale: &mut f64, shown: usize| {
+            if held {
+                *scale *= budget_shown / shown.max(1) as f64;
+            }
+        };
         // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
+        let mut before = vec![];
         for t in -WARM_UP..=0 {
             let (v, b) = frame(t);
-            pool.update(s, &v, b);
+            pool.update(s, &v, b * scale);
+            if held || t == 0 {
+                before = visible(&pool, s, &v, b * scale, &mut fades);
+                rescale(&mut scale, before.len());
+            }
         }
-        let (v, b) = frame(0);
-        let mut before = visible(&pool, s, &v, b, &mut fades);
         let shown = before.len();
         let (mut shares, mut in_view, mut times, mut bytes) = (vec![], vec![], vec![], vec![]);
+        let (mut fresh, mut beyond) = (vec![], vec![]);
         let mut moved = false;
         for t in 1..=frames as i32 {
             let (v, b) = frame(t);
+            let b = b * scale;
             let clock = Instant::now();
             let change = pool.update(s, &v, b);
             times.push(clock.elapsed().as_secs_f64() * 1e3);
@@ -249,6 +296,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let after = visible(&pool, s, &v, b, &mut fades);
             let (same, m) = kept(&before, &after);
             moved |= m;
+            fresh.push((after.len() - same) as f64);
+            beyond.push(new_from(&before, &after, pool.prefix()) as f64);
+            rescale(&mut scale, after.len());
             let gone = leaving(&before, s, &v);
             shares.push(same as f64 / before.len() as f64);
             in_view.push(same as f64 / (before.len() - gone).max(1) as f64);
@@ -257,13 +307,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let worst = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
         println!(
-            "| {path} | {shown} | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1} | {} |",
+            "| {path} | {shown} | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
             100.0 * worst(&shares),
             100.0 * mean(&shares),
             100.0 * worst(&in_view),
             if moved { "yes" } else { "no" },
             median(times.clone()),
             mean(&times),
+            mean(&fresh) / 1e3,
+            mean(&beyond) / 1e3,
+            mean(&bytes) / 20e3,
             mean(&bytes) / 1e3,
             pool.len(),
         );
@@ -275,7 +328,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         vec![SampleSite::default(); n],
         vec![SampleSite::default(); n + n / 100],
     );
-    s.sample_sites_into(SEED, &mut a);
+    // The sampler's cheapest placement per site, for the floor of an update: the
+    // stratified order places consecutive values along the curves (warm cells).
+    let mut placing = vec![];
+    for _ in 0..5 {
+        let clock = Instant::now();
+        s.sample_sites_into(SEED, &mut a);
+        placing.push(clock.elapsed().as_secs_f64() * 1e9 / n as f64);
+    }
     s.sample_sites_into(SEED, &mut b);
     let key = |x: &SampleSite| (x.face, x.segment, x.bary[0].to_bits(), x.bary[1].to_bits());
     let mut set: Vec<_> = b.iter().map(key).collect();
@@ -285,9 +345,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .filter(|x| set.binary_search(&key(x)).is_ok())
         .count();
     println!(
-        "\nStratified order, {n} to {} samples: {:.1}% kept their place.",
+        "\nStratified order, {n} to {} samples: {:.1}% kept their place. Placing its {n} sites takes {:.1} ns of wall time per site (median of 5, {} threads).",
         n + n / 100,
-        100.0 * same as f64 / n as f64
+        100.0 * same as f64 / n as f64,
+        median(placing),
+        rayon::current_num_threads(),
     );
     Ok(())
 }
