@@ -27,9 +27,10 @@
 //! renderer that culls on the GPU, besides a uniform write); the samples newly visible
 //! per frame (visible in frame t+1 and not kept from frame t), those of them beyond
 //! the prefix (ranks from `base` on shown for the first time: what any update must
-//! place, unless it placed them ahead), the pool's new entries per frame, and the bytes a GPU copy of the pool
-//! receives per frame (20 per new entry: site and rank). The visible sets are computed
-//! on the CPU (`LodPool::fades_into`), outside the timing.
+//! place, unless it placed them ahead), the pool's new entries per frame, and the
+//! bytes a GPU copy of the pool receives per frame (20 per new entry: site and rank).
+//! The visible sets are computed on the CPU (`LodPool::fades_into`), outside the
+//! timing.
 //!
 //! `LOD_DRAW_AHEAD=a` sets the pool's draw-ahead fraction (default [`DRAW_AHEAD`]),
 //! to compare with and without it on one binary. The frame loop runs on a worker of
@@ -54,7 +55,7 @@ const WIDTH: f64 = 1280.0;
 const HEIGHT: f64 = 720.0;
 const FOV_Y: f64 = std::f64::consts::FRAC_PI_4;
 const SEED: u64 = 3;
-/// The samples the first frame shows.
+/// The samples the first frame shows, and the budget the `shown held` paths keep.
 const SHOWN: f64 = 1e6;
 /// Untimed frames along each path before the timed ones: the camera was already
 /// moving, so the pool's draw-ahead is in its steady state (bins refilled at spread
@@ -256,8 +257,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("dolly in 1%, shown held", dolly(0.99), true),
         ("dolly out 1%, shown held", dolly(1.01), true),
     ];
-    // The budget: the samples the base count was set to show.
-    let budget_shown = SHOWN;
     for (path, frame, held) in paths {
         let mut pool = prefix.clone();
         // The budget's scale of the base count, and its update from a frame's shown
@@ -265,7 +264,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut scale = 1.0;
         let rescale = |scale: &mut f64, shown: usize| {
             if held {
-                *scale *= budget_shown / shown.max(1) as f64;
+                *scale *= SHOWN / shown.max(1) as f64;
             }
         };
         // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
