@@ -6,18 +6,23 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     let cli = strata_systems::cli::Cli::parse();
-    // `render` draws its frames on the main thread: it joins rayon's global pool, so
-    // that parallel work it starts (a level-of-detail update) begins on it at once
-    // instead of waiting for a sleeping worker to wake (1-2 ms on a 2-core machine;
-    // bench/README.md). Not for `view` and `watch`: their engine samples on bevy's
-    // threads, whose parallel work would then find one worker fewer while the main
-    // thread waits outside rayon (a 10^6-sample resampling took twice as long).
-    if matches!(cli.command, strata_systems::cli::Command::Render(_)) {
-        // Fails only if a global pool exists already; then that one serves.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .use_current_thread()
-            .build_global();
-    }
+    // The main thread joins rayon's global pool, which keeps a worker per core beside
+    // it. Parallel work the main thread starts (`render`'s frames; the level-of-detail
+    // update, which runs on the schedule's thread in `view`) then begins on it at once
+    // instead of waiting for a sleeping worker to wake (1-2 ms on a 2-core machine),
+    // and work that bevy's threads start (`view`'s and `watch`'s resampling) still
+    // finds a worker per core while the main thread waits outside rayon: with only the
+    // cores' count, a 10^6-sample resampling took twice as long (bench/README.md).
+    let cores = std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|n| n.parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    // Fails only if a global pool exists already; then that one serves.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .use_current_thread()
+        .num_threads(cores + 1)
+        .build_global();
     match strata_systems::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
