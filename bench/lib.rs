@@ -1,5 +1,6 @@
 //! Shared helpers for strata benchmarks.
 
+pub mod lod_camera;
 pub mod soak;
 
 use std::path::{Path, PathBuf};

@@ -47,13 +47,11 @@
 use std::time::Instant;
 
 use glam::DVec3;
+use strata_bench::lod_camera::LodCamera;
 use strata_engine::sample::lod::ViewLod;
 use strata_engine::sample::{DRAW_AHEAD, LodPool, PoolChange, SampleSite, Sampler};
 use strata_systems::scene::Scene;
 
-const WIDTH: f64 = 1280.0;
-const HEIGHT: f64 = 720.0;
-const FOV_Y: f64 = std::f64::consts::FRAC_PI_4;
 const SEED: u64 = 3;
 /// The samples the first frame shows, and the budget the `shown held` paths keep.
 const SHOWN: f64 = 1e6;
@@ -61,20 +59,6 @@ const SHOWN: f64 = 1e6;
 /// moving, so the pool's draw-ahead is in its steady state (bins refilled at spread
 /// phases) rather than all filled together for a still first frame.
 const WARM_UP: i32 = 30;
-
-/// A camera at `eye` looking at `target`.
-fn view(eye: DVec3, target: DVec3, reference: f64) -> ViewLod {
-    let proj = glam::dcamera::rh::proj::directx::perspective(FOV_Y, WIDTH / HEIGHT, 0.001, 1000.0);
-    let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
-    ViewLod {
-        clip_from_world: proj * look,
-        eye,
-        focal_pixels: HEIGHT / (2.0 * (FOV_Y / 2.0).tan()),
-        reference,
-        max: 4.0,
-        cull_back_faces: true,
-    }
-}
 
 /// The visible samples of the pool, as (rank, site) sorted by rank.
 fn visible(
@@ -177,25 +161,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     config.sampling.seed = SEED;
     let scene = Scene::build(&config)?;
     let s = &scene.sampler;
-    let (lo, hi) = scene
-        .mesh
-        .positions()
-        .iter()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
-    let centre = 0.5 * (lo + hi);
-    let radius = scene
-        .mesh
-        .positions()
-        .iter()
-        .map(|p| p.distance(centre))
-        .fold(0.0, f64::max);
-    let distance = 2.5 * radius;
-    let focal = HEIGHT / (2.0 * (FOV_Y / 2.0).tan());
-    let reference = focal * focal / (distance * distance);
-    let start = centre + DVec3::new(0.0, 0.0, distance);
-    let first = view(start, centre, reference);
+    let camera = LodCamera::around(scene.mesh.positions());
+    let LodCamera {
+        centre,
+        start,
+        reference,
+    } = camera;
+    let view = |eye: DVec3| camera.view(eye);
+    let first = view(start);
 
     // Calibrate the base count on a small pool: visible samples grow linearly with it.
     let probe_base = 100_000.0;
@@ -226,12 +199,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| path | visible (first frame) | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | newly visible per frame, mean | of them beyond the prefix | entries per frame, mean | upload KB per frame, mean | pool entries at end |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    let dolly = |factor: f64| -> Path {
-        Box::new(move |t| {
-            let eye = centre + (start - centre) * factor.powi(t);
-            (view(eye, centre, reference), base)
-        })
-    };
+    let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
     // The last two paths hold the samples shown at the first frame's count, as a
     // renderer with a point budget does: the base count is scaled after each frame by
     // the budget over the samples shown (a GPU cull's counter, one frame late).
@@ -247,10 +215,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "orbit 1 degree",
             Box::new(|t| {
                 let turn = glam::DQuat::from_rotation_y(f64::from(t).to_radians());
-                (
-                    view(centre + turn * (start - centre), centre, reference),
-                    base,
-                )
+                (view(centre + turn * (start - centre)), base)
             }),
             false,
         ),

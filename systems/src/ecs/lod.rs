@@ -25,8 +25,8 @@
 //! `strata` binary builds it, so that systems sampling on bevy's threads still find a
 //! worker per core. From a thread outside rayon's pool (a bevy thread, or a schedule
 //! thread not in the pool), the update waits for a sleeping rayon worker to wake: on the
-//! bunny's 1% dolly in (2-core virtual machine) it took 3.6-4.2 ms that way against
-//! 2.5-2.6 ms (bench/README.md).
+//! bunny's 1% dolly in (2-core virtual machine) it takes 3.5-4.0 ms that way against
+//! 2.7-2.9 ms (the `lod_ecs` bench; bench/README.md).
 
 use std::time::Instant;
 
