@@ -20,6 +20,7 @@ pub mod budget;
 pub mod cli;
 pub mod config;
 pub mod ecs;
+pub mod frame_thread;
 pub mod gpu;
 pub mod hot_reload;
 pub mod plugin;

@@ -12,9 +12,9 @@
 //! - `resample`: 10^6 samples drawn every update (`sample_every_update`, the
 //!   `sample_meshes` system, on bevy's threads); median and 90th percentile of 40.
 //!
-//! `LOD_ECS_POOL` chooses rayon's global pool: `cores+1` (the default, as the `strata`
-//! binary builds it: the main thread, which runs the schedule and with it
-//! `update_lod_pools`, plus a worker per core), `cores` (the main thread and one worker
+//! `LOD_ECS_POOL` chooses rayon's global pool: `cores+1` (the default,
+//! `frame_thread::join_rayon_pool` as the `strata` binary calls it: the main thread,
+//! which runs the schedule and with it `update_lod_pools`, plus a worker per core), `cores` (the main thread and one worker
 //! fewer) or `outside` (rayon's default pool; the main thread is not in it).
 
 use std::time::{Duration, Instant};
@@ -53,18 +53,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames = strata_bench::repeats_arg(20)?.max(1);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let pool = std::env::var("LOD_ECS_POOL").unwrap_or_else(|_| "cores+1".into());
-    let threads = match pool.as_str() {
-        "cores+1" => Some(cores + 1),
-        "cores" => Some(cores),
-        "outside" => None,
+    let inside = match pool.as_str() {
+        "cores+1" => {
+            strata_systems::frame_thread::join_rayon_pool()?;
+            true
+        }
+        "cores" => {
+            rayon::ThreadPoolBuilder::new()
+                .use_current_thread()
+                .num_threads(cores)
+                .build_global()?;
+            true
+        }
+        "outside" => false,
         other => return Err(format!("LOD_ECS_POOL={other}: cores+1, cores or outside").into()),
     };
-    if let Some(n) = threads {
-        rayon::ThreadPoolBuilder::new()
-            .use_current_thread()
-            .num_threads(n)
-            .build_global()?;
-    }
     strata_bench::shared_mesh_dir()?;
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../configs/stanford-bunny-anisotropic.ron");
@@ -142,11 +145,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "rayon pool `{pool}` ({} threads, main thread {}):",
         rayon::current_num_threads(),
-        if threads.is_some() {
-            "in it"
-        } else {
-            "outside"
-        }
+        if inside { "in it" } else { "outside" }
     );
     println!(
         "- lod, dolly in 1%: update {mean:.3} ms mean, {lod_median:.3} ms median over {frames} frames"

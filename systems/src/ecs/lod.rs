@@ -20,10 +20,9 @@
 //!
 //! [`update_lod_pools`] runs on the thread that runs the schedule (it takes a
 //! [`NonSendMarker`](bevy_ecs::system::NonSendMarker)). The update's parallel work then
-//! starts at once when that thread is a rayon worker: a global pool built with
-//! `ThreadPoolBuilder::use_current_thread` and one thread more than the cores, as the
-//! `strata` binary builds it, so that systems sampling on bevy's threads still find a
-//! worker per core. From a thread outside rayon's pool (a bevy thread, or a schedule
+//! starts at once when that thread is a rayon worker
+//! ([`join_rayon_pool`](crate::frame_thread::join_rayon_pool), which the `strata`
+//! binary calls at start-up). From a thread outside rayon's pool (a bevy thread, or a schedule
 //! thread not in the pool), the update waits for a sleeping rayon worker to wake: on the
 //! bunny's 1% dolly in (2-core virtual machine) it takes 3.5-4.0 ms that way against
 //! 2.7-2.9 ms (the `lod_ecs` bench; bench/README.md).
@@ -185,5 +184,23 @@ fn rebuild_pool(
     match (mode, preprocess_pool()) {
         (PreprocessMode::Background, Some(pool)) => pool.spawn(work),
         _ => work(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy_ecs::system::{IntoSystem, System};
+    use bevy_ecs::world::World;
+
+    use super::update_lod_pools;
+
+    /// The update runs on the schedule's thread, which the binary makes a rayon worker
+    /// (`frame_thread`): removing the marker lets the executor move it to bevy's
+    /// threads, where its parallel work waits for a worker to wake.
+    #[test]
+    fn the_update_runs_on_the_schedules_thread() {
+        let mut system = IntoSystem::into_system(update_lod_pools);
+        system.initialize(&mut World::new());
+        assert!(!system.is_send());
     }
 }
