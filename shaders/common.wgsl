@@ -30,8 +30,9 @@ struct Frame {
     normal_offset: f32,
     // Bit 0: level of detail on; bit 1: back faces get multiplier 0.
     lod_flags: u32,
+    // The factor of the samples' spacings: sqrt(expanded base / base).
+    lod_spacing: f32,
     _pad0: u32,
-    _pad1: u32,
     // Base count, reference area (pixels^2 per unit area), clamp, focal length (pixels).
     lod: vec4<f32>,
 }

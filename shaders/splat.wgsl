@@ -79,7 +79,7 @@ fn vs_splat(@builtin(vertex_index) corner: u32, input: SampleInput) -> SplatVary
     let major = tangent_major(s.major_axis, n);
     let minor = cross(n, major);
     // Spacings at the local density (lod times the base); splats grow in as they fade.
-    let spacing = s.spacing / sqrt(lod.y);
+    let spacing = s.spacing * frame.lod_spacing / sqrt(lod.y);
     let radius = 0.5 * frame.splat_scale * spacing * lod.x;
     let lift = frame.normal_offset * min(spacing.x, spacing.y);
     let world = s.position + n * lift + major * (out.q.x * radius.x) + minor * (out.q.y * radius.y);
@@ -137,7 +137,7 @@ fn vs_glyph(@builtin(vertex_index) corner: u32, input: SampleInput) -> GlyphVary
         return out;
     }
     let major = tangent_major(s.major_axis, n);
-    let spacing = s.spacing / sqrt(lod.y);
+    let spacing = s.spacing * frame.lod_spacing / sqrt(lod.y);
     let half_length = 0.5 * frame.splat_scale * max(spacing.x, spacing.y) * lod.x;
     let centre = s.position + n * (frame.normal_offset * min(spacing.x, spacing.y));
     let a = frame.view_proj * vec4<f32>(centre - major * half_length, 1.0);

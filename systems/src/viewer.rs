@@ -70,6 +70,9 @@ pub struct ViewerOptions {
     /// progressive pool ([`crate::ecs::Lod`]) that follows the camera, so zooming in
     /// adds samples near the camera and moves none. `None`: every sample drawn.
     pub lod_max: Option<f32>,
+    /// With `lod_max`: a point budget ([`crate::ecs::Lod::shown`]): about this many
+    /// samples are shown at any distance, and the count is the pool's prefix.
+    pub lod_shown: Option<u32>,
 }
 
 /// How a viewer run ended.
@@ -156,6 +159,7 @@ pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
         status: String::new(),
         refit_colors: true,
         lod_max: options.lod_max,
+        lod_shown: options.lod_shown,
         lod: None,
     };
     if options.lod_max.is_some() {
@@ -246,6 +250,8 @@ struct Viewer {
     refit_colors: bool,
     /// `--lod`: the clamp of the multiplier; the reference is fixed at the first frame.
     lod_max: Option<f32>,
+    /// `--lod-shown`: the point budget.
+    lod_shown: Option<u32>,
     lod: Option<SplatLod>,
 }
 
@@ -450,12 +456,14 @@ impl Viewer {
             .lod
             .get_or_insert_with(|| SplatLod::for_camera(camera, size.1, base as f32, max));
         lod.base = base as f32;
+        lod.expanded = base as f32;
         self.lod = Some(lod);
         self.style.lod = Some(lod);
         let component = Lod {
             view: lod.view(camera, size),
             base,
             budget: (f64::from(base) * f64::from(max)) as usize,
+            shown: self.lod_shown,
         };
         let mut entity = self.engine.world.entity_mut(self.mesh_entity);
         if !entity.contains::<LodState>() {
@@ -464,12 +472,23 @@ impl Viewer {
         entity.insert(component);
     }
 
+    /// With a point budget: draws with the base count the engine's update used.
+    fn draw_with_budget(&mut self) {
+        let (Some(_), Some(lod)) = (self.lod_shown, self.style.lod.as_mut()) else {
+            return;
+        };
+        if let Some(state) = self.engine.world.get::<LodState>(self.mesh_entity) {
+            lod.base = state.base as f32;
+        }
+    }
+
     fn frame(&mut self) -> anyhow::Result<()> {
         if self.gpu.is_none() || self.camera.is_none() {
             return Ok(());
         }
         self.follow_camera();
         let sampling = self.update_engine()?;
+        self.draw_with_budget();
         let (count, upload) = {
             let splats = self.engine.world.resource::<GpuSplats>();
             (splats.renderer.samples().len(), splats.last.time)

@@ -338,6 +338,7 @@ fn a_level_of_detail_pool_is_rebuilt_off_the_frame() {
     };
     let splat = SplatLod {
         base: 200_000.0,
+        expanded: 200_000.0,
         reference: 4000.0,
         max: 4.0,
         cull_back_faces: true,
@@ -355,6 +356,7 @@ fn a_level_of_detail_pool_is_rebuilt_off_the_frame() {
         view,
         base: 200_000,
         budget: 100_000,
+        shown: None,
     };
     let e = world.spawn((bundle, lod, LodState::default())).id();
     settle(&mut world, &mut schedule);

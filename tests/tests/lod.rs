@@ -31,6 +31,7 @@ const BASE: f64 = 20_000.0;
 fn lod() -> SplatLod {
     SplatLod {
         base: BASE as f32,
+        expanded: BASE as f32,
         reference: 4000.0,
         max: 8.0,
         cull_back_faces: true,
@@ -265,6 +266,24 @@ fn render_command_writes_a_lod_sequence() {
     assert!(plain.is_err());
 }
 
+/// Runs the ECS engine until its jobs are done and returns entity `e`'s sampler.
+fn settled_sampler(
+    world: &mut bevy_ecs::prelude::World,
+    schedule: &mut bevy_ecs::prelude::Schedule,
+    e: bevy_ecs::entity::Entity,
+) -> strata_engine::sample::Sampler {
+    use strata_systems::ecs::{self, MeshSampler};
+    assert!(ecs::settle(
+        world,
+        schedule,
+        std::time::Duration::from_secs(120)
+    ));
+    world
+        .get::<MeshSampler>(e)
+        .and_then(|s| s.0.clone())
+        .expect("sampler")
+}
+
 /// The ECS engine: a mesh entity with a `Lod` keeps a pool that follows its camera,
 /// and the upload system sends only the entries each update appends.
 #[test]
@@ -289,6 +308,7 @@ fn ecs_lod_pools_follow_the_camera() {
         view: lod().view(&camera(distance, 0.3), SIZE),
         base: 20_000,
         budget: 1_000_000,
+        shown: None,
     };
     let e = world
         .spawn((
@@ -358,7 +378,7 @@ fn ecs_lod_pools_follow_a_placed_mesh() {
     use glam::{DAffine3, DMat3, DQuat};
     use strata_engine::surface::SurfaceOptions;
     use strata_systems::ecs::{
-        self, EngineError, EngineErrors, Lod, LodState, MeshBundle, MeshSampler, MeshTransform,
+        self, EngineError, EngineErrors, Lod, LodState, MeshBundle, MeshTransform,
     };
     let scene = torus();
     let mut world = World::new();
@@ -391,19 +411,12 @@ fn ecs_lod_pools_follow_a_placed_mesh() {
                 view,
                 base: BASE as u32,
                 budget: 1_000_000,
+                shown: None,
             },
             LodState::default(),
         ))
         .id();
-    assert!(ecs::settle(
-        &mut world,
-        &mut schedule,
-        std::time::Duration::from_secs(120)
-    ));
-    let sampler = world
-        .get::<MeshSampler>(e)
-        .and_then(|s| s.0.clone())
-        .expect("sampler");
+    let sampler = settled_sampler(&mut world, &mut schedule, e);
     let held = |world: &World| {
         let state = world.get::<LodState>(e).expect("state");
         state.pool.as_ref().expect("pool").ranks().to_vec()
@@ -437,4 +450,129 @@ fn ecs_lod_pools_follow_a_placed_mesh() {
         .unwrap_or_default();
     assert!(message.contains("similarity"), "{message}");
     assert_eq!(held(&world), ranks);
+}
+
+/// A point budget in the ECS engine: each update thresholds with the base count that
+/// shows about the budget under its camera, far or near, and the pool holds every
+/// sample that base count shows. CPU only.
+#[test]
+fn ecs_lod_point_budget_holds_the_shown_count() {
+    use bevy_ecs::prelude::{Schedule, World};
+    use strata_engine::surface::SurfaceOptions;
+    use strata_systems::ecs::{self, Lod, LodState, MeshBundle};
+    const SHOWN: u32 = 8000;
+    let scene = torus();
+    let mut world = World::new();
+    let mut schedule = Schedule::default();
+    ecs::register(&mut world, &mut schedule);
+    let lod_at = |distance: f32| Lod {
+        view: lod().view(&camera(distance, 0.3), SIZE),
+        base: BASE as u32,
+        budget: 1_000_000,
+        shown: Some(SHOWN),
+    };
+    let e = world
+        .spawn((
+            MeshBundle::new(
+                scene.mesh.clone(),
+                scene.field.clone(),
+                SurfaceOptions::default(),
+                100,
+                5,
+            ),
+            lod_at(5.0),
+            LodState::default(),
+        ))
+        .id();
+    let sampler = settled_sampler(&mut world, &mut schedule, e);
+    let mut bases = vec![];
+    for distance in [5.0, 3.5, 2.5] {
+        *world.get_mut::<Lod>(e).expect("lod") = lod_at(distance);
+        schedule.run(&mut world);
+        let state = world.get::<LodState>(e).expect("state");
+        let pool = state.pool.as_ref().expect("pool");
+        let view = lod_at(distance).view;
+        assert!(pool.complete(&view, state.base), "distance {distance}");
+        let mut fades = vec![0.0f32; pool.len()];
+        pool.fades_into(&sampler, &view, state.base, &mut fades);
+        let shown = fades.iter().filter(|&&f| f > 0.0).count() as f64;
+        assert!(
+            (shown / f64::from(SHOWN) - 1.0).abs() < 0.04,
+            "distance {distance}: {shown} shown, base {}",
+            state.base
+        );
+        assert_eq!(state.base, f64::from(state.base as f32), "an f32 base");
+        bases.push(state.base);
+    }
+    // Nearer, each unit of surface covers more pixels: a smaller base count.
+    assert!(bases[0] > bases[1] && bases[1] > bases[2], "{bases:?}");
+    // Without a budget, the base count is the component's.
+    world.get_mut::<Lod>(e).expect("lod").shown = None;
+    schedule.run(&mut world);
+    assert_eq!(world.get::<LodState>(e).expect("state").base, BASE);
+}
+
+/// A point budget on the GPU: every frame of a dolly shows about the budget, the
+/// GPU's visible set is the CPU's for the frame's base count, and splats keep the size
+/// of the density they show (their spacings scaled by `sqrt(expanded / base)`).
+#[test]
+fn a_gpu_point_budget_holds_the_shown_count() {
+    use strata_systems::gpu::{LodScene, SplatRenderer};
+    let Some(ctx) = gpu("a_gpu_point_budget_holds_the_shown_count") else {
+        return;
+    };
+    const SHOWN: u32 = 8000;
+    let scene = torus();
+    let s = &scene.sampler;
+    let target = strata_systems::gpu::HeadlessTarget::new(&ctx.device, 16, 16, 1).expect("target");
+    let mut renderer = SplatRenderer::new(&ctx.device, target.format()).expect("renderer");
+    let mut lod_scene = LodScene::new(&ctx.device, s, 5, lod(), 1_000_000)
+        .expect("scene")
+        .with_shown(SHOWN);
+    let fades = LodFades::new(&ctx.device).expect("fade pass");
+    let mut bases = vec![];
+    for distance in [5.0, 3.5, 2.5] {
+        let cam = camera(distance, 0.3);
+        lod_scene
+            .frame(
+                &ctx.device,
+                &ctx.queue,
+                s,
+                renderer.samples_mut(),
+                &cam,
+                SIZE,
+            )
+            .expect("frame");
+        let style = lod_scene.style(&SplatStyle::default());
+        let l = style.lod.expect("level of detail");
+        assert_eq!(l.expanded, BASE as f32, "expanded for the prefix");
+        let gpu = fades
+            .fades(
+                &ctx.device,
+                &ctx.queue,
+                renderer.samples(),
+                &cam,
+                &style,
+                SIZE,
+            )
+            .expect("fades");
+        let mut cpu = vec![0.0f32; gpu.len()];
+        let view = lod_scene.lod().view(&cam, SIZE);
+        lod_scene
+            .pool()
+            .fades_into(s, &view, f64::from(l.base), &mut cpu);
+        let shown = gpu.iter().filter(|&&f| f > 0.0).count();
+        let differ = gpu
+            .iter()
+            .zip(&cpu)
+            .filter(|&(&g, &c)| (g > 0.0) != (c > 0.0))
+            .count();
+        assert!(
+            (shown as f64 / f64::from(SHOWN) - 1.0).abs() < 0.04,
+            "distance {distance}: {shown} shown"
+        );
+        assert!(differ * 1000 <= shown, "{differ} of {shown} differ");
+        bases.push(l.base);
+    }
+    assert!(bases[0] > bases[1] && bases[1] > bases[2], "{bases:?}");
 }

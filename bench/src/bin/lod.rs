@@ -15,11 +15,12 @@
 //! - `dolly in` / `dolly out`: the distance to the centre times 0.99 / 1.01 per frame;
 //! - `orbit`: 1 degree per frame about the vertical axis through the centre;
 //! - `dolly in` / `dolly out`, `shown held`: the same dollies with the samples shown
-//!   held at the first frame's, as a renderer with a point budget holds them: after
-//!   each frame the base count is scaled by the budget over the samples shown (what a
-//!   GPU cull's counter gives, one frame late).
+//!   held at 10^6, as a renderer with a point budget holds them: every frame's base
+//!   count is the engine's estimate of the one that shows 10^6 samples under the
+//!   frame's view ([`LodPool::base_for_shown`]), computed within the timed update.
 //!
-//! Per path: the visible samples of the first frame; the kept share (the samples of
+//! Per path: the visible samples of the first frame and their range over the timed
+//! frames, in millions; the kept share (the samples of
 //! frame t visible in frame t+1 with the same rank and site, over those of frame t,
 //! worst and mean over the steps); the same share among the samples that stay in view
 //! (multiplier above 0 in frame t+1); whether a kept sample ever moved; the CPU time
@@ -37,6 +38,9 @@
 //! rayon's global pool (`use_current_thread`), as in a renderer that drives rayon
 //! from its frame thread; `LOD_OUTSIDE_POOL=1` calls the update from outside the pool
 //! (bench/README.md: on a 2-core machine it then often waits for a worker to wake).
+//!
+//! The point budget's estimate is timed alone (`LodPool::base_for_shown`, per view of
+//! the dolly in, between full passes over the pool that leave caches cold).
 //!
 //! For comparison, `stratified` redraws `N` and `1.01 N` samples in today's stratified
 //! order and counts the samples that kept their place, and times the sampler's
@@ -196,13 +200,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         prefix.len() as f64 * 20.0 / 1e6
     );
     println!(
-        "| path | visible (first frame) | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | newly visible per frame, mean | of them beyond the prefix | entries per frame, mean | upload KB per frame, mean | pool entries at end |"
+        "| path | visible (first frame) | visible 10^6, range | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | newly visible per frame, mean | of them beyond the prefix | entries per frame, mean | upload KB per frame, mean | pool entries at end |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!(
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    );
     let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
-    // The last two paths hold the samples shown at the first frame's count, as a
-    // renderer with a point budget does: the base count is scaled after each frame by
-    // the budget over the samples shown (a GPU cull's counter, one frame late).
+    // The last two paths hold the samples shown at the budget, as a renderer with a
+    // point budget does: each frame's base count is the engine's estimate of the one
+    // that shows `SHOWN` samples under its view (`LodPool::base_for_shown`), timed with
+    // the update.
     let paths: [(&str, Path, bool); 6] = [
         (
             "count +1%",
@@ -224,32 +231,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     for (path, frame, held) in paths {
         let mut pool = prefix.clone();
-        // The budget's scale of the base count, and its update from a frame's shown
-        // samples.
-        let mut scale = 1.0;
-        let rescale = |scale: &mut f64, shown: usize| {
+        // A held path's base count: the engine's point budget for the frame's view
+        // (the previous frame's where nothing is in view).
+        let mut held_base = base;
+        let mut base_of = |pool: &LodPool, v: &ViewLod, b: f64| {
             if held {
-                *scale *= SHOWN / shown.max(1) as f64;
+                held_base = pool.base_for_shown(v, SHOWN).unwrap_or(held_base);
+                held_base
+            } else {
+                b
             }
         };
         // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
         let mut before = vec![];
         for t in -WARM_UP..=0 {
             let (v, b) = frame(t);
-            pool.update(s, &v, b * scale);
-            if held || t == 0 {
-                before = visible(&pool, s, &v, b * scale, &mut fades);
-                rescale(&mut scale, before.len());
+            let b = base_of(&pool, &v, b);
+            pool.update(s, &v, b);
+            if t == 0 {
+                before = visible(&pool, s, &v, b, &mut fades);
             }
         }
         let shown = before.len();
         let (mut shares, mut in_view, mut times, mut bytes) = (vec![], vec![], vec![], vec![]);
-        let (mut fresh, mut beyond) = (vec![], vec![]);
+        let (mut fresh, mut beyond, mut counts) = (vec![], vec![], vec![]);
         let mut moved = false;
         for t in 1..=frames as i32 {
             let (v, b) = frame(t);
-            let b = b * scale;
             let clock = Instant::now();
+            let b = base_of(&pool, &v, b);
             let change = pool.update(s, &v, b);
             times.push(clock.elapsed().as_secs_f64() * 1e3);
             bytes.push(match change {
@@ -262,7 +272,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             moved |= m;
             fresh.push((after.len() - same) as f64);
             beyond.push(new_from(&before, &after, pool.prefix()) as f64);
-            rescale(&mut scale, after.len());
+            counts.push(after.len() as f64);
             let gone = leaving(&before, s, &v);
             shares.push(same as f64 / before.len() as f64);
             in_view.push(same as f64 / (before.len() - gone).max(1) as f64);
@@ -270,8 +280,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let worst = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let range = |v: &[f64]| {
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(0.0, f64::max);
+            format!("{:.3}-{:.3}", lo / 1e6, hi / 1e6)
+        };
         println!(
-            "| {path} | {shown} | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
+            "| {path} | {shown} | {} | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
+            range(&counts),
             100.0 * worst(&shares),
             100.0 * mean(&shares),
             100.0 * worst(&in_view),
@@ -285,6 +301,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pool.len(),
         );
     }
+
+    // The point budget's estimate alone, along the dolly in (cold caches between
+    // calls, as between frames: the visible sets of a path are computed in between).
+    let mut estimates = vec![];
+    for t in 1..=frames as i32 {
+        let v = camera.dolly(0.99, t);
+        std::hint::black_box(visible(&prefix, s, &first, base, &mut fades).len());
+        let clock = Instant::now();
+        std::hint::black_box(prefix.base_for_shown(&v, SHOWN));
+        estimates.push(clock.elapsed().as_secs_f64() * 1e6);
+    }
+    println!(
+        "\nPoint budget: the base count for a view (`LodPool::base_for_shown`, {} probes) takes {:.0} us, median of {frames}.",
+        strata_engine::sample::lod_budget::PROBES,
+        median(estimates),
+    );
 
     // Today's stratified order, N to N + 1%.
     let n = 1_000_000usize;

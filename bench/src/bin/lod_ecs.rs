@@ -104,6 +104,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             view: camera.dolly(0.99, -WARM_UP),
             base: BASE,
             budget: 8_000_000,
+            shown: None,
         },
         LodState::default(),
     ));

@@ -76,6 +76,20 @@ fn face_frame(p: &[DVec3], tri: &[u32; 3], n: DVec3) -> (DVec3, DVec3) {
     (e1, n.cross(e1))
 }
 
+/// The position and unit normal (the vertex normals interpolated, the face's normal
+/// where they cancel) on `face` at barycentric coordinates `b`: a sample's
+/// [`position`](super::Sample::position) and [`normal`](super::Sample::normal) in `f64`.
+#[inline(always)]
+pub(crate) fn position_normal(mesh: &TriMesh, face: u32, b: [f64; 3]) -> (DVec3, DVec3) {
+    let [i, j, k] = mesh.triangles()[face as usize].map(|v| v as usize);
+    let p = mesh.positions();
+    let position = p[i] * b[0] + p[j] * b[1] + p[k] * b[2];
+    let vn = mesh.vertex_normals();
+    let normal = unit3(vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2])
+        .unwrap_or(mesh.face_normals()[face as usize]);
+    (position, normal)
+}
+
 /// Interpolates position, normal and field on `face` at barycentric coordinates `b`.
 ///
 /// The tensor is interpolated linearly in the face's frame (see [`FaceTensors`]). Its
@@ -90,12 +104,10 @@ pub(crate) fn face_point(
     b: [f64; 3],
 ) -> FacePoint {
     let tri = &mesh.triangles()[face as usize];
-    let [i, j, k] = tri.map(|v| v as usize);
+    let [i, j, _] = tri.map(|v| v as usize);
     let p = mesh.positions();
-    let position = p[i] * b[0] + p[j] * b[1] + p[k] * b[2];
+    let (position, normal) = position_normal(mesh, face, b);
     let n = mesh.face_normals()[face as usize];
-    let vn = mesh.vertex_normals();
-    let normal = unit3(vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2]).unwrap_or(n);
     let t = &tensors.corners[face as usize];
     let (b0, b1, b2) = (b[0] as f32, b[1] as f32, b[2] as f32);
     let lerp = |o: usize| (t[o] * b0 + t[3 + o] * b1 + t[6 + o] * b2) as f64;

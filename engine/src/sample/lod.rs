@@ -29,6 +29,8 @@
 
 use glam::{DAffine3, DMat4, DVec3, DVec4};
 
+use crate::mesh::TriMesh;
+
 /// A camera's level-of-detail request, in plain numbers.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewLod {
@@ -90,6 +92,19 @@ pub enum LodError {
         /// `det L`.
         determinant: f64,
     },
+}
+
+/// Checks that `mesh` is a deformation of `rest`: the same vertex count and triangles.
+pub(crate) fn check_deformation(rest: &TriMesh, mesh: &TriMesh) -> Result<(), LodError> {
+    if mesh.vertex_count() != rest.vertex_count() || mesh.triangles() != rest.triangles() {
+        return Err(LodError::Mismatch {
+            vertices: mesh.vertex_count(),
+            faces: mesh.face_count(),
+            expected_vertices: rest.vertex_count(),
+            expected_faces: rest.face_count(),
+        });
+    }
+    Ok(())
 }
 
 /// Largest relative deviation of a transform's linear part from a similarity that

@@ -41,8 +41,9 @@ use std::ops::Range;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::lod::{LodError, ViewLod, fade};
+use super::lod::{LodError, ViewLod, check_deformation, fade};
 use super::lod_bounds::{BoundSet, Frustum, RegionBound};
+use super::lod_budget::ShownEstimate;
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
 use crate::curve::LeafScratch;
@@ -120,6 +121,8 @@ pub struct LodPool {
     /// Per chunk of [`DRAW_CHUNK`] bins drawn in, the lists of a parallel update
     /// (kept, so that updates stop allocating).
     lists: Vec<BinList>,
+    /// The point budget's estimator, on the current geometry.
+    estimate: ShownEstimate,
 }
 
 impl Clone for LodPool {
@@ -141,6 +144,7 @@ impl Clone for LodPool {
             todo: self.todo.clone(),
             runs: self.runs.clone(),
             lists: self.lists.clone(),
+            estimate: self.estimate.clone(),
         }
     }
 }
@@ -233,15 +237,7 @@ impl LodPool {
     /// about 15% more ranks drawn for a view). Cost O(faces); an error, and nothing
     /// changed, when `mesh` has other vertices or triangles.
     pub fn set_geometry(&mut self, sampler: &Sampler, mesh: &TriMesh) -> Result<(), LodError> {
-        let rest = sampler.mesh();
-        if mesh.vertex_count() != rest.vertex_count() || mesh.triangles() != rest.triangles() {
-            return Err(LodError::Mismatch {
-                vertices: mesh.vertex_count(),
-                faces: mesh.face_count(),
-                expected_vertices: rest.vertex_count(),
-                expected_faces: rest.face_count(),
-            });
-        }
+        check_deformation(sampler.mesh(), mesh)?;
         let bounds: Vec<RegionBound> = self
             .bins
             .par_iter()
@@ -250,6 +246,7 @@ impl LodPool {
                 bin_bound(sampler, mesh, bin.segment as usize, leaves, false, buffers)
             })
             .collect();
+        self.estimate.set_geometry(sampler, mesh)?;
         for (i, bound) in bounds.iter().enumerate() {
             self.bounds.set(i, bound);
         }
@@ -324,6 +321,7 @@ impl LodPool {
             todo: Vec::new(),
             runs: Vec::new(),
             lists: Vec::new(),
+            estimate: ShownEstimate::new(sampler, seed),
         }
     }
 
@@ -438,6 +436,18 @@ impl LodPool {
     fn ahead_limit(&self, need: u32) -> u32 {
         let more = f64::from(need) * self.ahead * 2.0;
         (f64::from(need) + more).min(f64::from(u32::MAX)) as u32
+    }
+
+    /// The base count under which `view` shows about `shown` samples (a point budget;
+    /// [`lod_budget`](super::lod_budget)), on the pool's current geometry: `None` when
+    /// nothing is in view. Cost: a multiplier per [`PROBES`](super::lod_budget::PROBES).
+    pub fn base_for_shown(&self, view: &ViewLod, shown: f64) -> Option<f64> {
+        self.estimate.base_for(view, shown)
+    }
+
+    /// The point budget's estimator, on the pool's current geometry.
+    pub fn shown_estimate(&self) -> &ShownEstimate {
+        &self.estimate
     }
 
     /// Whether every rank visible under `view` with base count `base` is held.
@@ -652,16 +662,9 @@ mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::TriMesh;
+    use crate::surface::tests::torus_sampler;
     use crate::surface::{Preprocessed, SurfaceOptions};
     use std::sync::Arc;
-
-    /// The torus fixture of `surface` (1 by 0.4, a 3:1 field), preprocessed.
-    fn torus_sampler() -> Sampler {
-        let (mesh, field) = crate::surface::tests::torus_case();
-        Preprocessed::build(mesh, field, &SurfaceOptions::default())
-            .expect("preprocessed")
-            .sampler
-    }
 
     fn view(eye: DVec3, max: f64) -> ViewLod {
         view_at(eye, DVec3::ZERO, max)

@@ -12,6 +12,7 @@ mod chains;
 mod faces;
 pub mod lod;
 mod lod_bounds;
+pub mod lod_budget;
 mod lod_pool;
 pub mod progressive;
 mod sampler;

@@ -467,6 +467,14 @@ pub(crate) mod tests {
         (mesh, Arc::new(field))
     }
 
+    /// The sampler of [`torus_case`], preprocessed with the default options.
+    pub(crate) fn torus_sampler() -> crate::sample::Sampler {
+        let (mesh, field) = torus_case();
+        Preprocessed::build(mesh, field, &SurfaceOptions::default())
+            .expect("preprocessed")
+            .sampler
+    }
+
     #[test]
     fn per_segment_parameterization_and_cells_equal_the_whole_build() {
         let (mesh, field) = torus_case();

@@ -48,6 +48,11 @@ pub struct RenderArgs {
     /// With `--lod`: the largest multiplier of the count's density.
     #[arg(long, default_value_t = 4.0, requires = "lod")]
     pub lod_max: f32,
+    /// With `--lod`: a point budget: about this many samples are shown in every frame
+    /// at any camera distance (each frame's base count is chosen for it); the count is
+    /// then the pool's prefix, drawn up front.
+    #[arg(long, requires = "lod")]
+    pub lod_shown: Option<u32>,
     /// With `--lod`: frames to draw; with more than one, `--out` gets a frame number
     /// (`out.png` becomes `out_0000.png`, `out_0001.png`, ...).
     #[arg(long, default_value_t = 1, requires = "lod")]
@@ -199,6 +204,11 @@ fn run_lod(
     // Room for the ranks beyond the count that near surface asks for.
     let budget = (f64::from(base) * f64::from(args.lod_max)) as usize;
     let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
+    match args.lod_shown {
+        Some(0) => anyhow::bail!("--lod-shown must be at least 1"),
+        Some(shown) => lod_scene = lod_scene.with_shown(shown),
+        None => {}
+    }
     let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
     let segments = (args.look.mesh != MeshMode::None)
         .then(|| crate::gpu::splat::face_segments(&scene.sampler));
@@ -279,8 +289,9 @@ fn run_lod(
             _ => String::new(),
         };
         println!(
-            "frame {frame}: {visible} of {} pool samples shown, {:.1} KB sent, pool update {:.2} ms{kept}; wrote {}",
+            "frame {frame}: {visible} of {} pool samples shown (base count {:.0}), {:.1} KB sent, pool update {:.2} ms{kept}; wrote {}",
             step.entries,
+            style.lod.map_or(0.0, |l| l.base),
             step.uploaded as f64 / 1e3,
             step.update.as_secs_f64() * 1e3,
             path.display()

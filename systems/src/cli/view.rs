@@ -33,6 +33,11 @@ pub struct ViewArgs {
     /// With `--lod`: the largest multiplier of the count's density.
     #[arg(long, default_value_t = 4.0, requires = "lod")]
     pub lod_max: f32,
+    /// With `--lod`: a point budget: about this many samples are shown at any camera
+    /// distance (the base count of each frame is chosen for it); the count is then the
+    /// pool's prefix, drawn up front.
+    #[arg(long, requires = "lod")]
+    pub lod_shown: Option<u32>,
     /// `--style` and `--brush`, as `strata render`'s (the keys `P` and `B` change them).
     #[command(flatten)]
     pub paint: StyleArgs,
@@ -44,6 +49,9 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let paint = StyleChoice::new(args.paint.npr_kind_for(args.lod)?);
     if !(args.lod_max > 0.0 && args.lod_max.is_finite()) {
         anyhow::bail!("--lod-max must be a positive number, not {}", args.lod_max);
+    }
+    if args.lod_shown == Some(0) {
+        anyhow::bail!("--lod-shown must be at least 1");
     }
     let options = ViewerOptions {
         scene: args.config.clone(),
@@ -60,6 +68,7 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
         style: args.look.style(&[]),
         paint,
         lod_max: args.lod.then_some(args.lod_max),
+        lod_shown: args.lod_shown.filter(|_| args.lod),
     };
     let outcome = viewer::run(&options)?;
     if args.frames.is_some() {

@@ -49,6 +49,12 @@ pub struct Lod {
     pub base: u32,
     /// Entries the pool may add beyond `base` where views ask for them.
     pub budget: usize,
+    /// A point budget: when set, every update thresholds with the base count under
+    /// which the camera shows about this many samples
+    /// ([`LodPool::base_for_shown`]; within 1% on the bunny), instead of `base`
+    /// (which stays the pool's prefix, and the base count of a view of nothing). The
+    /// base count used is [`LodState::base`]: a renderer draws with it.
+    pub shown: Option<u32>,
 }
 
 /// The pool of a [`Lod`] entity and what its last update did.
@@ -58,6 +64,9 @@ pub struct LodState {
     pub pool: Option<LodPool>,
     /// The last update's change.
     pub last: Option<PoolChange>,
+    /// The base count the last update thresholded with: [`Lod::base`], or the point
+    /// budget's ([`Lod::shown`], rounded to `f32` as a renderer's uniform holds it).
+    pub base: f64,
     /// Times the pool was built or rebuilt (a GPU copy resends everything when it
     /// moves).
     pub builds: u64,
@@ -121,7 +130,13 @@ pub fn update_lod_pools(
         let (Some(pool), Some(s)) = (state.pool.as_mut(), state.drawn_from.as_ref()) else {
             continue; // the first pool is still building
         };
-        let change = pool.update(s, &view, f64::from(lod.base));
+        // Rounded to f32, the GPU's threshold, so that both pick the same ranks.
+        let base = lod
+            .shown
+            .and_then(|shown| pool.base_for_shown(&view, f64::from(shown)))
+            .map_or(f64::from(lod.base), |b| f64::from(b as f32));
+        let change = pool.update(s, &view, base);
+        state.base = base;
         if change != PoolChange::Unchanged {
             stats.record(
                 Stage::Sampling,

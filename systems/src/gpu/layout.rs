@@ -114,8 +114,11 @@ pub struct FrameUniforms {
     /// Level of detail: bit 0 on (splats are culled and faded by rank, see
     /// [`SplatLod`](super::splat::SplatLod)), bit 1 back faces get multiplier 0.
     pub lod_flags: u32,
+    /// Level of detail: the factor of the samples' spacings, `sqrt(expanded / base)`
+    /// ([`SplatLod::expanded`](super::splat::SplatLod::expanded)).
+    pub lod_spacing: f32,
     /// Padding to the next 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
     /// Level of detail: base count, reference area (pixels^2 per unit area), the
     /// multiplier's clamp and the focal length in pixels.
     pub lod: [f32; 4],

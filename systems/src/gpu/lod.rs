@@ -345,7 +345,8 @@ pub struct LodFrame {
     pub uploaded: u64,
     /// Entries in the pool (the instances drawn; the shader culls the rest).
     pub entries: usize,
-    /// CPU time of the pool update (new ranks and their sites).
+    /// CPU time of the pool update (new ranks and their sites, and the point budget's
+    /// base count).
     pub update: std::time::Duration,
 }
 
@@ -358,11 +359,14 @@ pub struct LodScene {
     gpu: GpuLodPool,
     expander: SiteExpander,
     lod: SplatLod,
+    /// A point budget: the samples each frame shows, about.
+    shown: Option<u32>,
 }
 
 impl LodScene {
     /// A pool of `sampler`'s progressive sequence for `seed` holding ranks
-    /// `0..lod.base` and up to `budget` more where views ask for them.
+    /// `0..lod.base` and up to `budget` more where views ask for them; the samples are
+    /// expanded for `lod.base` (its [`expanded`](SplatLod::expanded) is set to it).
     pub fn new(
         device: &wgpu::Device,
         sampler: &Sampler,
@@ -374,8 +378,22 @@ impl LodScene {
             pool: LodPool::new(sampler, seed, lod.base as u32, budget),
             gpu: GpuLodPool::new(device, f64::from(lod.base))?,
             expander: SiteExpander::new(device, sampler)?,
-            lod,
+            lod: SplatLod {
+                expanded: lod.base,
+                ..lod
+            },
+            shown: None,
         })
+    }
+
+    /// The same scene with a point budget: every [`frame`](Self::frame) thresholds
+    /// with the base count under which its camera shows about `shown` samples
+    /// ([`LodPool::base_for_shown`]), rounded to `f32` so that the GPU's threshold is
+    /// the CPU's; the base count given to [`new`](Self::new) stays the pool's prefix
+    /// and the base count of a view of nothing.
+    pub fn with_shown(mut self, shown: u32) -> Self {
+        self.shown = Some(shown);
+        self
     }
 
     /// The engine pool.
@@ -415,6 +433,10 @@ impl LodScene {
     ) -> Result<LodFrame, GpuError> {
         let view = self.lod.view(camera, size);
         let clock = std::time::Instant::now();
+        if let Some(shown) = self.shown {
+            let base = self.pool.base_for_shown(&view, f64::from(shown));
+            self.lod.base = base.map_or(self.lod.expanded, |b| b as f32);
+        }
         let change = self.pool.update(sampler, &view, f64::from(self.lod.base));
         let update = clock.elapsed();
         let uploaded =

@@ -67,13 +67,19 @@ pub struct SplatStyle {
 /// Level of detail in the splat pipelines: the samples' `index` is their progressive
 /// rank, and a sample of rank `k` is drawn when `k < base x lod(p_k)`, its splat scaled
 /// by its fade weight `clamp(base x lod(p_k) - k, 0, 1)` and its spacings by
-/// `1 / sqrt(lod(p_k))` (the density there is `lod` times the base density), with the
+/// `sqrt(expanded / (base lod(p_k)))` (the density there is `lod` times the base
+/// density; the samples' spacings were expanded for `expanded`), with the
 /// multiplier `lod` of [`ViewLod`] for the frame's
 /// camera, evaluated in `f32` per sample in the vertex shader.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SplatLod {
     /// Samples over the whole surface at multiplier 1.
     pub base: f32,
+    /// The base count the samples' spacings were expanded with (a pool's prefix,
+    /// [`GpuLodPool`](super::lod::GpuLodPool)): a frame whose base count differs (a
+    /// point budget's, [`LodPool::base_for_shown`](strata_engine::sample::LodPool::base_for_shown))
+    /// still sizes splats to its density.
+    pub expanded: f32,
     /// Projected area (pixels^2) of a unit of surface at multiplier 1.
     pub reference: f32,
     /// Clamp of the multiplier.
@@ -90,6 +96,7 @@ impl SplatLod {
         let f = focal_pixels(camera, height) as f32;
         Self {
             base,
+            expanded: base,
             reference: f * f / (camera.distance * camera.distance),
             max,
             cull_back_faces: true,
@@ -129,12 +136,13 @@ pub(crate) fn frame_uniforms(
     let (w, h) = size;
     let aspect = w.max(1) as f32 / h.max(1) as f32;
     let light = style.light_dir.normalize_or(Vec3::Y);
-    let (lod_flags, lod) = match style.lod {
+    let (lod_flags, lod, lod_spacing) = match style.lod {
         Some(l) => (
             1 | (u32::from(l.cull_back_faces) << 1),
             [l.base, l.reference, l.max, focal_pixels(camera, h) as f32],
+            lod_spacing(&l),
         ),
-        None => (0, [0.0; 4]),
+        None => (0, [0.0; 4], 1.0),
     };
     FrameUniforms {
         view_proj: camera.view_proj(aspect).to_cols_array_2d(),
@@ -154,8 +162,19 @@ pub(crate) fn frame_uniforms(
         mesh_mode: style.mesh_mode.code(),
         normal_offset,
         lod_flags,
-        _pad: [0; 2],
+        lod_spacing,
+        _pad: 0,
         lod,
+    }
+}
+
+/// The factor `sqrt(expanded / base)` of a level of detail's spacings (1 where either
+/// count is not positive).
+fn lod_spacing(l: &SplatLod) -> f32 {
+    if l.base > 0.0 && l.expanded > 0.0 {
+        (l.expanded / l.base).sqrt()
+    } else {
+        1.0
     }
 }
 
@@ -575,5 +594,47 @@ fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
         gaussian,
         glyph,
         mesh_pipeline,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A frame whose base count differs from the one the samples were expanded with
+    /// (a point budget's) scales their spacings by `sqrt(expanded / base)`: a quarter
+    /// of the base count, twice the spacing; without level of detail, 1.
+    #[test]
+    fn spacings_follow_the_frames_base_count() {
+        let camera = OrbitCamera {
+            target: Vec3::ZERO,
+            distance: 3.0,
+            yaw: 0.0,
+            pitch: 0.0,
+            fov_y: 0.8,
+            radius: 1.0,
+        };
+        let lod = SplatLod::for_camera(&camera, 240, 40_000.0, 4.0);
+        assert_eq!(lod.expanded, 40_000.0);
+        let at = |lod: Option<SplatLod>| {
+            let style = SplatStyle {
+                lod,
+                ..SplatStyle::default()
+            };
+            frame_uniforms(&camera, &style, (320, 240), 0.0).lod_spacing
+        };
+        assert_eq!(at(Some(lod)), 1.0);
+        let quarter = SplatLod {
+            base: 10_000.0,
+            ..lod
+        };
+        assert!((at(Some(quarter)) - 2.0).abs() < 1e-6);
+        assert_eq!(at(None), 1.0);
+        let (layout, uniforms) = (
+            std::mem::size_of::<FrameUniforms>(),
+            frame_uniforms(&camera, &SplatStyle::default(), (1, 1), 0.0),
+        );
+        assert_eq!(layout, 176, "the WGSL twin's size");
+        assert_eq!(uniforms._pad, 0);
     }
 }
