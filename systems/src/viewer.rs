@@ -23,22 +23,23 @@ use anyhow::{Context, anyhow};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
-use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use strata_engine::mesh::TriMesh;
 
 use crate::ecs::{
-    EngineSettings, Lod, LodState, MeshData, MeshSampler, MeshTransform, SamplingSettings, Stage,
-    StageStats,
+    EngineSettings, MeshData, MeshSampler, MeshTransform, SamplingSettings, Stage, StageStats,
 };
 use crate::gpu::headless::DEPTH_FORMAT;
 use crate::gpu::splat::{FrameTarget, TargetFormat};
 use crate::gpu::{
-    ColorMode, Footprint, GpuContext, GpuOptions, GpuSplats, MeshMode, OrbitCamera, SplatLod,
-    SplatRenderer, SplatStyle, StyleChoice, StyledFrame,
+    GpuContext, GpuOptions, GpuSplats, OrbitCamera, SplatLod, SplatRenderer, SplatStyle,
+    StyleChoice, StyledFrame,
 };
 use crate::hot_reload::StreamingEngine;
+
+mod keys;
+mod lod;
 
 /// What the viewer shows and how it starts.
 #[derive(Clone, Debug)]
@@ -445,43 +446,6 @@ impl Viewer {
         Ok(sampling)
     }
 
-    /// With `--lod`: points the mesh entity's [`Lod`] at the current camera.
-    fn follow_camera(&mut self) {
-        let (Some(max), Some(camera), Some(gpu)) = (self.lod_max, &self.camera, &self.gpu) else {
-            return;
-        };
-        let size = (gpu.config.width, gpu.config.height);
-        let base = self.sampling().count.min(u32::MAX as usize) as u32;
-        let mut lod = *self
-            .lod
-            .get_or_insert_with(|| SplatLod::for_camera(camera, size.1, base as f32, max));
-        lod.base = base as f32;
-        lod.expanded = base as f32;
-        self.lod = Some(lod);
-        self.style.lod = Some(lod);
-        let component = Lod {
-            view: lod.view(camera, size),
-            base,
-            budget: (f64::from(base) * f64::from(max)) as usize,
-            shown: self.lod_shown,
-        };
-        let mut entity = self.engine.world.entity_mut(self.mesh_entity);
-        if !entity.contains::<LodState>() {
-            entity.insert(LodState::default());
-        }
-        entity.insert(component);
-    }
-
-    /// With a point budget: draws with the base count the engine's update used.
-    fn draw_with_budget(&mut self) {
-        let (Some(_), Some(lod)) = (self.lod_shown, self.style.lod.as_mut()) else {
-            return;
-        };
-        if let Some(state) = self.engine.world.get::<LodState>(self.mesh_entity) {
-            lod.base = state.base as f32;
-        }
-    }
-
     fn frame(&mut self) -> anyhow::Result<()> {
         if self.gpu.is_none() || self.camera.is_none() {
             return Ok(());
@@ -577,73 +541,6 @@ impl Viewer {
         }
         gpu.window.request_redraw();
         Ok(())
-    }
-
-    fn key(&mut self, key: &Key, event_loop: &ActiveEventLoop) {
-        match key {
-            Key::Named(NamedKey::Escape) => event_loop.exit(),
-            Key::Named(NamedKey::ArrowUp) => {
-                let max = self
-                    .engine
-                    .world
-                    .get_resource::<GpuSplats>()
-                    .map_or(usize::MAX, |g| {
-                        crate::gpu::buffers::max_samples(&g.ctx.device)
-                    });
-                set_sampling(&mut self.engine, self.mesh_entity, |s| {
-                    s.count = s.count.saturating_mul(2).clamp(1, max)
-                });
-                self.refit_colors = true;
-            }
-            Key::Named(NamedKey::ArrowDown) => {
-                set_sampling(&mut self.engine, self.mesh_entity, |s| s.count /= 2);
-                self.refit_colors = true;
-            }
-            Key::Character(c) => match c.as_str() {
-                "s" | "S" => set_sampling(&mut self.engine, self.mesh_entity, |s| {
-                    s.seed = s.seed.wrapping_add(1)
-                }),
-                "c" | "C" => {
-                    self.style.color_mode = match self.style.color_mode {
-                        ColorMode::Density => ColorMode::Segment,
-                        ColorMode::Segment => ColorMode::Constant,
-                        ColorMode::Constant => ColorMode::Density,
-                    }
-                }
-                "m" | "M" => {
-                    self.style.mesh_mode = match self.style.mesh_mode {
-                        MeshMode::Plain => MeshMode::Segments,
-                        MeshMode::Segments => MeshMode::None,
-                        MeshMode::None => MeshMode::Plain,
-                    }
-                }
-                "p" | "P" => self.repaint(self.paint.next_style()),
-                "b" | "B" => self.repaint(self.paint.next_brush()),
-                "f" | "F" => {
-                    self.style.footprint = match self.style.footprint {
-                        Footprint::Disc => Footprint::Gaussian,
-                        Footprint::Gaussian => Footprint::Glyph,
-                        Footprint::Glyph => Footprint::Disc,
-                    }
-                }
-                _ => {}
-            },
-            _ => {}
-        }
-    }
-
-    /// Switches to `paint` (printing it), except with `--lod`, which stipple and
-    /// strokes do not support yet.
-    fn repaint(&mut self, paint: StyleChoice) {
-        if self.lod_max.is_some() && paint.kind().is_some() {
-            println!(
-                "style: {paint} does not support --lod yet; still {}",
-                self.paint
-            );
-        } else {
-            self.paint = paint;
-            println!("style: {paint}");
-        }
     }
 
     fn fail(&mut self, e: anyhow::Error, event_loop: &ActiveEventLoop) {

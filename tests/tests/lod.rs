@@ -216,36 +216,33 @@ fn a_deformed_mesh_carries_its_samples() {
 /// of a twisting mesh seen from a camera moving in.
 #[test]
 fn render_command_writes_a_lod_sequence() {
-    use clap::Parser;
     let Some(_ctx) = gpu("render_command_writes_a_lod_sequence") else {
         return;
     };
     let dir = tempfile::tempdir().expect("temp dir");
     let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/sphere-anisotropic.ron");
     let out = dir.path().join("seq.png");
-    let cli = strata_systems::cli::Cli::try_parse_from([
-        "strata".as_ref(),
-        "render".as_ref(),
-        config.as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--width".as_ref(),
-        "160".as_ref(),
-        "--height".as_ref(),
-        "120".as_ref(),
-        "-n".as_ref(),
-        "3000".as_ref(),
-        "--lod".as_ref(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-        "--dolly".as_ref(),
-        "0.8".as_ref(),
-        "--orbit".as_ref(),
-        "2".as_ref(),
-        "--twist".as_ref(),
-        "30".as_ref(),
-    ])
-    .expect("arguments parse");
+    // `strata render config --out out ...`, 160 x 120.
+    let render = |out: &Path, options: &[&str]| {
+        use clap::Parser;
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "strata".as_ref(),
+            "render".as_ref(),
+            config.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ];
+        args.extend(
+            ["--width", "160", "--height", "120"]
+                .iter()
+                .chain(options)
+                .map(|o: &&str| std::ffi::OsStr::new(*o)),
+        );
+        strata_systems::cli::Cli::try_parse_from(args)
+    };
+    let lod_options = ["-n", "3000", "--lod", "--frames", "3", "--dolly", "0.8"];
+    let sequence = [&lod_options[..], &["--orbit", "2", "--twist", "30"]].concat();
+    let cli = render(&out, &sequence).expect("arguments parse");
     strata_systems::cli::run(cli).expect("render succeeds");
     for frame in 0..3 {
         let png = dir.path().join(format!("seq_{frame:04}.png"));
@@ -253,17 +250,18 @@ fn render_command_writes_a_lod_sequence() {
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", png.display());
     }
     assert!(!out.exists(), "a sequence writes numbered frames only");
+    // With a point budget.
+    let budget = dir.path().join("budget.png");
+    let cli = render(&budget, &["-n", "3000", "--lod", "--lod-shown", "2000"]).expect("parse");
+    strata_systems::cli::run(cli).expect("render succeeds");
+    assert!(budget.exists());
+    let zero = render(&budget, &["--lod", "--lod-shown", "0"]).expect("arguments parse");
+    let error = strata_systems::cli::run(zero).expect_err("a budget of nothing");
+    assert!(error.to_string().contains("--lod-shown"), "{error}");
     // The level-of-detail options need --lod.
-    let plain = strata_systems::cli::Cli::try_parse_from([
-        "strata".as_ref(),
-        "render".as_ref(),
-        config.as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-    ]);
-    assert!(plain.is_err());
+    for option in [["--frames", "3"], ["--lod-shown", "2000"]] {
+        assert!(render(&out, &option).is_err(), "{option:?} without --lod");
+    }
 }
 
 /// Runs the ECS engine until its jobs are done and returns entity `e`'s sampler.

@@ -14,7 +14,7 @@
 //! - `count`: base count times 1.01 per frame, camera still;
 //! - `dolly in` / `dolly out`: the distance to the centre times 0.99 / 1.01 per frame;
 //! - `orbit`: 1 degree per frame about the vertical axis through the centre;
-//! - `dolly in` / `dolly out`, `shown held`: the same dollies with the samples shown
+//! - `dolly in` / `dolly out` / `orbit`, `shown held`: the same paths with the samples shown
 //!   held at 10^6, as a renderer with a point budget holds them: every frame's base
 //!   count is the engine's estimate of the one that shows 10^6 samples under the
 //!   frame's view ([`LodPool::base_for_shown`]), computed within the timed update.
@@ -206,11 +206,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
+    let orbit = || -> Path {
+        Box::new(move |t| {
+            let turn = glam::DQuat::from_rotation_y(f64::from(t).to_radians());
+            (view(centre + turn * (start - centre)), base)
+        })
+    };
     // The last two paths hold the samples shown at the budget, as a renderer with a
     // point budget does: each frame's base count is the engine's estimate of the one
     // that shows `SHOWN` samples under its view (`LodPool::base_for_shown`), timed with
     // the update.
-    let paths: [(&str, Path, bool); 6] = [
+    let paths: [(&str, Path, bool); 7] = [
         (
             "count +1%",
             Box::new(|t| (first, base * 1.01f64.powi(t))),
@@ -218,16 +224,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         ("dolly in 1%", dolly(0.99), false),
         ("dolly out 1%", dolly(1.01), false),
-        (
-            "orbit 1 degree",
-            Box::new(|t| {
-                let turn = glam::DQuat::from_rotation_y(f64::from(t).to_radians());
-                (view(centre + turn * (start - centre)), base)
-            }),
-            false,
-        ),
+        ("orbit 1 degree", orbit(), false),
         ("dolly in 1%, shown held", dolly(0.99), true),
         ("dolly out 1%, shown held", dolly(1.01), true),
+        ("orbit 1 degree, shown held", orbit(), true),
     ];
     for (path, frame, held) in paths {
         let mut pool = prefix.clone();

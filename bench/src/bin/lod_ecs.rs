@@ -8,7 +8,8 @@
 //!
 //! - `lod`: a [`Lod`] component on the mesh follows the `lod` bench's dolly in (the same
 //!   camera and base count, 30 untimed frames, then `frames` timed ones, default 20);
-//!   the time is the update's `Sampling` stage (`update_lod_pools`).
+//!   the time is the update's own (`LodState::update`, `update_lod_pools`).
+//!   `LOD_ECS_SHOWN=S` gives the component a point budget of `S` samples shown.
 //! - `resample`: 10^6 samples drawn every update (`sample_every_update`, the
 //!   `sample_meshes` system, on bevy's threads); median and 90th percentile of 40.
 //!
@@ -49,10 +50,20 @@ fn frame(engine: &mut StreamingEngine) -> f64 {
     took
 }
 
+/// The time of a mesh's last level-of-detail update in ms (also when it drew nothing,
+/// which records no `Sampling` stage), and the base count it used.
+fn lod_update(state: Option<&LodState>) -> (f64, f64) {
+    state.map_or((0.0, 0.0), |s| (s.update.as_secs_f64() * 1e3, s.base))
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames = strata_bench::repeats_arg(20)?.max(1);
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let pool = std::env::var("LOD_ECS_POOL").unwrap_or_else(|_| "cores+1".into());
+    let shown: Option<u32> = match std::env::var("LOD_ECS_SHOWN") {
+        Ok(s) => Some(s.parse()?),
+        Err(_) => None,
+    };
     let inside = match pool.as_str() {
         "cores+1" => {
             strata_systems::frame_thread::join_rayon_pool()?;
@@ -104,7 +115,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             view: camera.dolly(0.99, -WARM_UP),
             base: BASE,
             budget: 8_000_000,
-            shown: None,
+            shown,
         },
         LodState::default(),
     ));
@@ -118,14 +129,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             return Err("the level-of-detail pool did not build".into());
         }
     }
-    let mut lod = vec![];
+    let (mut lod, mut bases) = (vec![], vec![]);
     for t in -WARM_UP..=frames as i32 {
         if let Some(mut l) = engine.world.get_mut::<Lod>(mesh) {
             l.view = camera.dolly(0.99, t);
         }
-        let took = frame(&mut engine);
+        frame(&mut engine);
+        let (took, base) = lod_update(engine.world.get::<LodState>(mesh));
         if t > 0 {
             lod.push(took);
+            bases.push(base);
         }
     }
     let mean = lod.iter().sum::<f64>() / lod.len() as f64;
@@ -148,8 +161,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         rayon::current_num_threads(),
         if inside { "in it" } else { "outside" }
     );
+    let budget = shown.map_or(String::new(), |s| {
+        let (lo, hi) = bases.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &b| {
+            (lo.min(b), hi.max(b))
+        });
+        format!(", point budget {s} (base count {lo:.0} to {hi:.0})")
+    });
     println!(
-        "- lod, dolly in 1%: update {mean:.3} ms mean, {lod_median:.3} ms median over {frames} frames"
+        "- lod, dolly in 1%{budget}: update {mean:.3} ms mean, {lod_median:.3} ms median over {frames} frames"
     );
     println!(
         "- resample 10^6 every update: {r_median:.1} ms median, {r_p90:.1} ms 90th percentile"

@@ -195,6 +195,9 @@ fn run_lod(
     if args.frames == 0 {
         anyhow::bail!("--frames must be at least 1");
     }
+    if args.lod_shown == Some(0) {
+        anyhow::bail!("--lod-shown must be at least 1");
+    }
     let size = (args.width, args.height);
     let base = u32::try_from(count).context("--count: at most 2^32 - 1 with --lod")?;
     let mut camera = args
@@ -204,10 +207,8 @@ fn run_lod(
     // Room for the ranks beyond the count that near surface asks for.
     let budget = (f64::from(base) * f64::from(args.lod_max)) as usize;
     let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
-    match args.lod_shown {
-        Some(0) => anyhow::bail!("--lod-shown must be at least 1"),
-        Some(shown) => lod_scene = lod_scene.with_shown(shown),
-        None => {}
+    if let Some(shown) = args.lod_shown {
+        lod_scene = lod_scene.with_shown(shown);
     }
     let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
     let segments = (args.look.mesh != MeshMode::None)

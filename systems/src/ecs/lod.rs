@@ -64,6 +64,9 @@ pub struct LodState {
     pub pool: Option<LodPool>,
     /// The last update's change.
     pub last: Option<PoolChange>,
+    /// CPU time of the last update (the point budget's base count, new ranks and their
+    /// sites), whether or not it drew anything.
+    pub update: std::time::Duration,
     /// The base count the last update thresholded with: [`Lod::base`], or the point
     /// budget's ([`Lod::shown`], rounded to `f32` as a renderer's uniform holds it).
     pub base: f64,
@@ -137,6 +140,7 @@ pub fn update_lod_pools(
             .map_or(f64::from(lod.base), |b| f64::from(b as f32));
         let change = pool.update(s, &view, base);
         state.base = base;
+        state.update = t.elapsed();
         if change != PoolChange::Unchanged {
             stats.record(
                 Stage::Sampling,
