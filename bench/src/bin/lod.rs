@@ -234,7 +234,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // A held path's base count: the engine's point budget for the frame's view
         // (the previous frame's where nothing is in view).
         let mut held_base = base;
-        let mut base_of = |pool: &LodPool, v: &ViewLod, b: f64| {
+        let mut base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| {
             if held {
                 held_base = pool.base_for_shown(v, SHOWN).unwrap_or(held_base);
                 held_base
@@ -246,7 +246,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut before = vec![];
         for t in -WARM_UP..=0 {
             let (v, b) = frame(t);
-            let b = base_of(&pool, &v, b);
+            let b = base_of(&mut pool, &v, b);
             pool.update(s, &v, b);
             if t == 0 {
                 before = visible(&pool, s, &v, b, &mut fades);
@@ -259,7 +259,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for t in 1..=frames as i32 {
             let (v, b) = frame(t);
             let clock = Instant::now();
-            let b = base_of(&pool, &v, b);
+            let b = base_of(&mut pool, &v, b);
             let change = pool.update(s, &v, b);
             times.push(clock.elapsed().as_secs_f64() * 1e3);
             bytes.push(match change {
@@ -309,11 +309,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let v = camera.dolly(0.99, t);
         std::hint::black_box(visible(&prefix, s, &first, base, &mut fades).len());
         let clock = Instant::now();
-        std::hint::black_box(prefix.base_for_shown(&v, SHOWN));
+        std::hint::black_box(prefix.shown_estimate().mean_multiplier(&v));
         estimates.push(clock.elapsed().as_secs_f64() * 1e6);
     }
     println!(
-        "\nPoint budget: the base count for a view (`LodPool::base_for_shown`, {} probes) takes {:.0} us, median of {frames}.",
+        "\nPoint budget: the mean multiplier of a new view (`ShownEstimate::mean_multiplier`, {} probes) takes {:.0} us, median of {frames}.",
         strata_engine::sample::lod_budget::PROBES,
         median(estimates),
     );

@@ -8,7 +8,8 @@
 //! mean multiplier is estimated on the first [`PROBES`] ranks of the sequence (one in
 //! each `1 / PROBES` of the measure), whose positions and normals are kept, so that a
 //! view costs one multiplier per probe: 85 us for the 4096 on the test machine, with
-//! the probes out of cache as they are between frames (the `lod` bench). The base count that
+//! the probes out of cache as they are between frames (the `lod` bench); the last
+//! view's estimate is kept, so a still camera costs nothing. The base count that
 //! shows `S` samples is then `S / E_rho[lod]`.
 //!
 //! A renderer with a point budget (as point-cloud renderers bound the points they draw)
@@ -36,6 +37,9 @@ pub struct ShownEstimate {
     sites: Vec<SampleSite>,
     /// Their positions and unit normals on the current geometry.
     points: Vec<(DVec3, DVec3)>,
+    /// The last view [`base_for`](Self::base_for) estimated, and its mean multiplier: a
+    /// camera that has not moved costs nothing.
+    last: Option<(ViewLod, f64)>,
 }
 
 impl ShownEstimate {
@@ -45,7 +49,11 @@ impl ShownEstimate {
         let mut sites = vec![SampleSite::default(); PROBES];
         sampler.progressive_sites_into(seed, 0, &mut sites);
         let points = Self::place(&sites, sampler.mesh());
-        Self { sites, points }
+        Self {
+            sites,
+            points,
+            last: None,
+        }
     }
 
     fn place(sites: &[SampleSite], mesh: &TriMesh) -> Vec<(DVec3, DVec3)> {
@@ -60,6 +68,7 @@ impl ShownEstimate {
     pub fn set_geometry(&mut self, sampler: &Sampler, mesh: &TriMesh) -> Result<(), LodError> {
         check_deformation(sampler.mesh(), mesh)?;
         self.points = Self::place(&self.sites, mesh);
+        self.last = None;
         Ok(())
     }
 
@@ -82,9 +91,17 @@ impl ShownEstimate {
 
     /// The base count under which `view` shows about `shown` samples, at most 2^32 (the
     /// sequence's length); `None` when the view shows nothing at any base count (no
-    /// probe in view).
-    pub fn base_for(&self, view: &ViewLod, shown: f64) -> Option<f64> {
-        let mean = self.mean_multiplier(view);
+    /// probe in view). The mean multiplier of the last view asked is kept: the same
+    /// view again costs nothing.
+    pub fn base_for(&mut self, view: &ViewLod, shown: f64) -> Option<f64> {
+        let mean = match self.last {
+            Some((last, mean)) if last == *view => mean,
+            _ => {
+                let mean = self.mean_multiplier(view);
+                self.last = Some((*view, mean));
+                mean
+            }
+        };
         (mean > 0.0).then(|| (shown / mean).min(4_294_967_296.0))
     }
 }
@@ -126,7 +143,7 @@ mod tests {
     #[test]
     fn the_estimate_is_close_to_the_visible_count() {
         let s = torus_sampler();
-        let estimate = ShownEstimate::new(&s, 7);
+        let mut estimate = ShownEstimate::new(&s, 7);
         // Far and near, from above and from the side, part of the torus out of view.
         for (eye, target) in [
             (DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO),
@@ -155,7 +172,7 @@ mod tests {
     #[test]
     fn a_view_of_nothing_has_no_base() {
         let s = torus_sampler();
-        let estimate = ShownEstimate::new(&s, 7);
+        let mut estimate = ShownEstimate::new(&s, 7);
         let away = view(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 6.0));
         assert_eq!(estimate.mean_multiplier(&away), 0.0);
         assert_eq!(estimate.base_for(&away, 1e6), None);
@@ -173,6 +190,7 @@ mod tests {
         let mut estimate = ShownEstimate::new(&s, 7);
         let v = view(DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO);
         let before = estimate.mean_multiplier(&v);
+        let base = estimate.base_for(&v, 1e4).expect("in view");
         // The torus moved away from the camera: it shows less.
         let rest = s.mesh();
         let shifted: Vec<DVec3> = rest
@@ -184,6 +202,9 @@ mod tests {
         estimate.set_geometry(&s, &moved).expect("same topology");
         let after = estimate.mean_multiplier(&v);
         assert!(after < 0.8 * before, "{after} against {before}");
+        // The kept estimate of the view is dropped with the old geometry.
+        let moved_base = estimate.base_for(&v, 1e4).expect("in view");
+        assert!((moved_base * after / (base * before) - 1.0).abs() < 1e-12);
         let other = TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]])
             .expect("a triangle");
         assert!(matches!(

@@ -440,8 +440,9 @@ impl LodPool {
 
     /// The base count under which `view` shows about `shown` samples (a point budget;
     /// [`lod_budget`](super::lod_budget)), on the pool's current geometry: `None` when
-    /// nothing is in view. Cost: a multiplier per [`PROBES`](super::lod_budget::PROBES).
-    pub fn base_for_shown(&self, view: &ViewLod, shown: f64) -> Option<f64> {
+    /// nothing is in view. Cost: a multiplier per [`PROBES`](super::lod_budget::PROBES),
+    /// nothing for the view of the last call.
+    pub fn base_for_shown(&mut self, view: &ViewLod, shown: f64) -> Option<f64> {
         self.estimate.base_for(view, shown)
     }
 
