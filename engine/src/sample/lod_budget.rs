@@ -7,7 +7,7 @@
 //! count is, up to that stratification's error, `N E_rho[lod]`: linear in `N`. The
 //! mean multiplier is estimated on the first [`PROBES`] ranks of the sequence (one in
 //! each `1 / PROBES` of the measure), whose positions and normals are kept, so that a
-//! view costs one multiplier per probe: 85 us for the 4096 on the test machine, with
+//! view costs one multiplier per probe: 75-85 us for the 4096 on the test machine, with
 //! the probes out of cache as they are between frames (the `lod` bench); the last
 //! view's estimate is kept, so a still camera costs nothing. The base count that
 //! shows `S` samples is then `S / E_rho[lod]`.
@@ -67,9 +67,14 @@ impl ShownEstimate {
     /// vertices and triangles): an error, and nothing changed, when it has others.
     pub fn set_geometry(&mut self, sampler: &Sampler, mesh: &TriMesh) -> Result<(), LodError> {
         check_deformation(sampler.mesh(), mesh)?;
+        self.move_to(mesh);
+        Ok(())
+    }
+
+    /// [`set_geometry`](Self::set_geometry) for a caller that checked `mesh` already.
+    pub(crate) fn move_to(&mut self, mesh: &TriMesh) {
         self.points = Self::place(&self.sites, mesh);
         self.last = None;
-        Ok(())
     }
 
     /// The mean of `view`'s multiplier over the probes: `E_rho[lod]`.

@@ -246,7 +246,7 @@ impl LodPool {
                 bin_bound(sampler, mesh, bin.segment as usize, leaves, false, buffers)
             })
             .collect();
-        self.estimate.set_geometry(sampler, mesh)?;
+        self.estimate.move_to(mesh);
         for (i, bound) in bounds.iter().enumerate() {
             self.bounds.set(i, bound);
         }
@@ -883,7 +883,14 @@ mod tests {
             .map(|p| DVec3::new(p.x, p.y, 2.0 * p.z))
             .collect();
         let stretched = TriMesh::new(moved, rest.triangles().to_vec()).expect("mesh");
+        let mean = pool.shown_estimate().mean_multiplier(&v);
         pool.set_geometry(&s, &stretched).expect("same topology");
+        // The point budget's probes moved with the surface.
+        let mut probes = crate::sample::lod_budget::ShownEstimate::new(&s, pool.seed());
+        probes.set_geometry(&s, &stretched).expect("same topology");
+        let stretched_mean = pool.shown_estimate().mean_multiplier(&v);
+        assert_eq!(stretched_mean, probes.mean_multiplier(&v));
+        assert_ne!(stretched_mean, mean);
         let wanted = pool.complete(&v, 20_000.0);
         pool.update(&s, &v, 20_000.0);
         assert!(!wanted && pool.complete(&v, 20_000.0));

@@ -204,8 +204,10 @@ fn run_lod(
         .look
         .camera(scene, args.width as f32 / args.height as f32);
     let lod = SplatLod::for_camera(&camera, args.height, base as f32, args.lod_max);
-    // Room for the ranks beyond the count that near surface asks for.
-    let budget = (f64::from(base) * f64::from(args.lod_max)) as usize;
+    // Room for the ranks beyond the count that near surface asks for (or that a point
+    // budget beyond the count asks for).
+    let budget =
+        (f64::from(base.max(args.lod_shown.unwrap_or(0))) * f64::from(args.lod_max)) as usize;
     let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
     if let Some(shown) = args.lod_shown {
         lod_scene = lod_scene.with_shown(shown);

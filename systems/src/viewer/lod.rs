@@ -24,7 +24,7 @@ impl Viewer {
         let component = Lod {
             view: lod.view(camera, size),
             base,
-            budget: (f64::from(base) * f64::from(max)) as usize,
+            budget: (f64::from(base.max(self.lod_shown.unwrap_or(0))) * f64::from(max)) as usize,
             shown: self.lod_shown,
         };
         let mut entity = self.engine.world.entity_mut(self.mesh_entity);
