@@ -17,7 +17,7 @@
 //! - `dolly in` / `dolly out` / `orbit`, `shown held`: the same paths with the samples shown
 //!   held at 10^6, as a renderer with a point budget holds them: every frame's base
 //!   count is the engine's estimate of the one that shows 10^6 samples under the
-//!   frame's view ([`LodPool::base_for_shown`]), computed within the timed update.
+//!   frame's view ([`LodPool::frame_base`]), computed within the timed update.
 //!
 //! Per path: the visible samples of the first frame and their range over the timed
 //! frames, in millions; the kept share (the samples of
@@ -39,8 +39,8 @@
 //! from its frame thread; `LOD_OUTSIDE_POOL=1` calls the update from outside the pool
 //! (bench/README.md: on a 2-core machine it then often waits for a worker to wake).
 //!
-//! The point budget's estimate is timed alone (`LodPool::base_for_shown`, per view of
-//! the dolly in, between full passes over the pool that leave caches cold).
+//! The point budget's estimate is timed alone (`ShownEstimate::mean_multiplier`, per
+//! view of the dolly in, between full passes over the pool that leave caches cold).
 //!
 //! For comparison, `stratified` redraws `N` and `1.01 N` samples in today's stratified
 //! order and counts the samples that kept their place, and times the sampler's
@@ -212,10 +212,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             (view(centre + turn * (start - centre)), base)
         })
     };
-    // The last two paths hold the samples shown at the budget, as a renderer with a
-    // point budget does: each frame's base count is the engine's estimate of the one
-    // that shows `SHOWN` samples under its view (`LodPool::base_for_shown`), timed with
-    // the update.
+    // The `shown held` paths hold the samples shown at the budget, as a renderer with
+    // a point budget does: each frame's base count is the engine's estimate of the one
+    // that shows `SHOWN` samples under its view (`LodPool::frame_base`), timed with the
+    // update.
     let paths: [(&str, Path, bool); 7] = [
         (
             "count +1%",
@@ -231,17 +231,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     for (path, frame, held) in paths {
         let mut pool = prefix.clone();
-        // A held path's base count: the engine's point budget for the frame's view
-        // (the previous frame's where nothing is in view).
-        let mut held_base = base;
-        let mut base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| {
-            if held {
-                held_base = pool.base_for_shown(v, SHOWN).unwrap_or(held_base);
-                held_base
-            } else {
-                b
-            }
-        };
+        // A held path's base count: the engine's point budget for the frame's view.
+        let budget = held.then_some(SHOWN as u32);
+        let base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| pool.frame_base(v, b, budget);
         // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
         let mut before = vec![];
         for t in -WARM_UP..=0 {

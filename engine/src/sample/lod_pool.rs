@@ -446,6 +446,17 @@ impl LodPool {
         self.estimate.base_for(view, shown)
     }
 
+    /// The base count a frame thresholds with: `base`, or with a point budget of
+    /// `shown` samples the one under which `view` shows about that many
+    /// ([`base_for_shown`](Self::base_for_shown)), rounded to `f32` (what a GPU's
+    /// uniform holds, so that the CPU's and the GPU's thresholds pick the same ranks),
+    /// and `base` when nothing is in view.
+    pub fn frame_base(&mut self, view: &ViewLod, base: f64, shown: Option<u32>) -> f64 {
+        shown
+            .and_then(|shown| self.base_for_shown(view, f64::from(shown)))
+            .map_or(base, |b| f64::from(b as f32))
+    }
+
     /// The point budget's estimator, on the pool's current geometry.
     pub fn shown_estimate(&self) -> &ShownEstimate {
         &self.estimate
@@ -712,6 +723,22 @@ mod tests {
             .collect();
         shown.sort_by_key(|e| e.0);
         shown
+    }
+
+    /// A frame's base count: the given one without a budget or with nothing in view,
+    /// else the budget's, rounded to `f32`.
+    #[test]
+    fn a_frames_base_count_follows_the_budget() {
+        let s = torus_sampler();
+        let mut pool = LodPool::new(&s, 3, 2_000, 10_000);
+        let v = view(DVec3::new(0.0, 3.0, 3.0), 4.0);
+        assert_eq!(pool.frame_base(&v, 2_000.0, None), 2_000.0);
+        let budget = pool.frame_base(&v, 2_000.0, Some(5_000));
+        let exact = pool.base_for_shown(&v, 5_000.0).expect("in view");
+        assert_eq!(budget, f64::from(exact as f32));
+        assert!(budget != 2_000.0 && (budget / exact - 1.0).abs() < 1e-6);
+        let away = view_at(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 6.0), 4.0);
+        assert_eq!(pool.frame_base(&away, 2_000.0, Some(5_000)), 2_000.0);
     }
 
     #[test]

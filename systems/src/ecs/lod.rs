@@ -51,7 +51,7 @@ pub struct Lod {
     pub budget: usize,
     /// A point budget: when set, every update thresholds with the base count under
     /// which the camera shows about this many samples
-    /// ([`LodPool::base_for_shown`]; within 1% on the bunny), instead of `base`
+    /// ([`LodPool::frame_base`]; within 1% on the bunny), instead of `base`
     /// (which stays the pool's prefix, and the base count of a view of nothing). The
     /// base count used is [`LodState::base`]: a renderer draws with it.
     pub shown: Option<u32>,
@@ -133,11 +133,7 @@ pub fn update_lod_pools(
         let (Some(pool), Some(s)) = (state.pool.as_mut(), state.drawn_from.as_ref()) else {
             continue; // the first pool is still building
         };
-        // Rounded to f32, the GPU's threshold, so that both pick the same ranks.
-        let base = lod
-            .shown
-            .and_then(|shown| pool.base_for_shown(&view, f64::from(shown)))
-            .map_or(f64::from(lod.base), |b| f64::from(b as f32));
+        let base = pool.frame_base(&view, f64::from(lod.base), lod.shown);
         let change = pool.update(s, &view, base);
         state.base = base;
         state.update = t.elapsed();

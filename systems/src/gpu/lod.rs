@@ -388,8 +388,7 @@ impl LodScene {
 
     /// The same scene with a point budget: every [`frame`](Self::frame) thresholds
     /// with the base count under which its camera shows about `shown` samples
-    /// ([`LodPool::base_for_shown`]), rounded to `f32` so that the GPU's threshold is
-    /// the CPU's; the base count given to [`new`](Self::new) stays the pool's prefix
+    /// ([`LodPool::frame_base`]); the base count given to [`new`](Self::new) stays the pool's prefix
     /// and the base count of a view of nothing.
     pub fn with_shown(mut self, shown: u32) -> Self {
         self.shown = Some(shown);
@@ -433,11 +432,11 @@ impl LodScene {
     ) -> Result<LodFrame, GpuError> {
         let view = self.lod.view(camera, size);
         let clock = std::time::Instant::now();
-        if let Some(shown) = self.shown {
-            let base = self.pool.base_for_shown(&view, f64::from(shown));
-            self.lod.base = base.map_or(self.lod.expanded, |b| b as f32);
-        }
-        let change = self.pool.update(sampler, &view, f64::from(self.lod.base));
+        let base = self
+            .pool
+            .frame_base(&view, f64::from(self.lod.expanded), self.shown);
+        self.lod.base = base as f32;
+        let change = self.pool.update(sampler, &view, base);
         let update = clock.elapsed();
         let uploaded =
             self.gpu
