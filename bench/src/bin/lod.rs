@@ -233,7 +233,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut pool = prefix.clone();
         // A held path's base count: the engine's point budget for the frame's view.
         let budget = held.then_some(SHOWN as u32);
-        let base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| pool.frame_base(v, b, budget);
+        let base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| pool.frame_base(s, v, b, budget);
         // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
         let mut before = vec![];
         for t in -WARM_UP..=0 {

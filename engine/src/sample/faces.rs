@@ -81,13 +81,38 @@ fn face_frame(p: &[DVec3], tri: &[u32; 3], n: DVec3) -> (DVec3, DVec3) {
 /// [`position`](super::Sample::position) and [`normal`](super::Sample::normal) in `f64`.
 #[inline(always)]
 pub(crate) fn position_normal(mesh: &TriMesh, face: u32, b: [f64; 3]) -> (DVec3, DVec3) {
-    let [i, j, k] = mesh.triangles()[face as usize].map(|v| v as usize);
-    let p = mesh.positions();
-    let position = p[i] * b[0] + p[j] * b[1] + p[k] * b[2];
-    let vn = mesh.vertex_normals();
-    let normal = unit3(vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2])
-        .unwrap_or(mesh.face_normals()[face as usize]);
-    (position, normal)
+    let geometry = Geometry {
+        positions: mesh.positions(),
+        vertex_normals: mesh.vertex_normals(),
+        face_normals: mesh.face_normals(),
+    };
+    geometry.position_normal(mesh.triangles()[face as usize], face, b)
+}
+
+/// The vertex positions and normals and the face normals of a mesh or of a deformation
+/// of it (the same triangles), borrowed.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Geometry<'a> {
+    /// Per vertex, its position.
+    pub positions: &'a [DVec3],
+    /// Per vertex, its unit normal.
+    pub vertex_normals: &'a [DVec3],
+    /// Per face, its unit normal.
+    pub face_normals: &'a [DVec3],
+}
+
+impl Geometry<'_> {
+    /// [`position_normal`] on `face`, whose corners are `tri`.
+    #[inline(always)]
+    pub(crate) fn position_normal(&self, tri: [u32; 3], face: u32, b: [f64; 3]) -> (DVec3, DVec3) {
+        let [i, j, k] = tri.map(|v| v as usize);
+        let p = self.positions;
+        let position = p[i] * b[0] + p[j] * b[1] + p[k] * b[2];
+        let vn = self.vertex_normals;
+        let normal = unit3(vn[i] * b[0] + vn[j] * b[1] + vn[k] * b[2])
+            .unwrap_or(self.face_normals[face as usize]);
+        (position, normal)
+    }
 }
 
 /// Interpolates position, normal and field on `face` at barycentric coordinates `b`.

@@ -5,30 +5,73 @@
 //! ([`lod`](super::lod)). The sequence spreads every run of ranks over the surface by
 //! one measure `rho` (the curves' measure, stratified at every prefix), so the visible
 //! count is, up to that stratification's error, `N E_rho[lod]`: linear in `N`. The
-//! mean multiplier is estimated on the first [`PROBES`] ranks of the sequence (one in
-//! each `1 / PROBES` of the measure), whose positions and normals are kept, so that a
-//! view costs one multiplier per probe: 75-85 us for the 4096 on the test machine, with
-//! the probes out of cache as they are between frames (the `lod` bench); the last
-//! view's estimate is kept, so a still camera costs nothing. The base count that
-//! shows `S` samples is then `S / E_rho[lod]`.
+//! base count that shows `S` samples is then `S / E_rho[lod]`.
+//!
+//! The mean multiplier is estimated as the mean over the sequence's first `M` ranks:
+//! one rank in each `1 / M` of the measure when `M` is a power of two.
+//!
+//! - **The probes.** The first [`PROBES`] ranks: their positions and normals are kept,
+//!   so a view costs one multiplier each: 75-85 us for the 4096 on the test machine,
+//!   with the probes out of cache as they are between frames (the `lod` bench). On the
+//!   bunny's `lod` bench paths this is within 1% of the count.
+//! - **Refinement in view.** A close view sees a small part of the surface, and few
+//!   probes: on the bunny, 2.5 times the budget shown 0.03 bounding radii from the
+//!   surface, and the base count jumping by 1.3-1.5 times between frames of a smooth
+//!   dolly as probes cross the frame's edge. While fewer than [`IN_VIEW`] of the ranks
+//!   averaged are in view, `M` doubles: the new ranks `M..2M` are enumerated only in
+//!   the bins of a pool ([`LodPool`](super::LodPool)) whose bound of the multiplier is
+//!   above 0 (elsewhere every multiplier is 0), placed, and their multipliers added.
+//!   The cost is about `IN_VIEW` times the measure of those bins over the measure in
+//!   view, at most [`REFINE_LIMIT`] ranks per view.
+//!
+//! The estimate depends on the view alone (and the seed and geometry), never on the
+//! path of the camera or on the ranks a pool holds; fixed chunks of bins summed in
+//! order make it the same for any thread count. The last view's estimate is kept, so a
+//! still camera costs nothing.
 //!
 //! A renderer with a point budget (as point-cloud renderers bound the points they draw)
 //! sets the base count of every frame this way, so that the shown count stays at its
 //! budget while the camera moves: a dolly in then refines near the camera and thins
-//! elsewhere instead of showing ever more samples. On the bunny's `lod` bench paths
-//! the estimate is within 1% of the count (bench/README.md).
+//! elsewhere instead of showing ever more samples.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
-use super::faces::position_normal;
+use super::faces::{Geometry, position_normal};
 use super::lod::{LodError, ViewLod, check_deformation};
+use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
+use crate::curve::LeafScratch;
 use crate::mesh::TriMesh;
 
 /// Probes of the mean multiplier: the first this many ranks of the sequence. On the
 /// bunny's `lod` bench paths, 4096 estimate the shown count within 1% (1024: within
 /// 4.5%, 16384: within 0.3%).
 pub const PROBES: usize = 4096;
+
+/// Ranks in view (multiplier above 0) the estimate refines to: the probes' count in
+/// view on the bunny's `lod` bench paths is about 2000 when it is all in view.
+pub const IN_VIEW: usize = 1024;
+
+/// The most ranks the refinement of one view places beyond the probes (about 1-2 ms of
+/// one core; reached only when the view shows a small part of one bin).
+pub const REFINE_LIMIT: usize = 1 << 15;
+
+/// Bins per task of a refinement.
+const REFINE_CHUNK: usize = 16;
+
+/// A view's estimate of the mean multiplier `E_rho[lod]` (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeanMultiplier {
+    /// The mean multiplier over the first [`ranks`](Self::ranks) ranks.
+    pub mean: f64,
+    /// The ranks averaged: [`PROBES`] times a power of two.
+    pub ranks: u64,
+    /// Of them, those in view (multiplier above 0).
+    pub in_view: usize,
+    /// Ranks placed for this view beyond the probes.
+    pub placed: usize,
+}
 
 /// The estimator of a point budget: see the module docs.
 #[derive(Clone, Debug)]
@@ -37,9 +80,28 @@ pub struct ShownEstimate {
     sites: Vec<SampleSite>,
     /// Their positions and unit normals on the current geometry.
     points: Vec<(DVec3, DVec3)>,
-    /// The last view [`base_for`](Self::base_for) estimated, and its mean multiplier: a
-    /// camera that has not moved costs nothing.
-    last: Option<(ViewLod, f64)>,
+    /// The current geometry when it is a deformation of the sampler's mesh: vertex
+    /// positions, vertex normals and face normals.
+    deformed: Option<[Vec<DVec3>; 3]>,
+    /// The last view estimated, and its estimate: a camera that has not moved costs
+    /// nothing.
+    last: Option<(ViewLod, MeanMultiplier)>,
+    /// Per chunk of [`REFINE_CHUNK`] bins, a refinement's lists (kept, so that
+    /// refinements stop allocating).
+    lists: Vec<ProbeList>,
+}
+
+/// One chunk's part of a refinement.
+#[derive(Clone, Debug, Default)]
+struct ProbeList {
+    ranks: Vec<u32>,
+    sites: Vec<SampleSite>,
+    /// The sum of the chunk's multipliers, in order.
+    sum: f64,
+    /// Ranks in view.
+    in_view: usize,
+    /// Ranks placed.
+    placed: usize,
 }
 
 impl ShownEstimate {
@@ -52,7 +114,9 @@ impl ShownEstimate {
         Self {
             sites,
             points,
+            deformed: None,
             last: None,
+            lists: Vec::new(),
         }
     }
 
@@ -72,54 +136,159 @@ impl ShownEstimate {
     }
 
     /// [`set_geometry`](Self::set_geometry) for a caller that checked `mesh` already.
+    /// Keeps a copy of its vertices and face normals for the refinement (what
+    /// [`Sampler::record`] reads of a mesh besides its triangles).
     pub(crate) fn move_to(&mut self, mesh: &TriMesh) {
         self.points = Self::place(&self.sites, mesh);
+        let copy = |from: &[DVec3], to: &mut Vec<DVec3>| {
+            to.clear();
+            to.extend_from_slice(from);
+        };
+        let deformed = self.deformed.get_or_insert_with(Default::default);
+        copy(mesh.positions(), &mut deformed[0]);
+        copy(mesh.vertex_normals(), &mut deformed[1]);
+        copy(mesh.face_normals(), &mut deformed[2]);
         self.last = None;
     }
 
-    /// The mean of `view`'s multiplier over the probes: `E_rho[lod]`.
+    /// The mean of `view`'s multiplier over the [`PROBES`] alone (no refinement).
     pub fn mean_multiplier(&self, view: &ViewLod) -> f64 {
+        self.probe(view).mean
+    }
+
+    /// The probes' estimate of `view` alone (no refinement; what
+    /// [`LodPool::mean_multiplier`](super::LodPool::mean_multiplier) refines).
+    pub fn probe(&self, view: &ViewLod) -> MeanMultiplier {
         // One thread, in order: the same sum whatever the thread count, and faster than
         // waking rayon's workers for 4096 multipliers (85 us here against 120 us).
-        let sum: f64 = self
-            .points
-            .iter()
-            .map(|&(p, n)| view.multiplier(p, n))
-            .sum();
-        sum / self.points.len() as f64
+        let (mut sum, mut in_view) = (0.0, 0);
+        for &(p, n) in &self.points {
+            let m = view.multiplier(p, n);
+            sum += m;
+            in_view += usize::from(m > 0.0);
+        }
+        MeanMultiplier {
+            mean: sum / PROBES as f64,
+            ranks: PROBES as u64,
+            in_view,
+            placed: 0,
+        }
     }
 
-    /// About how many samples `view` shows with base count `base`.
-    pub fn shown(&self, view: &ViewLod, base: f64) -> f64 {
-        base * self.mean_multiplier(view)
+    /// The estimate kept for `view`, if it is the last view estimated.
+    pub(crate) fn kept(&self, view: &ViewLod) -> Option<MeanMultiplier> {
+        self.last.filter(|(last, _)| last == view).map(|(_, e)| e)
     }
 
-    /// The base count under which `view` shows about `shown` samples, at most 2^32 (the
-    /// sequence's length); `None` when the view shows nothing at any base count (no
-    /// probe in view). The mean multiplier of the last view asked is kept: the same
-    /// view again costs nothing.
-    pub fn base_for(&mut self, view: &ViewLod, shown: f64) -> Option<f64> {
-        let mean = match self.last {
-            Some((last, mean)) if last == *view => mean,
-            _ => {
-                let mean = self.mean_multiplier(view);
-                self.last = Some((*view, mean));
-                mean
-            }
+    /// Keeps `estimate` as `view`'s, and returns it.
+    pub(crate) fn keep(&mut self, view: &ViewLod, estimate: MeanMultiplier) -> MeanMultiplier {
+        self.last = Some((*view, estimate));
+        estimate
+    }
+
+    /// Refines the probes' estimate `probes` of `view`: doubles the ranks averaged while
+    /// fewer than [`IN_VIEW`] are in view, the next doubling fits [`REFINE_LIMIT`] and
+    /// the ranks stay within `2^31`. The new ranks are drawn in the bins `live` only
+    /// (every bin where a multiplier may be above 0), whose dyadic covers `cover` gives
+    /// and whose shares of the measure are `shares`.
+    pub(crate) fn refine<'c>(
+        &mut self,
+        sampler: &Sampler,
+        view: &ViewLod,
+        probes: MeanMultiplier,
+        live: &[u32],
+        cover: impl Fn(usize) -> &'c RankCover + Sync,
+        shares: &[f64],
+    ) -> MeanMultiplier {
+        let share: f64 = live.iter().map(|&b| shares[b as usize]).sum();
+        let chunks = live.len().div_ceil(REFINE_CHUNK);
+        if self.lists.len() < chunks {
+            self.lists.resize_with(chunks, Default::default);
+        }
+        let mesh = sampler.mesh();
+        let geometry = match &self.deformed {
+            Some([positions, vertex_normals, face_normals]) => Geometry {
+                positions,
+                vertex_normals,
+                face_normals,
+            },
+            None => Geometry {
+                positions: mesh.positions(),
+                vertex_normals: mesh.vertex_normals(),
+                face_normals: mesh.face_normals(),
+            },
         };
-        (mean > 0.0).then(|| (shown / mean).min(4_294_967_296.0))
+        let mut sum = probes.mean * PROBES as f64;
+        let (mut ranks, mut in_view, mut placed) = (probes.ranks, probes.in_view, 0);
+        // `share * ranks` is the number of new ranks expected in the bins.
+        while in_view < IN_VIEW
+            && !live.is_empty()
+            && ranks < 1 << 31
+            && placed as f64 + share * ranks as f64 <= REFINE_LIMIT as f64
+        {
+            let (from, to) = (ranks as u32, 2 * ranks as u32);
+            self.lists[..chunks]
+                .par_iter_mut()
+                .zip(live.par_chunks(REFINE_CHUNK))
+                .for_each_init(LeafScratch::default, |scratch, (list, bins)| {
+                    let (mut s, mut seen) = (0.0, 0);
+                    list.placed = 0;
+                    for &b in bins {
+                        let cover = cover(b as usize);
+                        list.ranks.clear();
+                        sampler.progressive_ranks_in_cover(
+                            cover,
+                            from,
+                            to,
+                            usize::MAX,
+                            &mut list.ranks,
+                        );
+                        list.sites.resize(list.ranks.len(), SampleSite::default());
+                        list.placed += list.ranks.len();
+                        sampler.progressive_cover_sites_with(
+                            cover,
+                            &list.ranks,
+                            &mut list.sites,
+                            scratch,
+                        );
+                        for site in &list.sites {
+                            let tri = mesh.triangles()[site.face as usize];
+                            let b = site.barycentric().map(f64::from);
+                            let (p, n) = geometry.position_normal(tri, site.face, b);
+                            let m = view.multiplier(p, n);
+                            s += m;
+                            seen += usize::from(m > 0.0);
+                        }
+                    }
+                    list.sum = s;
+                    list.in_view = seen;
+                });
+            for list in &self.lists[..chunks] {
+                sum += list.sum;
+                in_view += list.in_view;
+                placed += list.placed;
+            }
+            ranks *= 2;
+        }
+        MeanMultiplier {
+            mean: sum / ranks as f64,
+            ranks,
+            in_view,
+            placed,
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sample::LodPool;
     use crate::sample::lod::fade;
     use crate::surface::tests::torus_sampler;
 
     fn view(eye: DVec3, target: DVec3) -> ViewLod {
         let fov = 50f64.to_radians();
-        let proj = glam::dcamera::rh::proj::directx::perspective(fov, 1.5, 0.01, 100.0);
+        let proj = glam::dcamera::rh::proj::directx::perspective(fov, 1.5, 0.001, 100.0);
         let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
         ViewLod {
             clip_from_world: proj * look,
@@ -131,24 +300,56 @@ mod tests {
         }
     }
 
-    /// The ranks below `end` visible under `v` with base `base`, by a scan.
-    fn count(s: &Sampler, seed: u64, end: u32, v: &ViewLod, base: f64) -> usize {
+    /// The multipliers of ranks `0..end` under `v`, by a scan.
+    fn multipliers(s: &Sampler, seed: u64, end: u32, v: &ViewLod) -> Vec<f64> {
         let mut sites = vec![SampleSite::default(); end as usize];
         s.progressive_sites_into(seed, 0, &mut sites);
-        (0..end)
-            .zip(&sites)
-            .filter(|&(k, site)| {
+        sites
+            .iter()
+            .map(|site| {
                 let (p, n) =
                     position_normal(s.mesh(), site.face, site.barycentric().map(f64::from));
-                fade(k, base, v.multiplier(p, n)) > 0.0
+                v.multiplier(p, n)
             })
+            .collect()
+    }
+
+    /// The ranks below `end` visible under `v` with base `base`, by a scan.
+    fn count(s: &Sampler, seed: u64, end: u32, v: &ViewLod, base: f64) -> usize {
+        let lods = multipliers(s, seed, end, v);
+        (0..end)
+            .zip(lods)
+            .filter(|&(k, lod)| fade(k, base, lod) > 0.0)
             .count()
+    }
+
+    /// The samples `pool` shows under `v` with base `base`, once it holds them all.
+    fn shown(pool: &mut LodPool, s: &Sampler, v: &ViewLod, base: f64) -> usize {
+        pool.update(s, v, base);
+        assert!(pool.complete(v, base));
+        let mut fades = vec![0.0; pool.len()];
+        pool.fades_into(s, v, base, &mut fades);
+        fades.iter().filter(|&&f| f > 0.0).count()
+    }
+
+    /// A camera `distance` above the torus's highest vertex, along its normal, looking
+    /// down at it: a small part of the surface in view (the rest of the torus below it
+    /// faces away).
+    fn close_view(s: &Sampler, distance: f64) -> ViewLod {
+        let mesh = s.mesh();
+        let (i, &p) = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.z.total_cmp(&b.1.z))
+            .expect("vertices");
+        view(p + mesh.vertex_normals()[i] * distance, p)
     }
 
     #[test]
     fn the_estimate_is_close_to_the_visible_count() {
         let s = torus_sampler();
-        let mut estimate = ShownEstimate::new(&s, 7);
+        let mut pool = LodPool::new(&s, 7, 0, 1 << 22);
         // Far and near, from above and from the side, part of the torus out of view.
         for (eye, target) in [
             (DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO),
@@ -156,66 +357,146 @@ mod tests {
             (DVec3::new(1.6, 0.6, 0.6), DVec3::new(1.0, 0.0, 0.0)),
         ] {
             let v = view(eye, target);
-            let mean = estimate.mean_multiplier(&v);
+            let estimate = pool.mean_multiplier(&s, &v);
             // A base under which at most max * base ranks can show: the scan covers them.
             let base = 20_000.0;
             let exact = count(&s, 7, (base * v.max) as u32 + 1, &v, base) as f64;
-            let guess = estimate.shown(&v, base);
+            let guess = base * estimate.mean;
             assert!(exact > 1000.0, "{eye}: {exact} shown");
             assert!(
                 (guess / exact - 1.0).abs() < 0.03,
-                "{eye}: estimate {guess} against {exact} (mean multiplier {mean})"
+                "{eye}: estimate {guess} against {exact} ({estimate:?})"
             );
-            let b = estimate.base_for(&v, exact).expect("in view");
+            let b = pool.base_for_shown(&s, &v, exact).expect("in view");
             assert!((b / base - 1.0).abs() < 0.03, "{eye}: base {b}");
             // A smaller budget, a proportionally smaller base.
-            let half = estimate.base_for(&v, exact / 2.0).expect("in view");
+            let half = pool.base_for_shown(&s, &v, exact / 2.0).expect("in view");
             assert!((half / b - 0.5).abs() < 1e-12);
         }
     }
 
     #[test]
+    fn a_close_view_refines_the_estimate() {
+        let s = torus_sampler();
+        let mut pool = LodPool::new(&s, 7, 0, 1 << 22);
+        for distance in [0.05, 0.02] {
+            let v = close_view(&s, distance);
+            let probes = pool.shown_estimate().probe(&v);
+            let estimate = pool.mean_multiplier(&s, &v);
+            assert!(probes.in_view < 100, "{distance}: {probes:?}");
+            assert!(estimate.ranks > PROBES as u64 && estimate.placed > 0);
+            assert!(estimate.placed <= REFINE_LIMIT, "{distance}: {estimate:?}");
+            // Refined to IN_VIEW ranks in view (0.05), or until the next doubling would
+            // pass the limit (0.02: the view sees a small part of its bins).
+            assert!(
+                estimate.in_view >= IN_VIEW || estimate.placed > REFINE_LIMIT / 2,
+                "{distance}: {estimate:?}"
+            );
+            // The budget is shown, within 3%, where the probes alone are far off.
+            let budget = 20_000.0;
+            let base = pool.base_for_shown(&s, &v, budget).expect("in view");
+            let exact = shown(&mut pool, &s, &v, base) as f64;
+            assert!(
+                (exact / budget - 1.0).abs() < 0.03,
+                "{distance}: {exact} shown for {budget} ({estimate:?})"
+            );
+            let guess = probes.mean * base;
+            assert!(
+                (guess / exact - 1.0).abs() > 0.1,
+                "{distance}: the probes alone guess {guess} against {exact}"
+            );
+            // The same view again: the kept estimate.
+            assert_eq!(pool.mean_multiplier(&s, &v), estimate);
+        }
+    }
+
+    #[test]
+    fn the_refined_estimate_is_the_mean_over_a_prefix_for_any_thread_count() {
+        let s = torus_sampler();
+        let v = close_view(&s, 0.3);
+        let on = |threads: usize| {
+            let workers = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool");
+            workers.install(|| LodPool::new(&s, 7, 0, 1 << 20).mean_multiplier(&s, &v))
+        };
+        let estimate = on(1);
+        assert_eq!(on(3), estimate, "bit for bit");
+        assert!(estimate.ranks > PROBES as u64 && estimate.ranks <= 1 << 20);
+        let lods = multipliers(&s, 7, estimate.ranks as u32, &v);
+        let mean = lods.iter().sum::<f64>() / lods.len() as f64;
+        // The same ranks, summed in another order.
+        assert!(
+            (estimate.mean / mean - 1.0).abs() < 1e-12,
+            "{estimate:?} against {mean}"
+        );
+        let in_view = lods.iter().filter(|&&m| m > 0.0).count();
+        assert_eq!(estimate.in_view, in_view);
+        // One fewer doubling would have seen fewer than IN_VIEW.
+        let half = estimate.ranks as usize / 2;
+        assert!(lods[..half].iter().filter(|&&m| m > 0.0).count() < IN_VIEW);
+    }
+
+    #[test]
     fn a_view_of_nothing_has_no_base() {
         let s = torus_sampler();
-        let mut estimate = ShownEstimate::new(&s, 7);
+        let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
         let away = view(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 6.0));
-        assert_eq!(estimate.mean_multiplier(&away), 0.0);
-        assert_eq!(estimate.base_for(&away, 1e6), None);
+        let estimate = pool.mean_multiplier(&s, &away);
+        assert_eq!((estimate.mean, estimate.placed), (0.0, 0), "{estimate:?}");
+        assert_eq!(pool.base_for_shown(&s, &away, 1e6), None);
         // A tiny multiplier: the base is capped at the sequence's length.
         let far = ViewLod {
             reference: 1e300,
             ..view(DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO)
         };
-        assert_eq!(estimate.base_for(&far, 1e6), Some(4_294_967_296.0));
+        assert_eq!(pool.base_for_shown(&s, &far, 1e6), Some(4_294_967_296.0));
     }
 
     #[test]
     fn deformed_probes_follow_the_mesh() {
         let s = torus_sampler();
-        let mut estimate = ShownEstimate::new(&s, 7);
+        let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
         let v = view(DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO);
-        let before = estimate.mean_multiplier(&v);
-        let base = estimate.base_for(&v, 1e4).expect("in view");
+        let before = pool.mean_multiplier(&s, &v).mean;
+        let base = pool.base_for_shown(&s, &v, 1e4).expect("in view");
         // The torus moved away from the camera: it shows less.
         let rest = s.mesh();
-        let shifted: Vec<DVec3> = rest
-            .positions()
-            .iter()
-            .map(|&p| p - DVec3::new(0.0, 1.0, 1.0))
-            .collect();
+        let shift = DVec3::new(0.0, 1.0, 1.0);
+        let shifted: Vec<DVec3> = rest.positions().iter().map(|&p| p - shift).collect();
         let moved = TriMesh::new(shifted, rest.triangles().to_vec()).expect("mesh");
-        estimate.set_geometry(&s, &moved).expect("same topology");
-        let after = estimate.mean_multiplier(&v);
+        pool.set_geometry(&s, &moved).expect("same topology");
+        let after = pool.mean_multiplier(&s, &v).mean;
         assert!(after < 0.8 * before, "{after} against {before}");
         // The kept estimate of the view is dropped with the old geometry.
-        let moved_base = estimate.base_for(&v, 1e4).expect("in view");
+        let moved_base = pool.base_for_shown(&s, &v, 1e4).expect("in view");
         assert!((moved_base * after / (base * before) - 1.0).abs() < 1e-12);
+        // The refinement follows the moved surface: a close view moved with it sees
+        // what it saw on the rest geometry bounded alike (up to rounding).
+        let near = close_view(&s, 0.05);
+        let near_moved = ViewLod {
+            clip_from_world: near.clip_from_world * glam::DMat4::from_translation(shift),
+            eye: near.eye - shift,
+            ..near
+        };
+        let close_moved = pool.mean_multiplier(&s, &near_moved);
+        let mut at_rest = LodPool::new(&s, 7, 0, 1 << 20);
+        at_rest.set_geometry(&s, rest).expect("the rest mesh");
+        let close = at_rest.mean_multiplier(&s, &near);
+        assert!(close.placed > 0 && close_moved.ranks == close.ranks);
+        assert_eq!(close_moved.in_view, close.in_view);
+        assert!((close_moved.mean / close.mean - 1.0).abs() < 1e-9);
         let other = TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]])
             .expect("a triangle");
         assert!(matches!(
-            estimate.set_geometry(&s, &other),
+            pool.shown_estimate().clone().set_geometry(&s, &other),
             Err(LodError::Mismatch { .. })
         ));
-        assert_eq!(estimate.mean_multiplier(&v), after);
+        assert!(matches!(
+            pool.set_geometry(&s, &other),
+            Err(LodError::Mismatch { .. })
+        ));
+        assert_eq!(pool.mean_multiplier(&s, &v).mean, after);
     }
 }

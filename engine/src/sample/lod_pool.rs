@@ -43,7 +43,7 @@ use rayon::prelude::*;
 
 use super::lod::{LodError, ViewLod, check_deformation, fade};
 use super::lod_bounds::{BoundSet, Frustum, RegionBound};
-use super::lod_budget::ShownEstimate;
+use super::lod_budget::{IN_VIEW, MeanMultiplier, ShownEstimate};
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
 use crate::curve::LeafScratch;
@@ -123,6 +123,9 @@ pub struct LodPool {
     lists: Vec<BinList>,
     /// The point budget's estimator, on the current geometry.
     estimate: ShownEstimate,
+    /// The bins a refinement of the estimate draws in (kept, so that refinements stop
+    /// allocating).
+    live: Vec<u32>,
 }
 
 impl Clone for LodPool {
@@ -145,6 +148,7 @@ impl Clone for LodPool {
             runs: self.runs.clone(),
             lists: self.lists.clone(),
             estimate: self.estimate.clone(),
+            live: self.live.clone(),
         }
     }
 }
@@ -322,6 +326,7 @@ impl LodPool {
             runs: Vec::new(),
             lists: Vec::new(),
             estimate: ShownEstimate::new(sampler, seed),
+            live: Vec::new(),
         }
     }
 
@@ -409,6 +414,17 @@ impl LodPool {
             .for_each(|(c, dst)| self.bounds.multipliers_into(&frustum, c * BOUND_CHUNK, dst));
     }
 
+    /// Bounds every bin's multiplier under `view` into `multipliers`, unless they hold
+    /// its bounds already.
+    fn bound_view(&mut self, view: &ViewLod) {
+        if self.bounded.as_ref() != Some(view) {
+            let mut multipliers = std::mem::take(&mut self.multipliers);
+            self.bound_bins(view, &mut multipliers);
+            self.multipliers = multipliers;
+            self.bounded = Some(*view);
+        }
+    }
+
     /// Writes into `needs` each bin's needed rank under multiplier bounds
     /// `multipliers` with base count `base`: `ceil(base * bound)`, saturated at
     /// `u32::MAX`.
@@ -439,11 +455,49 @@ impl LodPool {
     }
 
     /// The base count under which `view` shows about `shown` samples (a point budget;
-    /// [`lod_budget`](super::lod_budget)), on the pool's current geometry: `None` when
-    /// nothing is in view. Cost: a multiplier per [`PROBES`](super::lod_budget::PROBES),
+    /// [`lod_budget`](super::lod_budget)), on the pool's current geometry, at most
+    /// 2^32 (the sequence's length): `None` when the estimate sees nothing in view.
+    /// Cost: [`mean_multiplier`](Self::mean_multiplier)'s.
+    pub fn base_for_shown(&mut self, sampler: &Sampler, view: &ViewLod, shown: f64) -> Option<f64> {
+        let mean = self.mean_multiplier(sampler, view).mean;
+        (mean > 0.0).then(|| (shown / mean).min(4_294_967_296.0))
+    }
+
+    /// The point budget's estimate of `view`'s mean multiplier over the sequence's
+    /// measure ([`lod_budget`](super::lod_budget)), on the pool's current geometry
+    /// (`sampler` must be the pool's). Cost: a multiplier per
+    /// [`PROBES`](super::lod_budget::PROBES); when fewer than
+    /// [`IN_VIEW`](super::lod_budget::IN_VIEW) of them are in view, the bins' bounds
+    /// (which the next [`update`](Self::update) for the view reuses) and the
+    /// refinement's ranks, at most [`REFINE_LIMIT`](super::lod_budget::REFINE_LIMIT);
     /// nothing for the view of the last call.
-    pub fn base_for_shown(&mut self, view: &ViewLod, shown: f64) -> Option<f64> {
-        self.estimate.base_for(view, shown)
+    pub fn mean_multiplier(&mut self, sampler: &Sampler, view: &ViewLod) -> MeanMultiplier {
+        if let Some(kept) = self.estimate.kept(view) {
+            return kept;
+        }
+        let probes = self.estimate.probe(view);
+        if probes.in_view >= IN_VIEW {
+            return self.estimate.keep(view, probes);
+        }
+        self.bound_view(view);
+        self.live.clear();
+        self.live.extend(
+            self.multipliers
+                .iter()
+                .enumerate()
+                .filter(|&(_, &m)| m > 0.0)
+                .map(|(b, _)| b as u32),
+        );
+        let bins = &self.bins;
+        let refined = self.estimate.refine(
+            sampler,
+            view,
+            probes,
+            &self.live,
+            |b| &bins[b].cover,
+            &self.shares,
+        );
+        self.estimate.keep(view, refined)
     }
 
     /// The base count a frame thresholds with: `base`, or with a point budget of
@@ -451,9 +505,15 @@ impl LodPool {
     /// ([`base_for_shown`](Self::base_for_shown)), rounded to `f32` (what a GPU's
     /// uniform holds, so that the CPU's and the GPU's thresholds pick the same ranks),
     /// and `base` when nothing is in view.
-    pub fn frame_base(&mut self, view: &ViewLod, base: f64, shown: Option<u32>) -> f64 {
+    pub fn frame_base(
+        &mut self,
+        sampler: &Sampler,
+        view: &ViewLod,
+        base: f64,
+        shown: Option<u32>,
+    ) -> f64 {
         shown
-            .and_then(|shown| self.base_for_shown(view, f64::from(shown)))
+            .and_then(|shown| self.base_for_shown(sampler, view, f64::from(shown)))
             .map_or(base, |b| f64::from(b as f32))
     }
 
@@ -481,12 +541,7 @@ impl LodPool {
     pub fn update(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> PoolChange {
         let start = self.sites.len();
         self.runs.clear();
-        if self.bounded.as_ref() != Some(view) {
-            let mut multipliers = std::mem::take(&mut self.multipliers);
-            self.bound_bins(view, &mut multipliers);
-            self.multipliers = multipliers;
-            self.bounded = Some(*view);
-        }
+        self.bound_view(view);
         Self::needs_from(&self.multipliers, base, &mut self.needs);
         if self.extend(sampler) {
             return self.finish(sampler, start);
@@ -732,13 +787,13 @@ mod tests {
         let s = torus_sampler();
         let mut pool = LodPool::new(&s, 3, 2_000, 10_000);
         let v = view(DVec3::new(0.0, 3.0, 3.0), 4.0);
-        assert_eq!(pool.frame_base(&v, 2_000.0, None), 2_000.0);
-        let budget = pool.frame_base(&v, 2_000.0, Some(5_000));
-        let exact = pool.base_for_shown(&v, 5_000.0).expect("in view");
+        assert_eq!(pool.frame_base(&s, &v, 2_000.0, None), 2_000.0);
+        let budget = pool.frame_base(&s, &v, 2_000.0, Some(5_000));
+        let exact = pool.base_for_shown(&s, &v, 5_000.0).expect("in view");
         assert_eq!(budget, f64::from(exact as f32));
         assert!(budget != 2_000.0 && (budget / exact - 1.0).abs() < 1e-6);
         let away = view_at(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 6.0), 4.0);
-        assert_eq!(pool.frame_base(&away, 2_000.0, Some(5_000)), 2_000.0);
+        assert_eq!(pool.frame_base(&s, &away, 2_000.0, Some(5_000)), 2_000.0);
     }
 
     #[test]

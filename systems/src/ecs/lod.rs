@@ -133,7 +133,7 @@ pub fn update_lod_pools(
         let (Some(pool), Some(s)) = (state.pool.as_mut(), state.drawn_from.as_ref()) else {
             continue; // the first pool is still building
         };
-        let base = pool.frame_base(&view, f64::from(lod.base), lod.shown);
+        let base = pool.frame_base(s, &view, f64::from(lod.base), lod.shown);
         let change = pool.update(s, &view, base);
         state.base = base;
         state.update = t.elapsed();

@@ -434,7 +434,7 @@ impl LodScene {
         let clock = std::time::Instant::now();
         let base = self
             .pool
-            .frame_base(&view, f64::from(self.lod.expanded), self.shown);
+            .frame_base(sampler, &view, f64::from(self.lod.expanded), self.shown);
         self.lod.base = base as f32;
         let change = self.pool.update(sampler, &view, base);
         let update = clock.elapsed();

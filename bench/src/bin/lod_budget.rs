@@ -1,0 +1,152 @@
+//! The point budget on close views (issue 19): a camera moves from 2 bounding radii
+//! above the bunny's surface down to 0.01, 3% nearer per frame, looking at the surface
+//! point it approaches, with a budget of `S` samples shown (default 10^5):
+//! `cargo run --release -p strata-bench --bin lod_budget [-- S]`.
+//!
+//! The camera is the `lod` bench's (1280 x 720, 45 degrees, back faces culled,
+//! multiplier clamped at 4) on the bunny (3:1 field, seed 3). Per frame, two base
+//! counts: the probes' alone (`ShownEstimate::mean_multiplier`, the first 4096 ranks)
+//! and the engine's (`LodPool::base_for_shown`, refined in view); for each, the samples
+//! a pool then shows (`LodPool::fades_into`, exact) over the budget, and the ratio of
+//! the base count to the previous frame's (a jump pops samples everywhere in view).
+//! The engine's estimate is timed on each new view (its bounds included, which the
+//! frame's update reuses), the frame thread in rayon's pool as in the `lod` bench.
+
+use std::time::Instant;
+
+use glam::DVec3;
+use strata_bench::lod_camera::LodCamera;
+use strata_engine::sample::LodPool;
+use strata_engine::sample::lod::ViewLod;
+use strata_systems::scene::Scene;
+
+const SEED: u64 = 3;
+
+/// The samples the pool shows under `v` with base `base` (after drawing them).
+fn shown(
+    pool: &mut LodPool,
+    s: &strata_engine::sample::Sampler,
+    v: &ViewLod,
+    base: f64,
+    fades: &mut Vec<f32>,
+) -> f64 {
+    pool.update(s, v, base);
+    fades.resize(pool.len(), 0.0);
+    pool.fades_into(s, v, base, fades);
+    fades.iter().filter(|&&f| f > 0.0).count() as f64
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let budget = strata_bench::repeats_arg(100_000)? as f64;
+    rayon::ThreadPoolBuilder::new()
+        .use_current_thread()
+        .build_global()?;
+    let file = match strata_bench::shared_mesh_dir() {
+        Ok(_) => "stanford-bunny-anisotropic.ron",
+        Err(e) => {
+            eprintln!("{e}; using the default scene");
+            "default.ron"
+        }
+    };
+    let (name, mut config) = strata_bench::bundled_scenes(&[("scene", file)])?.remove(0);
+    config.sampling.seed = SEED;
+    let scene = Scene::build(&config)?;
+    let s = &scene.sampler;
+    let mesh = &scene.mesh;
+    let camera = LodCamera::around(mesh.positions());
+    let radius = (camera.start - camera.centre).length() / 2.5;
+    // The surface point nearest the `lod` bench's first eye, and its normal.
+    let (vertex, &target) = mesh
+        .positions()
+        .iter()
+        .enumerate()
+        .min_by(|a, b| {
+            a.1.distance(camera.start)
+                .total_cmp(&b.1.distance(camera.start))
+        })
+        .ok_or("an empty mesh")?;
+    let normal = mesh.vertex_normals()[vertex];
+    println!(
+        "{name} `{file}`: {} faces, budget {budget} samples shown, the camera 3% nearer per frame.\n",
+        mesh.face_count()
+    );
+    println!(
+        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks placed | estimate ms | shown / budget | base step, probes alone | base step |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let mut pool = LodPool::new(s, SEED, 0, usize::MAX / 4);
+    let mut alone = pool.clone();
+    let mut fades = Vec::new();
+    let (mut last, mut last_alone) = (None::<f64>, None::<f64>);
+    let (mut worst, mut worst_alone, mut step, mut step_alone) = (0.0f64, 0.0f64, 1.0f64, 1.0f64);
+    let mut times = Vec::new();
+    let (mut frame, mut distance) = (0, 2.0 * radius);
+    while distance > 0.01 * radius {
+        let eye = target + normal * distance;
+        let proj = glam::dcamera::rh::proj::directx::perspective(
+            std::f64::consts::FRAC_PI_4,
+            1280.0 / 720.0,
+            1e-4 * radius,
+            100.0 * radius,
+        );
+        let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
+        let v = ViewLod {
+            clip_from_world: proj * look,
+            ..camera.view(eye)
+        };
+        let probed = pool.shown_estimate().probe(&v);
+        let probes = probed.mean;
+        let in_view_alone = (probes > 0.0).then_some(());
+        let t = Instant::now();
+        let estimate = pool.mean_multiplier(s, &v);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        times.push(ms);
+        let base = pool
+            .base_for_shown(s, &v, budget)
+            .ok_or("nothing in view")?;
+        let ratio = shown(&mut pool, s, &v, base, &mut fades) / budget;
+        let (ratio_alone, base_alone) = match in_view_alone {
+            Some(()) => {
+                let b = (budget / probes).min(4_294_967_296.0);
+                (shown(&mut alone, s, &v, b, &mut fades) / budget, Some(b))
+            }
+            None => (f64::INFINITY, None),
+        };
+        let jump = |b: f64, l: Option<f64>| l.map_or(1.0, |l| (b / l).max(l / b));
+        let (j, j_alone) = (
+            jump(base, last),
+            base_alone.map_or(f64::INFINITY, |b| jump(b, last_alone)),
+        );
+        // Ignore the steps of the first frames: the camera starts there.
+        if frame > 0 {
+            step = step.max(j);
+            step_alone = step_alone.max(j_alone);
+        }
+        worst = worst.max((ratio - 1.0).abs());
+        worst_alone = worst_alone.max((ratio_alone - 1.0).abs());
+        if frame % 8 == 0 {
+            let probes_in_view = probed.in_view;
+            println!(
+                "| {:.3} | {probes_in_view} | {ratio_alone:.3} | {} | {} | {} | {ms:.2} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
+                distance / radius,
+                estimate.ranks,
+                estimate.in_view,
+                estimate.placed
+            );
+        }
+        last = Some(base);
+        last_alone = base_alone;
+        frame += 1;
+        distance *= 0.97;
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}.",
+        100.0 * worst_alone,
+        100.0 * worst,
+        times[times.len() / 2],
+        times[times.len() * 9 / 10],
+        times[times.len() - 1]
+    );
+    Ok(())
+}
