@@ -5,6 +5,7 @@
 
 use glam::DVec3;
 use strata_engine::sample::lod::ViewLod;
+use strata_systems::scene::Scene;
 
 const WIDTH: f64 = 1280.0;
 const HEIGHT: f64 = 720.0;
@@ -63,4 +64,20 @@ impl LodCamera {
     pub fn dolly(&self, factor: f64, t: i32) -> ViewLod {
         self.view(self.centre + (self.start - self.centre) * factor.powi(t))
     }
+}
+
+/// The level-of-detail benches' scene with sampling seed `seed`: the bunny with its 3:1
+/// field (`stanford-bunny-anisotropic.ron`), or the default scene when the shared
+/// meshes are absent; with the bundled config's file name.
+pub fn lod_scene(seed: u64) -> Result<(&'static str, Scene), Box<dyn std::error::Error>> {
+    let file = match crate::shared_mesh_dir() {
+        Ok(_) => "stanford-bunny-anisotropic.ron",
+        Err(e) => {
+            eprintln!("{e}; using the default scene");
+            "default.ron"
+        }
+    };
+    let (_, mut config) = crate::bundled_scenes(&[("scene", file)])?.remove(0);
+    config.sampling.seed = seed;
+    Ok((file, Scene::build(&config)?))
 }

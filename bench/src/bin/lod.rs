@@ -51,10 +51,9 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use strata_bench::lod_camera::LodCamera;
+use strata_bench::lod_camera::{LodCamera, lod_scene};
 use strata_engine::sample::lod::ViewLod;
 use strata_engine::sample::{DRAW_AHEAD, LodPool, PoolChange, SampleSite, Sampler};
-use strata_systems::scene::Scene;
 
 const SEED: u64 = 3;
 /// The samples the first frame shows, and the budget the `shown held` paths keep.
@@ -153,17 +152,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .use_current_thread()
             .build_global()?;
     }
-    let file = match strata_bench::shared_mesh_dir() {
-        Ok(_) => "stanford-bunny-anisotropic.ron",
-        Err(e) => {
-            eprintln!("{e}; using the default scene");
-            "default.ron"
-        }
-    };
-    let (name, config) = strata_bench::bundled_scenes(&[("scene", file)])?.remove(0);
-    let mut config = config;
-    config.sampling.seed = SEED;
-    let scene = Scene::build(&config)?;
+    let (file, scene) = lod_scene(SEED)?;
     let s = &scene.sampler;
     let camera = LodCamera::around(scene.mesh.positions());
     let LodCamera {
@@ -182,7 +171,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let shown = visible(&probe, s, &first, probe_base, &mut fades).len() as f64;
     let base = (probe_base * SHOWN / shown).round();
     println!(
-        "{name} `{file}`: {} faces, {} segments; base count {base:.0}, reference {reference:.1} px^2 per unit area, {frames} frames per path.\n",
+        "scene `{file}`: {} faces, {} segments; base count {base:.0}, reference {reference:.1} px^2 per unit area, {frames} frames per path.\n",
         scene.mesh.face_count(),
         s.segments().len(),
     );

@@ -15,25 +15,27 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use strata_bench::lod_camera::LodCamera;
+use strata_bench::lod_camera::{LodCamera, lod_scene};
 use strata_engine::sample::LodPool;
 use strata_engine::sample::lod::ViewLod;
-use strata_systems::scene::Scene;
 
 const SEED: u64 = 3;
 
-/// The samples the pool shows under `v` with base `base` (after drawing them).
+/// The samples the pool shows under `v` with base `base` (after drawing them), and the
+/// time of the update that drew them, in ms.
 fn shown(
     pool: &mut LodPool,
     s: &strata_engine::sample::Sampler,
     v: &ViewLod,
     base: f64,
     fades: &mut Vec<f32>,
-) -> f64 {
+) -> (f64, f64) {
+    let t = Instant::now();
     pool.update(s, v, base);
+    let ms = t.elapsed().as_secs_f64() * 1e3;
     fades.resize(pool.len(), 0.0);
     pool.fades_into(s, v, base, fades);
-    fades.iter().filter(|&&f| f > 0.0).count() as f64
+    (fades.iter().filter(|&&f| f > 0.0).count() as f64, ms)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -41,16 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     rayon::ThreadPoolBuilder::new()
         .use_current_thread()
         .build_global()?;
-    let file = match strata_bench::shared_mesh_dir() {
-        Ok(_) => "stanford-bunny-anisotropic.ron",
-        Err(e) => {
-            eprintln!("{e}; using the default scene");
-            "default.ron"
-        }
-    };
-    let (name, mut config) = strata_bench::bundled_scenes(&[("scene", file)])?.remove(0);
-    config.sampling.seed = SEED;
-    let scene = Scene::build(&config)?;
+    let (file, scene) = lod_scene(SEED)?;
     let s = &scene.sampler;
     let mesh = &scene.mesh;
     let camera = LodCamera::around(mesh.positions());
@@ -67,19 +60,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("an empty mesh")?;
     let normal = mesh.vertex_normals()[vertex];
     println!(
-        "{name} `{file}`: {} faces, budget {budget} samples shown, the camera 3% nearer per frame.\n",
+        "scene `{file}`: {} faces, budget {budget} samples shown, the camera 3% nearer per frame.\n",
         mesh.face_count()
     );
     println!(
-        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks placed | estimate ms | shown / budget | base step, probes alone | base step |"
+        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks placed | estimate ms | update ms | entries the view needs | shown / budget | base step, probes alone | base step |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut pool = LodPool::new(s, SEED, 0, usize::MAX / 4);
     let mut alone = pool.clone();
+    // An empty pool drawing no more than each view needs.
+    let empty = pool.clone().with_draw_ahead(0.0);
     let mut fades = Vec::new();
     let (mut last, mut last_alone) = (None::<f64>, None::<f64>);
     let (mut worst, mut worst_alone, mut step, mut step_alone) = (0.0f64, 0.0f64, 1.0f64, 1.0f64);
-    let mut times = Vec::new();
+    let (mut times, mut updates) = (Vec::new(), Vec::new());
     let (mut frame, mut distance) = (0, 2.0 * radius);
     while distance > 0.01 * radius {
         let eye = target + normal * distance;
@@ -104,11 +99,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let base = pool
             .base_for_shown(s, &v, budget)
             .ok_or("nothing in view")?;
-        let ratio = shown(&mut pool, s, &v, base, &mut fades) / budget;
+        let (count, update) = shown(&mut pool, s, &v, base, &mut fades);
+        let ratio = count / budget;
+        updates.push(update);
         let (ratio_alone, base_alone) = match in_view_alone {
             Some(()) => {
                 let b = (budget / probes).min(4_294_967_296.0);
-                (shown(&mut alone, s, &v, b, &mut fades) / budget, Some(b))
+                (shown(&mut alone, s, &v, b, &mut fades).0 / budget, Some(b))
             }
             None => (f64::INFINITY, None),
         };
@@ -127,11 +124,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if frame % 8 == 0 {
             let probes_in_view = probed.in_view;
             println!(
-                "| {:.3} | {probes_in_view} | {ratio_alone:.3} | {} | {} | {} | {ms:.2} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
+                "| {:.3} | {probes_in_view} | {ratio_alone:.3} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
                 distance / radius,
                 estimate.ranks,
                 estimate.in_view,
-                estimate.placed
+                estimate.placed,
+                {
+                    let mut fresh = empty.clone();
+                    fresh.update(s, &v, base);
+                    fresh.len()
+                }
             );
         }
         last = Some(base);
@@ -140,13 +142,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         distance *= 0.97;
     }
     times.sort_by(f64::total_cmp);
+    updates.sort_by(f64::total_cmp);
     println!(
-        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}.",
+        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}.",
         100.0 * worst_alone,
         100.0 * worst,
         times[times.len() / 2],
         times[times.len() * 9 / 10],
-        times[times.len() - 1]
+        times[times.len() - 1],
+        updates[updates.len() / 2],
+        updates[updates.len() * 9 / 10]
     );
     Ok(())
 }

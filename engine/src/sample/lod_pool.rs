@@ -60,6 +60,10 @@ pub const BINS: usize = 16384;
 /// than 1/32 and orbits 10% faster, for 2-4% more entries held (bench/README.md).
 pub const DRAW_AHEAD: f64 = 1.0 / 8.0;
 
+/// With a point budget, the pool's room for ranks beyond its prefix is this many times
+/// the budget's `shown x max` (see [`LodPool::room_for`]).
+pub const CLOSE_ROOM: f64 = 4.0;
+
 /// What an [`LodPool::update`] changed.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PoolChange {
@@ -328,6 +332,20 @@ impl LodPool {
             estimate: ShownEstimate::new(sampler, seed),
             live: Vec::new(),
         }
+    }
+
+    /// Room for the ranks a pool draws beyond its prefix (the `budget` of
+    /// [`new`](Self::new)) for views whose multiplier is at most `max`: with base count
+    /// `base`, `base x max` (a view at the clamp everywhere asks for that many); with a
+    /// point budget of `shown` samples, [`CLOSE_ROOM`] times more of `shown x max` as
+    /// well, since a close view's bins reach past what it shows: 0.012 bounding radii
+    /// above the bunny, a budget of 10^5 needs 9.5 times as many entries (the
+    /// `lod_budget` bench). The room is used only as views ask: the pool reserves
+    /// memory for its prefix and grows geometrically beyond.
+    pub fn room_for(base: u32, shown: Option<u32>, max: f64) -> usize {
+        let close = shown.map_or(0.0, |s| f64::from(s) * max * CLOSE_ROOM);
+        // `as` saturates; half the address space is more than any pool holds.
+        (((f64::from(base) * max).max(close)) as usize).min(usize::MAX / 2)
     }
 
     /// The same pool drawing ahead by `fraction` (see the module docs; 0: a bin is
@@ -778,6 +796,19 @@ mod tests {
             .collect();
         shown.sort_by_key(|e| e.0);
         shown
+    }
+
+    #[test]
+    fn room_for_a_point_budget_covers_close_views() {
+        assert_eq!(LodPool::room_for(1000, None, 4.0), 4000);
+        // A budget below the count: the count's room still.
+        assert_eq!(LodPool::room_for(100_000, Some(1000), 4.0), 400_000);
+        // A budget: CLOSE_ROOM times its shown x max.
+        assert_eq!(LodPool::room_for(1000, Some(1000), 4.0), 16_000);
+        assert_eq!(
+            LodPool::room_for(u32::MAX, Some(u32::MAX), 1e30),
+            usize::MAX / 2
+        );
     }
 
     /// A frame's base count: the given one without a budget or with nothing in view,

@@ -12,7 +12,7 @@ use anyhow::Context;
 use super::{LookArgs, StyleArgs};
 use crate::config::SceneConfig;
 use strata_engine::mesh::TriMesh;
-use strata_engine::sample::PoolChange;
+use strata_engine::sample::{LodPool, PoolChange};
 
 use crate::gpu::{
     GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer, NprStyle,
@@ -204,10 +204,8 @@ fn run_lod(
         .look
         .camera(scene, args.width as f32 / args.height as f32);
     let lod = SplatLod::for_camera(&camera, args.height, base as f32, args.lod_max);
-    // Room for the ranks beyond the count that near surface asks for (or that a point
-    // budget beyond the count asks for).
-    let budget =
-        (f64::from(base.max(args.lod_shown.unwrap_or(0))) * f64::from(args.lod_max)) as usize;
+    // Room for the ranks beyond the count that near surface asks for, or a point budget.
+    let budget = LodPool::room_for(base, args.lod_shown, f64::from(args.lod_max));
     let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
     if let Some(shown) = args.lod_shown {
         lod_scene = lod_scene.with_shown(shown);

@@ -3,6 +3,7 @@
 
 use crate::ecs::{Lod, LodState};
 use crate::gpu::SplatLod;
+use strata_engine::sample::LodPool;
 
 use super::Viewer;
 
@@ -24,7 +25,7 @@ impl Viewer {
         let component = Lod {
             view: lod.view(camera, size),
             base,
-            budget: (f64::from(base.max(self.lod_shown.unwrap_or(0))) * f64::from(max)) as usize,
+            budget: LodPool::room_for(base, self.lod_shown, f64::from(max)),
             shown: self.lod_shown,
         };
         let mut entity = self.engine.world.entity_mut(self.mesh_entity);
