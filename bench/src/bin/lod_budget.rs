@@ -10,7 +10,10 @@
 //! a pool then shows (`LodPool::fades_into`, exact) over the budget, and the ratio of
 //! the base count to the previous frame's (a jump pops samples everywhere in view).
 //! The engine's estimate is timed on each new view (its bounds included, which the
-//! frame's update reuses), the frame thread in rayon's pool as in the `lod` bench.
+//! frame's update reuses; the sites the last view's refinement evaluated are kept, as a
+//! renderer's estimator keeps them), the frame thread in rayon's pool as in the `lod`
+//! bench. `LOD_BUDGET_COLD=1` times every view's estimate on a copy of an estimator
+//! that has seen no view (each placing every site it evaluates).
 
 use std::time::Instant;
 
@@ -40,6 +43,7 @@ fn shown(
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let budget = strata_bench::repeats_arg(100_000)? as f64;
+    let cold = std::env::var_os("LOD_BUDGET_COLD").is_some();
     rayon::ThreadPoolBuilder::new()
         .use_current_thread()
         .build_global()?;
@@ -64,9 +68,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mesh.face_count()
     );
     println!(
-        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks placed | estimate ms | update ms | entries the view needs | shown / budget | base step, probes alone | base step |"
+        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks evaluated | of them placed | estimate ms | update ms | entries the view needs | shown / budget | base step, probes alone | base step |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut pool = LodPool::new(s, SEED, 0, usize::MAX / 4);
     let mut alone = pool.clone();
     // An empty pool drawing no more than each view needs.
@@ -92,9 +96,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let probed = pool.shown_estimate().probe(&v);
         let probes = probed.mean;
         let in_view_alone = (probes > 0.0).then_some(());
-        let t = Instant::now();
-        let estimate = pool.mean_multiplier(s, &v);
-        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let (estimate, ms) = if cold {
+            let mut fresh = empty.clone();
+            let t = Instant::now();
+            let estimate = fresh.mean_multiplier(s, &v);
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            // The pool's own estimate, untimed: the same numbers.
+            assert_eq!(pool.mean_multiplier(s, &v).mean, estimate.mean);
+            (estimate, ms)
+        } else {
+            let t = Instant::now();
+            let estimate = pool.mean_multiplier(s, &v);
+            (estimate, t.elapsed().as_secs_f64() * 1e3)
+        };
         times.push(ms);
         let base = pool
             .base_for_shown(s, &v, budget)
@@ -124,10 +138,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if frame % 8 == 0 {
             let probes_in_view = probed.in_view;
             println!(
-                "| {:.3} | {probes_in_view} | {ratio_alone:.3} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
+                "| {:.3} | {probes_in_view} | {ratio_alone:.3} | {} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
                 distance / radius,
                 estimate.ranks,
                 estimate.in_view,
+                estimate.evaluated,
                 estimate.placed,
                 {
                     let mut fresh = empty.clone();

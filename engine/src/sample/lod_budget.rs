@@ -15,14 +15,19 @@
 //!   with the probes out of cache as they are between frames (the `lod` bench). On the
 //!   bunny's `lod` bench paths this is within 1% of the count.
 //! - **Refinement in view.** A close view sees a small part of the surface, and few
-//!   probes: on the bunny, 2.5 times the budget shown 0.03 bounding radii from the
-//!   surface, and the base count jumping by 1.3-1.5 times between frames of a smooth
-//!   dolly as probes cross the frame's edge. While fewer than [`IN_VIEW`] of the ranks
+//!   probes: on the bunny, 2.7 times the budget shown 0.03 bounding radii from the
+//!   surface, and the base count jumping by up to 1.5 times between frames of a smooth
+//!   dolly as probes cross the frame's edge (the `lod_budget` bench). While fewer than [`IN_VIEW`] of the ranks
 //!   averaged are in view, `M` doubles: the new ranks `M..2M` are enumerated only in
-//!   the bins of a pool ([`LodPool`](super::LodPool)) whose bound of the multiplier is
+//!   the bins of a pool ([`LodPool`]) whose bound of the multiplier is
 //!   above 0 (elsewhere every multiplier is 0), placed, and their multipliers added.
-//!   The cost is about `IN_VIEW` times the measure of those bins over the measure in
-//!   view, at most [`REFINE_LIMIT`] ranks per view.
+//!   The ranks evaluated are about `IN_VIEW` times the measure of those bins over the
+//!   measure in view, at most [`REFINE_LIMIT`] per view (where that limit stops the
+//!   doubling, how far it got depends on the bins' bounds too: the looser bounds of a
+//!   deformed mesh reach it sooner).
+//! - **Kept sites.** Placing a rank drawn a few per bin costs 150-250 ns (cold cells);
+//!   the sites a refinement evaluated are kept per bin for the next one, so a camera
+//!   that moves a little reads most of them back and places only the ranks new to it.
 //!
 //! The estimate depends on the view alone (and the seed and geometry), never on the
 //! path of the camera or on the ranks a pool holds; fixed chunks of bins summed in
@@ -34,13 +39,15 @@
 //! budget while the camera moves: a dolly in then refines near the camera and thins
 //! elsewhere instead of showing ever more samples.
 
+use std::ops::Range;
+
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::faces::{Geometry, position_normal};
 use super::lod::{LodError, ViewLod, check_deformation};
 use super::progressive::RankCover;
-use super::{SampleSite, Sampler};
+use super::{LodPool, SampleSite, Sampler};
 use crate::curve::LeafScratch;
 use crate::mesh::TriMesh;
 
@@ -49,16 +56,22 @@ use crate::mesh::TriMesh;
 /// 4.5%, 16384: within 0.3%).
 pub const PROBES: usize = 4096;
 
-/// Ranks in view (multiplier above 0) the estimate refines to: the probes' count in
-/// view on the bunny's `lod` bench paths is about 2000 when it is all in view.
+/// Ranks in view (multiplier above 0) the estimate refines to: on the bunny the probes
+/// in view number 1100-1700 while all of it is in view, so those views keep the
+/// probes' estimate.
 pub const IN_VIEW: usize = 1024;
 
-/// The most ranks the refinement of one view places beyond the probes (about 1-2 ms of
-/// one core; reached only when the view shows a small part of one bin).
+/// The most ranks the refinement of one view evaluates beyond the probes (placing them
+/// all takes about 5-8 ms of one core; reached only when the view shows a small part of
+/// its bins).
 pub const REFINE_LIMIT: usize = 1 << 15;
 
 /// Bins per task of a refinement.
 const REFINE_CHUNK: usize = 16;
+
+/// With a point budget, the pool's room for ranks beyond its prefix is this many times
+/// the budget's `shown x max` (see [`LodPool::room_for`]).
+pub const CLOSE_ROOM: f64 = 4.0;
 
 /// A view's estimate of the mean multiplier `E_rho[lod]` (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -69,7 +82,10 @@ pub struct MeanMultiplier {
     pub ranks: u64,
     /// Of them, those in view (multiplier above 0).
     pub in_view: usize,
-    /// Ranks placed for this view beyond the probes.
+    /// Ranks evaluated for this view beyond the probes.
+    pub evaluated: usize,
+    /// Of them, those whose sites were placed for this view (the others were kept from
+    /// the last refinement): the only field that depends on what came before.
     pub placed: usize,
 }
 
@@ -89,6 +105,8 @@ pub struct ShownEstimate {
     /// Per chunk of [`REFINE_CHUNK`] bins, a refinement's lists (kept, so that
     /// refinements stop allocating).
     lists: Vec<ProbeList>,
+    /// The sites the last refinement evaluated.
+    cache: SiteCache,
 }
 
 /// One chunk's part of a refinement.
@@ -96,12 +114,35 @@ pub struct ShownEstimate {
 struct ProbeList {
     ranks: Vec<u32>,
     sites: Vec<SampleSite>,
-    /// The sum of the chunk's multipliers, in order.
+    /// The sum of the chunk's multipliers at the current doubling, in order.
     sum: f64,
-    /// Ranks in view.
+    /// Ranks in view at the current doubling.
     in_view: usize,
-    /// Ranks placed.
+    /// Ranks evaluated at the current doubling.
+    evaluated: usize,
+    /// Ranks whose sites were placed at the current doubling.
     placed: usize,
+    /// The ranks and sites placed over the refinement, for the cache.
+    fresh: Vec<(u32, SampleSite)>,
+    /// Runs of `fresh`: (the bin's position in the chunk, end).
+    runs: Vec<(u8, u32)>,
+}
+
+/// The sites of the last refinement, per bin, so that the next one (a camera that moved
+/// a little: about the same bins and ranks) reads them instead of placing them again,
+/// at a small part of the cost. Sites do not move with the view or the geometry; only
+/// the time depends on the cache, never the estimate.
+#[derive(Clone, Debug, Default)]
+struct SiteCache {
+    /// Per bin of the pool, its ranks from [`PROBES`] to the last refinement's end, if
+    /// it was in it: a range of `entries`, in rank order, and that end (0 if not).
+    slots: Vec<(Range<u32>, u32)>,
+    /// The entries: rank and site.
+    entries: Vec<(u32, SampleSite)>,
+    /// The next refinement's entries while they are gathered.
+    spare: Vec<(u32, SampleSite)>,
+    /// The next refinement's range per bin of its `live`, while they are gathered.
+    built: Vec<Range<u32>>,
 }
 
 impl ShownEstimate {
@@ -117,6 +158,7 @@ impl ShownEstimate {
             deformed: None,
             last: None,
             lists: Vec::new(),
+            cache: SiteCache::default(),
         }
     }
 
@@ -171,6 +213,7 @@ impl ShownEstimate {
             mean: sum / PROBES as f64,
             ranks: PROBES as u64,
             in_view,
+            evaluated: 0,
             placed: 0,
         }
     }
@@ -205,6 +248,8 @@ impl ShownEstimate {
         if self.lists.len() < chunks {
             self.lists.resize_with(chunks, Default::default);
         }
+        let cache = &mut self.cache;
+        cache.slots.resize(shares.len(), (0..0, 0));
         let mesh = sampler.mesh();
         let geometry = match &self.deformed {
             Some([positions, vertex_normals, face_normals]) => Geometry {
@@ -218,64 +263,214 @@ impl ShownEstimate {
                 face_normals: mesh.face_normals(),
             },
         };
+        let evaluate = |site: &SampleSite| {
+            let tri = mesh.triangles()[site.face as usize];
+            let (p, n) =
+                geometry.position_normal(tri, site.face, site.barycentric().map(f64::from));
+            view.multiplier(p, n)
+        };
+        for list in &mut self.lists[..chunks] {
+            list.fresh.clear();
+            list.runs.clear();
+        }
         let mut sum = probes.mean * PROBES as f64;
-        let (mut ranks, mut in_view, mut placed) = (probes.ranks, probes.in_view, 0);
+        let (mut ranks, mut in_view) = (probes.ranks, probes.in_view);
+        let (mut evaluated, mut placed) = (0, 0);
         // `share * ranks` is the number of new ranks expected in the bins.
         while in_view < IN_VIEW
             && !live.is_empty()
             && ranks < 1 << 31
-            && placed as f64 + share * ranks as f64 <= REFINE_LIMIT as f64
+            && evaluated as f64 + share * ranks as f64 <= REFINE_LIMIT as f64
         {
             let (from, to) = (ranks as u32, 2 * ranks as u32);
+            let cached = &*cache;
             self.lists[..chunks]
                 .par_iter_mut()
                 .zip(live.par_chunks(REFINE_CHUNK))
                 .for_each_init(LeafScratch::default, |scratch, (list, bins)| {
-                    let (mut s, mut seen) = (0.0, 0);
-                    list.placed = 0;
-                    for &b in bins {
+                    let (mut s, mut seen, mut count, mut drawn) = (0.0, 0, 0, 0);
+                    for (i, &b) in bins.iter().enumerate() {
+                        // Every rank of the bin in [PROBES, `reach`) is in the cache, in
+                        // order; the others in [from, to) are placed. Either way the
+                        // multipliers are summed in rank order.
+                        let (slot, reach) = cached.slots[b as usize].clone();
+                        let kept = &cached.entries[slot.start as usize..slot.end as usize];
+                        let lo = kept.partition_point(|e| e.0 < from);
+                        let hi = kept.partition_point(|e| e.0 < to);
+                        for (_, site) in &kept[lo..hi] {
+                            let m = evaluate(site);
+                            s += m;
+                            seen += usize::from(m > 0.0);
+                        }
+                        count += hi - lo;
+                        let start = from.max(reach);
+                        if start >= to {
+                            continue;
+                        }
                         let cover = cover(b as usize);
                         list.ranks.clear();
                         sampler.progressive_ranks_in_cover(
                             cover,
-                            from,
+                            start,
                             to,
                             usize::MAX,
                             &mut list.ranks,
                         );
                         list.sites.resize(list.ranks.len(), SampleSite::default());
-                        list.placed += list.ranks.len();
                         sampler.progressive_cover_sites_with(
                             cover,
                             &list.ranks,
                             &mut list.sites,
                             scratch,
                         );
-                        for site in &list.sites {
-                            let tri = mesh.triangles()[site.face as usize];
-                            let b = site.barycentric().map(f64::from);
-                            let (p, n) = geometry.position_normal(tri, site.face, b);
-                            let m = view.multiplier(p, n);
+                        for (&rank, site) in list.ranks.iter().zip(&list.sites) {
+                            let m = evaluate(site);
                             s += m;
                             seen += usize::from(m > 0.0);
+                            list.fresh.push((rank, *site));
                         }
+                        count += list.ranks.len();
+                        drawn += list.ranks.len();
+                        list.runs.push((i as u8, list.fresh.len() as u32));
                     }
-                    list.sum = s;
-                    list.in_view = seen;
+                    (list.sum, list.in_view) = (s, seen);
+                    (list.evaluated, list.placed) = (count, drawn);
                 });
             for list in &self.lists[..chunks] {
                 sum += list.sum;
                 in_view += list.in_view;
+                evaluated += list.evaluated;
                 placed += list.placed;
             }
             ranks *= 2;
         }
+        Self::keep_sites(cache, &self.lists[..chunks], live, ranks as u32);
         MeanMultiplier {
             mean: sum / ranks as f64,
             ranks,
             in_view,
+            evaluated,
             placed,
         }
+    }
+
+    /// Keeps in `cache` the sites of the ranks below `end` of every bin of `live`: those
+    /// it held and those the chunks' `lists` placed; the other bins' are dropped.
+    fn keep_sites(cache: &mut SiteCache, lists: &[ProbeList], live: &[u32], end: u32) {
+        let SiteCache {
+            slots,
+            entries,
+            spare,
+            built,
+        } = cache;
+        spare.clear();
+        built.clear();
+        for (list, bins) in lists.iter().zip(live.chunks(REFINE_CHUNK)) {
+            for (i, &b) in bins.iter().enumerate() {
+                let start = spare.len() as u32;
+                let (slot, _) = slots[b as usize].clone();
+                let kept = &entries[slot.start as usize..slot.end as usize];
+                spare.extend(kept.iter().take_while(|e| e.0 < end));
+                let mut from = 0;
+                for &(bin, to) in &list.runs {
+                    if usize::from(bin) == i {
+                        spare.extend_from_slice(&list.fresh[from as usize..to as usize]);
+                    }
+                    from = to;
+                }
+                built.push(start..spare.len() as u32);
+            }
+        }
+        slots.fill((0..0, 0));
+        for (&b, range) in live.iter().zip(built.iter()) {
+            slots[b as usize] = (range.clone(), end);
+        }
+        std::mem::swap(entries, spare);
+    }
+}
+
+/// The point budget of a pool: see the module docs.
+impl LodPool {
+    /// Room for the ranks a pool draws beyond its prefix (the `budget` of
+    /// [`new`](Self::new)) for views whose multiplier is at most `max`: with base count
+    /// `base`, `base x max` (a view at the clamp everywhere asks for that many); with a
+    /// point budget of `shown` samples, at least [`CLOSE_ROOM`] times `shown x max`,
+    /// since a close view's bins reach past what it shows: 0.012 bounding radii
+    /// above the bunny, a budget of 10^5 needs 9.5 times as many entries (the
+    /// `lod_budget` bench). The room is used only as views ask: the pool reserves
+    /// memory for its prefix and grows geometrically beyond.
+    pub fn room_for(base: u32, shown: Option<u32>, max: f64) -> usize {
+        let close = shown.map_or(0.0, |s| f64::from(s) * max * CLOSE_ROOM);
+        // `as` saturates; half the address space is more than any pool holds.
+        (((f64::from(base) * max).max(close)) as usize).min(usize::MAX / 2)
+    }
+
+    /// The base count under which `view` shows about `shown` samples (a point budget;
+    /// [`lod_budget`](super::lod_budget)), on the pool's current geometry, at most
+    /// 2^32 (the sequence's length): `None` when the estimate sees nothing in view.
+    /// Cost: [`mean_multiplier`](Self::mean_multiplier)'s.
+    pub fn base_for_shown(&mut self, sampler: &Sampler, view: &ViewLod, shown: f64) -> Option<f64> {
+        let mean = self.mean_multiplier(sampler, view).mean;
+        (mean > 0.0).then(|| (shown / mean).min(4_294_967_296.0))
+    }
+
+    /// The point budget's estimate of `view`'s mean multiplier over the sequence's
+    /// measure ([`lod_budget`](super::lod_budget)), on the pool's current geometry
+    /// (`sampler` must be the pool's). Cost: a multiplier per
+    /// [`PROBES`](super::lod_budget::PROBES); when fewer than
+    /// [`IN_VIEW`](super::lod_budget::IN_VIEW) of them are in view, the bins' bounds
+    /// (which the next [`update`](Self::update) for the view reuses) and the
+    /// refinement's ranks, at most [`REFINE_LIMIT`](super::lod_budget::REFINE_LIMIT);
+    /// nothing for the view of the last call.
+    pub fn mean_multiplier(&mut self, sampler: &Sampler, view: &ViewLod) -> MeanMultiplier {
+        if let Some(kept) = self.estimate.kept(view) {
+            return kept;
+        }
+        let probes = self.estimate.probe(view);
+        if probes.in_view >= IN_VIEW {
+            return self.estimate.keep(view, probes);
+        }
+        self.bound_view(view);
+        self.live.clear();
+        self.live.extend(
+            self.multipliers
+                .iter()
+                .enumerate()
+                .filter(|&(_, &m)| m > 0.0)
+                .map(|(b, _)| b as u32),
+        );
+        let bins = &self.bins;
+        let refined = self.estimate.refine(
+            sampler,
+            view,
+            probes,
+            &self.live,
+            |b| &bins[b].cover,
+            &self.shares,
+        );
+        self.estimate.keep(view, refined)
+    }
+
+    /// The base count a frame thresholds with: `base`, or with a point budget of
+    /// `shown` samples the one under which `view` shows about that many
+    /// ([`base_for_shown`](Self::base_for_shown)), rounded to `f32` (what a GPU's
+    /// uniform holds, so that the CPU's and the GPU's thresholds pick the same ranks),
+    /// and `base` when nothing is in view.
+    pub fn frame_base(
+        &mut self,
+        sampler: &Sampler,
+        view: &ViewLod,
+        base: f64,
+        shown: Option<u32>,
+    ) -> f64 {
+        shown
+            .and_then(|shown| self.base_for_shown(sampler, view, f64::from(shown)))
+            .map_or(base, |b| f64::from(b as f32))
+    }
+
+    /// The point budget's estimator, on the pool's current geometry.
+    pub fn shown_estimate(&self) -> &ShownEstimate {
+        &self.estimate
     }
 }
 
@@ -384,12 +579,15 @@ mod tests {
             let probes = pool.shown_estimate().probe(&v);
             let estimate = pool.mean_multiplier(&s, &v);
             assert!(probes.in_view < 100, "{distance}: {probes:?}");
-            assert!(estimate.ranks > PROBES as u64 && estimate.placed > 0);
-            assert!(estimate.placed <= REFINE_LIMIT, "{distance}: {estimate:?}");
+            assert!(estimate.ranks > PROBES as u64 && estimate.evaluated > 0);
+            assert!(
+                estimate.evaluated <= REFINE_LIMIT,
+                "{distance}: {estimate:?}"
+            );
             // Refined to IN_VIEW ranks in view (0.05), or until the next doubling would
             // pass the limit (0.02: the view sees a small part of its bins).
             assert!(
-                estimate.in_view >= IN_VIEW || estimate.placed > REFINE_LIMIT / 2,
+                estimate.in_view >= IN_VIEW || estimate.evaluated > REFINE_LIMIT / 2,
                 "{distance}: {estimate:?}"
             );
             // The budget is shown, within 3%, where the probes alone are far off.
@@ -439,12 +637,51 @@ mod tests {
     }
 
     #[test]
+    fn kept_sites_change_the_cost_never_the_estimate() {
+        let s = torus_sampler();
+        let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
+        let far = close_view(&s, 0.3);
+        let first = pool.mean_multiplier(&s, &far);
+        assert_eq!(first.placed, first.evaluated);
+        assert!(first.evaluated > 0);
+        // A camera coming nearer, 3% a step, then back: each estimate equals a fresh
+        // pool's, bit for bit; a step that averages as many ranks as the last reads
+        // most of its sites from the last one.
+        let (mut last, mut same) = (first, 0);
+        for step in (1..16).chain([0]) {
+            let v = close_view(&s, 0.3 * 0.97f64.powi(step));
+            let estimate = pool.mean_multiplier(&s, &v);
+            let fresh = LodPool::new(&s, 7, 0, 1 << 20).mean_multiplier(&s, &v);
+            assert_eq!(
+                (estimate.mean.to_bits(), estimate.ranks, estimate.in_view),
+                (fresh.mean.to_bits(), fresh.ranks, fresh.in_view),
+                "{step}"
+            );
+            assert_eq!(estimate.evaluated, fresh.evaluated);
+            assert_eq!(fresh.placed, fresh.evaluated);
+            if step > 0 && estimate.ranks == last.ranks {
+                assert!(
+                    estimate.placed * 4 < estimate.evaluated,
+                    "{step}: {estimate:?}"
+                );
+                same += 1;
+            }
+            last = estimate;
+        }
+        assert!(same >= 8, "{same} steps at the same doubling");
+    }
+
+    #[test]
     fn a_view_of_nothing_has_no_base() {
         let s = torus_sampler();
         let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
         let away = view(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 6.0));
         let estimate = pool.mean_multiplier(&s, &away);
-        assert_eq!((estimate.mean, estimate.placed), (0.0, 0), "{estimate:?}");
+        assert_eq!(
+            (estimate.mean, estimate.evaluated),
+            (0.0, 0),
+            "{estimate:?}"
+        );
         assert_eq!(pool.base_for_shown(&s, &away, 1e6), None);
         // A tiny multiplier: the base is capped at the sequence's length.
         let far = ViewLod {
@@ -484,7 +721,7 @@ mod tests {
         let mut at_rest = LodPool::new(&s, 7, 0, 1 << 20);
         at_rest.set_geometry(&s, rest).expect("the rest mesh");
         let close = at_rest.mean_multiplier(&s, &near);
-        assert!(close.placed > 0 && close_moved.ranks == close.ranks);
+        assert!(close.evaluated > 0 && close_moved.ranks == close.ranks);
         assert_eq!(close_moved.in_view, close.in_view);
         assert!((close_moved.mean / close.mean - 1.0).abs() < 1e-9);
         let other = TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]])

@@ -43,7 +43,7 @@ use rayon::prelude::*;
 
 use super::lod::{LodError, ViewLod, check_deformation, fade};
 use super::lod_bounds::{BoundSet, Frustum, RegionBound};
-use super::lod_budget::{IN_VIEW, MeanMultiplier, ShownEstimate};
+use super::lod_budget::ShownEstimate;
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
 use crate::curve::LeafScratch;
@@ -59,10 +59,6 @@ pub const BINS: usize = 16384;
 /// the camera moving before the timed frames, 1/8 draws a growing count 12% faster
 /// than 1/32 and orbits 10% faster, for 2-4% more entries held (bench/README.md).
 pub const DRAW_AHEAD: f64 = 1.0 / 8.0;
-
-/// With a point budget, the pool's room for ranks beyond its prefix is this many times
-/// the budget's `shown x max` (see [`LodPool::room_for`]).
-pub const CLOSE_ROOM: f64 = 4.0;
 
 /// What an [`LodPool::update`] changed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -103,10 +99,10 @@ pub struct LodPool {
     sites: Vec<SampleSite>,
     ranks: Vec<u32>,
     /// The bins, in segment order and cell order within a segment.
-    bins: Vec<Bin>,
+    pub(super) bins: Vec<Bin>,
     /// Per bin, its share of the total measure (of the sequence's values): a column
     /// of its own, read for every bin that lacks ranks before any of them is drawn.
-    shares: Vec<f64>,
+    pub(super) shares: Vec<f64>,
     /// Their bounds, as columns.
     bounds: BoundSet,
     /// Per bin: every rank below it that falls in the bin is held.
@@ -115,7 +111,7 @@ pub struct LodPool {
     needs: Vec<u32>,
     /// Per bin, the bound of the multiplier of the view `bounded` (kept, so that an
     /// update whose view has not moved, only its base count, skips the bounds).
-    multipliers: Vec<f64>,
+    pub(super) multipliers: Vec<f64>,
     /// The view `multipliers` bounds, if any.
     bounded: Option<ViewLod>,
     /// The bins a parallel update draws in, in order.
@@ -126,10 +122,10 @@ pub struct LodPool {
     /// (kept, so that updates stop allocating).
     lists: Vec<BinList>,
     /// The point budget's estimator, on the current geometry.
-    estimate: ShownEstimate,
+    pub(super) estimate: ShownEstimate,
     /// The bins a refinement of the estimate draws in (kept, so that refinements stop
     /// allocating).
-    live: Vec<u32>,
+    pub(super) live: Vec<u32>,
 }
 
 impl Clone for LodPool {
@@ -180,13 +176,13 @@ struct BinList {
 
 /// A run of consecutive cells of one segment's curve.
 #[derive(Clone, Debug)]
-struct Bin {
+pub(super) struct Bin {
     /// Index into `Sampler::segments`.
     segment: u32,
     /// Leaves of the segment's curve.
     leaves: Range<u32>,
     /// The dyadic intervals over the bin's values.
-    cover: RankCover,
+    pub(super) cover: RankCover,
 }
 
 /// The bound of the parts of cells `leaves` of segment `segment` in the domain, with
@@ -334,20 +330,6 @@ impl LodPool {
         }
     }
 
-    /// Room for the ranks a pool draws beyond its prefix (the `budget` of
-    /// [`new`](Self::new)) for views whose multiplier is at most `max`: with base count
-    /// `base`, `base x max` (a view at the clamp everywhere asks for that many); with a
-    /// point budget of `shown` samples, [`CLOSE_ROOM`] times more of `shown x max` as
-    /// well, since a close view's bins reach past what it shows: 0.012 bounding radii
-    /// above the bunny, a budget of 10^5 needs 9.5 times as many entries (the
-    /// `lod_budget` bench). The room is used only as views ask: the pool reserves
-    /// memory for its prefix and grows geometrically beyond.
-    pub fn room_for(base: u32, shown: Option<u32>, max: f64) -> usize {
-        let close = shown.map_or(0.0, |s| f64::from(s) * max * CLOSE_ROOM);
-        // `as` saturates; half the address space is more than any pool holds.
-        (((f64::from(base) * max).max(close)) as usize).min(usize::MAX / 2)
-    }
-
     /// The same pool drawing ahead by `fraction` (see the module docs; 0: a bin is
     /// filled to its need exactly). Panics unless `fraction` is in `[0, 1]`.
     pub fn with_draw_ahead(mut self, fraction: f64) -> Self {
@@ -434,7 +416,7 @@ impl LodPool {
 
     /// Bounds every bin's multiplier under `view` into `multipliers`, unless they hold
     /// its bounds already.
-    fn bound_view(&mut self, view: &ViewLod) {
+    pub(super) fn bound_view(&mut self, view: &ViewLod) {
         if self.bounded.as_ref() != Some(view) {
             let mut multipliers = std::mem::take(&mut self.multipliers);
             self.bound_bins(view, &mut multipliers);
@@ -470,74 +452,6 @@ impl LodPool {
     fn ahead_limit(&self, need: u32) -> u32 {
         let more = f64::from(need) * self.ahead * 2.0;
         (f64::from(need) + more).min(f64::from(u32::MAX)) as u32
-    }
-
-    /// The base count under which `view` shows about `shown` samples (a point budget;
-    /// [`lod_budget`](super::lod_budget)), on the pool's current geometry, at most
-    /// 2^32 (the sequence's length): `None` when the estimate sees nothing in view.
-    /// Cost: [`mean_multiplier`](Self::mean_multiplier)'s.
-    pub fn base_for_shown(&mut self, sampler: &Sampler, view: &ViewLod, shown: f64) -> Option<f64> {
-        let mean = self.mean_multiplier(sampler, view).mean;
-        (mean > 0.0).then(|| (shown / mean).min(4_294_967_296.0))
-    }
-
-    /// The point budget's estimate of `view`'s mean multiplier over the sequence's
-    /// measure ([`lod_budget`](super::lod_budget)), on the pool's current geometry
-    /// (`sampler` must be the pool's). Cost: a multiplier per
-    /// [`PROBES`](super::lod_budget::PROBES); when fewer than
-    /// [`IN_VIEW`](super::lod_budget::IN_VIEW) of them are in view, the bins' bounds
-    /// (which the next [`update`](Self::update) for the view reuses) and the
-    /// refinement's ranks, at most [`REFINE_LIMIT`](super::lod_budget::REFINE_LIMIT);
-    /// nothing for the view of the last call.
-    pub fn mean_multiplier(&mut self, sampler: &Sampler, view: &ViewLod) -> MeanMultiplier {
-        if let Some(kept) = self.estimate.kept(view) {
-            return kept;
-        }
-        let probes = self.estimate.probe(view);
-        if probes.in_view >= IN_VIEW {
-            return self.estimate.keep(view, probes);
-        }
-        self.bound_view(view);
-        self.live.clear();
-        self.live.extend(
-            self.multipliers
-                .iter()
-                .enumerate()
-                .filter(|&(_, &m)| m > 0.0)
-                .map(|(b, _)| b as u32),
-        );
-        let bins = &self.bins;
-        let refined = self.estimate.refine(
-            sampler,
-            view,
-            probes,
-            &self.live,
-            |b| &bins[b].cover,
-            &self.shares,
-        );
-        self.estimate.keep(view, refined)
-    }
-
-    /// The base count a frame thresholds with: `base`, or with a point budget of
-    /// `shown` samples the one under which `view` shows about that many
-    /// ([`base_for_shown`](Self::base_for_shown)), rounded to `f32` (what a GPU's
-    /// uniform holds, so that the CPU's and the GPU's thresholds pick the same ranks),
-    /// and `base` when nothing is in view.
-    pub fn frame_base(
-        &mut self,
-        sampler: &Sampler,
-        view: &ViewLod,
-        base: f64,
-        shown: Option<u32>,
-    ) -> f64 {
-        shown
-            .and_then(|shown| self.base_for_shown(sampler, view, f64::from(shown)))
-            .map_or(base, |b| f64::from(b as f32))
-    }
-
-    /// The point budget's estimator, on the pool's current geometry.
-    pub fn shown_estimate(&self) -> &ShownEstimate {
-        &self.estimate
     }
 
     /// Whether every rank visible under `view` with base count `base` is held.

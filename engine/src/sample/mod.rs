@@ -19,7 +19,8 @@ mod sampler;
 mod stratified;
 mod types;
 
-pub use lod_pool::{CLOSE_ROOM, DRAW_AHEAD, LodPool, PoolChange};
+pub use lod_budget::CLOSE_ROOM;
+pub use lod_pool::{DRAW_AHEAD, LodPool, PoolChange};
 pub use sampler::{SampleError, Sampler, SegmentSampling};
 pub use stratified::{allocate, stratified_value};
 pub use types::{Sample, SampleSite};

@@ -47,11 +47,12 @@ pub struct Lod {
     pub view: ViewLod,
     /// Samples over the whole surface at multiplier 1; the pool holds ranks `0..base`.
     pub base: u32,
-    /// Entries the pool may add beyond `base` where views ask for them.
+    /// Entries the pool may add beyond `base` where views ask for them
+    /// ([`LodPool::room_for`] gives room for close views).
     pub budget: usize,
     /// A point budget: when set, every update thresholds with the base count under
     /// which the camera shows about this many samples
-    /// ([`LodPool::frame_base`]; within 1% on the bunny), instead of `base`
+    /// ([`LodPool::frame_base`]; within 3% on the bunny, near or far), instead of `base`
     /// (which stays the pool's prefix, and the base count of a view of nothing). The
     /// base count used is [`LodState::base`]: a renderer draws with it.
     pub shown: Option<u32>,
