@@ -94,8 +94,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..camera.view(eye)
         };
         let probed = pool.shown_estimate().probe(&v);
-        let probes = probed.mean;
-        let in_view_alone = (probes > 0.0).then_some(());
+        let base_alone = (probed.mean > 0.0).then(|| (budget / probed.mean).min(4_294_967_296.0));
         let (estimate, ms) = if cold {
             let mut fresh = empty.clone();
             let t = Instant::now();
@@ -116,13 +115,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (count, update) = shown(&mut pool, s, &v, base, &mut fades);
         let ratio = count / budget;
         updates.push(update);
-        let (ratio_alone, base_alone) = match in_view_alone {
-            Some(()) => {
-                let b = (budget / probes).min(4_294_967_296.0);
-                (shown(&mut alone, s, &v, b, &mut fades).0 / budget, Some(b))
-            }
-            None => (f64::INFINITY, None),
-        };
+        let ratio_alone = base_alone.map_or(f64::INFINITY, |b| {
+            shown(&mut alone, s, &v, b, &mut fades).0 / budget
+        });
         let jump = |b: f64, l: Option<f64>| l.map_or(1.0, |l| (b / l).max(l / b));
         let (j, j_alone) = (
             jump(base, last),
@@ -136,10 +131,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         worst = worst.max((ratio - 1.0).abs());
         worst_alone = worst_alone.max((ratio_alone - 1.0).abs());
         if frame % 8 == 0 {
-            let probes_in_view = probed.in_view;
             println!(
-                "| {:.3} | {probes_in_view} | {ratio_alone:.3} | {} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
+                "| {:.3} | {} | {ratio_alone:.3} | {} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
                 distance / radius,
+                probed.in_view,
                 estimate.ranks,
                 estimate.in_view,
                 estimate.evaluated,

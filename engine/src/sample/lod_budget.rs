@@ -17,10 +17,11 @@
 //! - **Refinement in view.** A close view sees a small part of the surface, and few
 //!   probes: on the bunny, 2.7 times the budget shown 0.03 bounding radii from the
 //!   surface, and the base count jumping by up to 1.5 times between frames of a smooth
-//!   dolly as probes cross the frame's edge (the `lod_budget` bench). While fewer than [`IN_VIEW`] of the ranks
-//!   averaged are in view, `M` doubles: the new ranks `M..2M` are enumerated only in
-//!   the bins of a pool ([`LodPool`]) whose bound of the multiplier is
-//!   above 0 (elsewhere every multiplier is 0), placed, and their multipliers added.
+//!   dolly as probes cross the frame's edge (the `lod_budget` bench). While fewer than
+//!   [`IN_VIEW`] of the ranks averaged are in view, `M` doubles: the new ranks `M..2M`
+//!   are enumerated only in the bins of a pool ([`LodPool`]) whose bound of the
+//!   multiplier is above 0 (elsewhere every multiplier is 0), placed, and their
+//!   multipliers added.
 //!   The ranks evaluated are about `IN_VIEW` times the measure of those bins over the
 //!   measure in view, at most [`REFINE_LIMIT`] per view (where that limit stops the
 //!   doubling, how far it got depends on the bins' bounds too: the looser bounds of a
@@ -134,9 +135,11 @@ struct ProbeList {
 /// the time depends on the cache, never the estimate.
 #[derive(Clone, Debug, Default)]
 struct SiteCache {
-    /// Per bin of the pool, its ranks from [`PROBES`] to the last refinement's end, if
-    /// it was in it: a range of `entries`, in rank order, and that end (0 if not).
-    slots: Vec<(Range<u32>, u32)>,
+    /// Per bin of the pool in the last refinement, its ranks from [`PROBES`] to `end`:
+    /// a range of `entries`, in rank order.
+    slots: Vec<Option<Range<u32>>>,
+    /// The end of the ranks the last refinement averaged.
+    end: u32,
     /// The entries: rank and site.
     entries: Vec<(u32, SampleSite)>,
     /// The next refinement's entries while they are gathered.
@@ -249,7 +252,7 @@ impl ShownEstimate {
             self.lists.resize_with(chunks, Default::default);
         }
         let cache = &mut self.cache;
-        cache.slots.resize(shares.len(), (0..0, 0));
+        cache.slots.resize(shares.len(), None);
         let mesh = sampler.mesh();
         let geometry = match &self.deformed {
             Some([positions, vertex_normals, face_normals]) => Geometry {
@@ -293,7 +296,10 @@ impl ShownEstimate {
                         // Every rank of the bin in [PROBES, `reach`) is in the cache, in
                         // order; the others in [from, to) are placed. Either way the
                         // multipliers are summed in rank order.
-                        let (slot, reach) = cached.slots[b as usize].clone();
+                        let (slot, reach) = match cached.slots[b as usize].clone() {
+                            Some(slot) => (slot, cached.end),
+                            None => (0..0, 0),
+                        };
                         let kept = &cached.entries[slot.start as usize..slot.end as usize];
                         let lo = kept.partition_point(|e| e.0 < from);
                         let hi = kept.partition_point(|e| e.0 < to);
@@ -359,6 +365,7 @@ impl ShownEstimate {
     fn keep_sites(cache: &mut SiteCache, lists: &[ProbeList], live: &[u32], end: u32) {
         let SiteCache {
             slots,
+            end: kept_end,
             entries,
             spare,
             built,
@@ -368,7 +375,7 @@ impl ShownEstimate {
         for (list, bins) in lists.iter().zip(live.chunks(REFINE_CHUNK)) {
             for (i, &b) in bins.iter().enumerate() {
                 let start = spare.len() as u32;
-                let (slot, _) = slots[b as usize].clone();
+                let slot = slots[b as usize].clone().unwrap_or(0..0);
                 let kept = &entries[slot.start as usize..slot.end as usize];
                 spare.extend(kept.iter().take_while(|e| e.0 < end));
                 let mut from = 0;
@@ -381,10 +388,11 @@ impl ShownEstimate {
                 built.push(start..spare.len() as u32);
             }
         }
-        slots.fill((0..0, 0));
+        slots.fill(None);
         for (&b, range) in live.iter().zip(built.iter()) {
-            slots[b as usize] = (range.clone(), end);
+            slots[b as usize] = Some(range.clone());
         }
+        *kept_end = end;
         std::mem::swap(entries, spare);
     }
 }
