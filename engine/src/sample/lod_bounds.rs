@@ -5,13 +5,16 @@
 //! without branches, which the compiler turns into vector code.
 //!
 //! Input: per region, points and unit normals whose convex combinations hold its
-//! surface (the pool's `bin_bound` gives them); a [`ViewLod`]. Output: per region, an
-//! upper bound of [`ViewLod::multiplier`] over every such point and normalised blend
-//! of the normals (the pool turns it into the rank `ceil(N bound)` a base count `N`
-//! needs there). Cost: O(1) per region and view, no trigonometric call.
+//! surface ([`bin_bound`] gives them for a pool's bins); a [`ViewLod`]. Output: per
+//! region, an upper bound of [`ViewLod::multiplier`] over every such point and
+//! normalised blend of the normals (the pool turns it into the rank `ceil(N bound)` a
+//! base count `N` needs there). Cost: O(1) per region and view, no trigonometric call.
+
+use std::ops::Range;
 
 use glam::{DVec3, DVec4, Vec4Swizzles};
 
+use super::Sampler;
 use super::lod::ViewLod;
 
 /// A sphere holding some faces and a cone holding their vertex normals (hence every
@@ -164,6 +167,24 @@ impl BoundSet {
         self.spread_sin.push(bound.spread_sin);
     }
 
+    /// Region `i`'s sphere's centre and its normal cone's axis.
+    pub(super) fn centre_axis(&self, i: usize) -> (DVec3, DVec3) {
+        let column = |c: &[Vec<f64>; 3]| DVec3::new(c[0][i], c[1][i], c[2][i]);
+        (column(&self.centre), column(&self.axis))
+    }
+
+    /// Keeps the first `len` regions' bounds.
+    pub(super) fn truncate(&mut self, len: usize) {
+        for k in 0..3 {
+            self.centre[k].truncate(len);
+            self.axis[k].truncate(len);
+        }
+        self.radius.truncate(len);
+        self.narrow.truncate(len);
+        self.spread_cos.truncate(len);
+        self.spread_sin.truncate(len);
+    }
+
     /// Replaces region `i`'s bound with `bound`.
     pub(super) fn set(&mut self, i: usize, bound: &RegionBound) {
         for k in 0..3 {
@@ -280,4 +301,51 @@ impl BoundSet {
             out[i] = if inside < 0.0 { 0.0 } else { bound };
         }
     }
+}
+
+/// The bound of the parts of cells `leaves` of segment `segment` in the domain, with
+/// the vertex positions and normals `geometry` (the sampler's mesh's, or a
+/// deformation's).
+///
+/// `tight`: a sphere and a normal cone (its axis fitted) around the points and
+/// interpolated vertex normals at the corners of each overlapping triangle's part
+/// inside each cell ([`leaf_part_corners`](crate::curve::SegmentCurve::leaf_part_corners)).
+/// Every sample of the cells is a convex combination of its part's corners, so it lies
+/// in the sphere and its normal in the cone, and the parts are far smaller than the
+/// triangles they are cut from (a cell is smaller than a face on a fine mesh): on the
+/// bunny a view's pool holds 1.32 times its visible ranks, against 1.53 around the
+/// triangles. Otherwise, around the overlapping triangles' corners and vertex normals
+/// (the cone around their mean): about eight times cheaper, for a mesh deforming
+/// every frame.
+pub(super) fn bin_bound(
+    sampler: &Sampler,
+    (positions, normals): (&[DVec3], &[DVec3]),
+    segment: usize,
+    leaves: Range<usize>,
+    tight: bool,
+    (points, directions): &mut (Vec<DVec3>, Vec<DVec3>),
+) -> RegionBound {
+    let seg = &sampler.segments()[segment];
+    let triangles = sampler.mesh().triangles();
+    let corners_of = |t: u32| triangles[seg.faces[t as usize] as usize].map(|v| v as usize);
+    points.clear();
+    directions.clear();
+    for leaf in leaves {
+        if tight {
+            seg.curve.leaf_part_corners(leaf, |t, b| {
+                let corners = corners_of(t);
+                let blend = |x: &[DVec3]| (0..3).map(|i| x[corners[i]] * b[i]).sum::<DVec3>();
+                points.push(blend(positions));
+                directions.push(blend(normals).normalize_or_zero());
+            });
+        } else {
+            for &t in seg.curve.leaf_triangles(leaf) {
+                for v in corners_of(t) {
+                    points.push(positions[v]);
+                    directions.push(normals[v]);
+                }
+            }
+        }
+    }
+    RegionBound::new(points, directions, tight)
 }

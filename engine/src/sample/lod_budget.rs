@@ -196,6 +196,15 @@ impl ShownEstimate {
         self.last = None;
     }
 
+    /// The vertex positions and normals of the current geometry: the sampler's mesh's,
+    /// or the deformation's given to [`set_geometry`](Self::set_geometry).
+    pub(crate) fn vertices<'a>(&'a self, sampler: &'a Sampler) -> (&'a [DVec3], &'a [DVec3]) {
+        match &self.deformed {
+            Some([positions, normals, _]) => (positions, normals),
+            None => (sampler.mesh().positions(), sampler.mesh().vertex_normals()),
+        }
+    }
+
     /// The mean of `view`'s multiplier over the [`PROBES`] alone (no refinement).
     pub fn mean_multiplier(&self, view: &ViewLod) -> f64 {
         self.probe(view).mean
@@ -404,8 +413,9 @@ impl LodPool {
     /// `base`, `base x max` (a view at the clamp everywhere asks for that many); with a
     /// point budget of `shown` samples, at least [`CLOSE_ROOM`] times `shown x max`,
     /// since a close view's bins reach past what it shows: 0.012 bounding radii
-    /// above the bunny, a budget of 10^5 needs 9.5 times as many entries (the
-    /// `lod_budget` bench). The room is used only as views ask: the pool reserves
+    /// above the bunny, a budget of 10^5 needs 2.8 times as many entries with the
+    /// bins split for the view ([`lod_split`](super::lod_split)), 9.5 times without
+    /// (the `lod_budget` bench). The room is used only as views ask: the pool reserves
     /// memory for its prefix and grows geometrically beyond.
     pub fn room_for(base: u32, shown: Option<u32>, max: f64) -> usize {
         let close = shown.map_or(0.0, |s| f64::from(s) * max * CLOSE_ROOM);
@@ -440,8 +450,10 @@ impl LodPool {
         }
         self.bound_view(view);
         self.live.clear();
+        // The roots: they partition the surface (split bins' children are finer
+        // copies of parts of it).
         self.live.extend(
-            self.multipliers
+            self.multipliers[..self.roots]
                 .iter()
                 .enumerate()
                 .filter(|&(_, &m)| m > 0.0)

@@ -24,6 +24,11 @@
 //! and stay apart): it is refilled every few frames, in batches. This changes which
 //! ranks the pool holds, never which are visible: a renderer thresholds by rank.
 //!
+//! **Splits.** Close to the surface a bin is wider than its distance to the eye and its
+//! bound far above the multiplier over most of it, so a bin that asks for many ranks
+//! and whose bound is loose is split into finer bins, each with its own bound and
+//! cover ([`lod_split`](super::lod_split)).
+//!
 //! Entries are only ever appended, so a GPU copy of the pool is extended by streaming
 //! the new tail ([`PoolChange::Appended`]). When the extension would outgrow its budget
 //! and holds ranks the view no longer needs, even with its draw-ahead, it is rebuilt
@@ -42,7 +47,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::lod::{LodError, ViewLod, check_deformation, fade};
-use super::lod_bounds::{BoundSet, Frustum, RegionBound};
+use super::lod_bounds::{BoundSet, Frustum, RegionBound, bin_bound};
 use super::lod_budget::ShownEstimate;
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
@@ -98,22 +103,36 @@ pub struct LodPool {
     ahead: f64,
     sites: Vec<SampleSite>,
     ranks: Vec<u32>,
-    /// The bins, in segment order and cell order within a segment.
+    /// The bins: the roots, in segment order and cell order within a segment, then
+    /// the children of split bins, in the order they were split
+    /// ([`lod_split`](super::lod_split)).
     pub(super) bins: Vec<Bin>,
+    /// The number of roots: they partition the surface, and never change.
+    pub(super) roots: usize,
+    /// Per bin, whether it is split (its children hold its ranks from then on).
+    pub(super) split: Vec<bool>,
+    /// The split bins and their children, in the order they were split (a parent
+    /// before its children's groups).
+    pub(super) groups: Vec<(u32, Range<u32>)>,
+    /// Whether the bins are bounded around the parts of faces inside their cells (the
+    /// sampler's mesh) or around whole faces (a deformation of it).
+    pub(super) tight: bool,
+    /// Whether bins split for close views.
+    pub(super) splitting: bool,
     /// Per bin, its share of the total measure (of the sequence's values): a column
     /// of its own, read for every bin that lacks ranks before any of them is drawn.
     pub(super) shares: Vec<f64>,
     /// Their bounds, as columns.
-    bounds: BoundSet,
+    pub(super) bounds: BoundSet,
     /// Per bin: every rank below it that falls in the bin is held.
-    reach: Vec<u32>,
-    /// Per bin, the rank the view of the current update needs.
-    needs: Vec<u32>,
+    pub(super) reach: Vec<u32>,
+    /// Per bin, the rank the view of the current update needs (0 for a split bin).
+    pub(super) needs: Vec<u32>,
     /// Per bin, the bound of the multiplier of the view `bounded` (kept, so that an
     /// update whose view has not moved, only its base count, skips the bounds).
     pub(super) multipliers: Vec<f64>,
     /// The view `multipliers` bounds, if any.
-    bounded: Option<ViewLod>,
+    pub(super) bounded: Option<ViewLod>,
     /// The bins a parallel update draws in, in order.
     todo: Vec<u32>,
     /// The ranks listed by a sequential update, as runs of one bin: (bin, end entry).
@@ -138,6 +157,11 @@ impl Clone for LodPool {
             sites: with_room(&self.sites, self.sites.capacity()),
             ranks: with_room(&self.ranks, self.ranks.capacity()),
             bins: self.bins.clone(),
+            roots: self.roots,
+            split: self.split.clone(),
+            groups: self.groups.clone(),
+            tight: self.tight,
+            splitting: self.splitting,
             shares: self.shares.clone(),
             bounds: self.bounds.clone(),
             reach: self.reach.clone(),
@@ -178,57 +202,11 @@ struct BinList {
 #[derive(Clone, Debug)]
 pub(super) struct Bin {
     /// Index into `Sampler::segments`.
-    segment: u32,
+    pub(super) segment: u32,
     /// Leaves of the segment's curve.
-    leaves: Range<u32>,
+    pub(super) leaves: Range<u32>,
     /// The dyadic intervals over the bin's values.
     pub(super) cover: RankCover,
-}
-
-/// The bound of the parts of cells `leaves` of segment `segment` in the domain, with
-/// the positions and normals of `mesh` (the sampler's mesh, or a deformation of it).
-///
-/// `tight`: a sphere and a normal cone (its axis fitted) around the points and
-/// interpolated vertex normals at the corners of each overlapping triangle's part
-/// inside each cell ([`leaf_part_corners`](crate::curve::SegmentCurve::leaf_part_corners)).
-/// Every sample of the cells is a convex combination of its part's corners, so it lies
-/// in the sphere and its normal in the cone, and the parts are far smaller than the
-/// triangles they are cut from (a cell is smaller than a face on a fine mesh): on the
-/// bunny a view's pool holds 1.32 times its visible ranks, against 1.53 around the
-/// triangles. Otherwise, around the overlapping triangles' corners and vertex normals
-/// (the cone around their mean): about eight times cheaper, for a mesh deforming
-/// every frame.
-fn bin_bound(
-    sampler: &Sampler,
-    mesh: &TriMesh,
-    segment: usize,
-    leaves: Range<usize>,
-    tight: bool,
-    (points, directions): &mut (Vec<DVec3>, Vec<DVec3>),
-) -> RegionBound {
-    let seg = &sampler.segments()[segment];
-    let (positions, normals) = (mesh.positions(), mesh.vertex_normals());
-    let corners_of = |t: u32| mesh.triangles()[seg.faces[t as usize] as usize].map(|v| v as usize);
-    points.clear();
-    directions.clear();
-    for leaf in leaves {
-        if tight {
-            seg.curve.leaf_part_corners(leaf, |t, b| {
-                let corners = corners_of(t);
-                let blend = |x: &[DVec3]| (0..3).map(|i| x[corners[i]] * b[i]).sum::<DVec3>();
-                points.push(blend(positions));
-                directions.push(blend(normals).normalize_or_zero());
-            });
-        } else {
-            for &t in seg.curve.leaf_triangles(leaf) {
-                for v in corners_of(t) {
-                    points.push(positions[v]);
-                    directions.push(normals[v]);
-                }
-            }
-        }
-    }
-    RegionBound::new(points, directions, tight)
 }
 
 impl LodPool {
@@ -247,7 +225,15 @@ impl LodPool {
             .par_iter()
             .map_init(Default::default, |buffers, bin| {
                 let leaves = bin.leaves.start as usize..bin.leaves.end as usize;
-                bin_bound(sampler, mesh, bin.segment as usize, leaves, false, buffers)
+                let geometry = (mesh.positions(), mesh.vertex_normals());
+                bin_bound(
+                    sampler,
+                    geometry,
+                    bin.segment as usize,
+                    leaves,
+                    false,
+                    buffers,
+                )
             })
             .collect();
         self.estimate.move_to(mesh);
@@ -255,6 +241,7 @@ impl LodPool {
             self.bounds.set(i, bound);
         }
         self.bounded = None;
+        self.tight = false;
         Ok(())
     }
 
@@ -290,7 +277,8 @@ impl LodPool {
                 let mut buffers = Default::default();
                 runs.into_iter().map(move |leaves| {
                     let mesh = sampler.mesh();
-                    let bound = bin_bound(sampler, mesh, i, leaves.clone(), true, &mut buffers);
+                    let geometry = (mesh.positions(), mesh.vertex_normals());
+                    let bound = bin_bound(sampler, geometry, i, leaves.clone(), true, &mut buffers);
                     let share = (cumulative[leaves.end] - cumulative[leaves.start])
                         / sampler.total_measure();
                     let bin = Bin {
@@ -320,6 +308,11 @@ impl LodPool {
             needs: vec![0; bins.len()],
             multipliers: Vec::new(),
             bounded: None,
+            roots: bins.len(),
+            split: vec![false; bins.len()],
+            groups: Vec::new(),
+            tight: true,
+            splitting: true,
             bins,
             bounds,
             todo: Vec::new(),
@@ -376,7 +369,9 @@ impl LodPool {
         self.sites.is_empty()
     }
 
-    /// The number of bins.
+    /// The number of bins: about [`BINS`] roots, and the children of the bins split
+    /// for close views ([`lod_split`](super::lod_split)), which only grow in number
+    /// until the pool is rebuilt.
     pub fn bins(&self) -> usize {
         self.bins.len()
     }
@@ -391,7 +386,8 @@ impl LodPool {
         )
     }
 
-    /// The rank below which bin `bin` holds every rank that falls in it.
+    /// The rank below which bin `bin` holds every rank that falls in it (for a split
+    /// bin, its reach when it was split: its children reach further).
     pub fn reach(&self, bin: usize) -> u32 {
         self.reach[bin]
     }
@@ -405,13 +401,15 @@ impl LodPool {
         self.bounds.multiplier(bin, &Frustum::new(view))
     }
 
-    /// Bounds every bin's multiplier under `view` into `out`, in parallel.
+    /// Bounds every bin's multiplier under `view` into `out`, in parallel (then each
+    /// split bin's children by their parent's bound too).
     fn bound_bins(&self, view: &ViewLod, out: &mut Vec<f64>) {
         let frustum = Frustum::new(view);
         out.resize(self.bins.len(), 0.0);
         out.par_chunks_mut(BOUND_CHUNK)
             .enumerate()
             .for_each(|(c, dst)| self.bounds.multipliers_into(&frustum, c * BOUND_CHUNK, dst));
+        self.bound_by_parents(out);
     }
 
     /// Bounds every bin's multiplier under `view` into `multipliers`, unless they hold
@@ -427,11 +425,21 @@ impl LodPool {
 
     /// Writes into `needs` each bin's needed rank under multiplier bounds
     /// `multipliers` with base count `base`: `ceil(base * bound)`, saturated at
-    /// `u32::MAX`.
-    fn needs_from(multipliers: &[f64], base: f64, needs: &mut Vec<u32>) {
+    /// `u32::MAX`, and 0 for a split bin (its children hold its ranks).
+    fn needs_from(&self, multipliers: &[f64], base: f64, needs: &mut Vec<u32>) {
         needs.clear();
         // `as` saturates: u32::MAX for a bound past it.
         needs.extend(multipliers.iter().map(|&b| (base * b).ceil() as u32));
+        for &(parent, _) in &self.groups {
+            needs[parent as usize] = 0;
+        }
+    }
+
+    /// [`needs_from`](Self::needs_from) the bounds of the last view into `needs`.
+    fn need(&mut self, base: f64) {
+        let mut needs = std::mem::take(&mut self.needs);
+        self.needs_from(&self.multipliers, base, &mut needs);
+        self.needs = needs;
     }
 
     /// The rank bin `bin` is filled to when it needs `need`: past it by the
@@ -458,7 +466,7 @@ impl LodPool {
     pub fn complete(&self, view: &ViewLod, base: f64) -> bool {
         let (mut multipliers, mut needs) = (Vec::new(), Vec::new());
         self.bound_bins(view, &mut multipliers);
-        Self::needs_from(&multipliers, base, &mut needs);
+        self.needs_from(&multipliers, base, &mut needs);
         needs
             .iter()
             .zip(&self.reach)
@@ -474,20 +482,25 @@ impl LodPool {
         let start = self.sites.len();
         self.runs.clear();
         self.bound_view(view);
-        Self::needs_from(&self.multipliers, base, &mut self.needs);
+        self.need(base);
+        self.split_for(sampler, base);
         if self.extend(sampler) {
             return self.finish(sampler, start);
         }
         // The budget ran out. Rebuild if the extension holds ranks the view does not
         // need, even drawing ahead; otherwise keep what is there.
-        let stale = (0..self.reach.len())
-            .any(|b| self.reach[b] > self.prefix.max(self.ahead_limit(self.needs[b])));
+        let stale = (0..self.reach.len()).any(|b| {
+            !self.split[b] && self.reach[b] > self.prefix.max(self.ahead_limit(self.needs[b]))
+        });
         if !stale {
             return self.finish(sampler, start);
         }
         self.sites.truncate(self.prefix as usize);
         self.ranks.truncate(self.prefix as usize);
+        self.unsplit();
         self.reach.fill(self.prefix);
+        self.need(base);
+        self.split_for(sampler, base);
         self.runs.clear();
         self.extend(sampler);
         self.finish(sampler, self.prefix as usize);
@@ -657,7 +670,7 @@ impl LodPool {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::TriMesh;
@@ -701,7 +714,13 @@ mod tests {
             .collect()
     }
 
-    fn held_visible(pool: &LodPool, s: &Sampler, v: &ViewLod, base: f64) -> Vec<(u32, SampleSite)> {
+    /// The visible entries (rank and site), in rank order.
+    pub(in crate::sample) fn held_visible(
+        pool: &LodPool,
+        s: &Sampler,
+        v: &ViewLod,
+        base: f64,
+    ) -> Vec<(u32, SampleSite)> {
         let mut fades = vec![0.0; pool.len()];
         pool.fades_into(s, v, base, &mut fades);
         let mut shown: Vec<(u32, SampleSite)> = (0..pool.len())
@@ -1007,30 +1026,31 @@ mod tests {
             held_visible(&ahead, &s, &v, base),
             scan(&s, seed, end, &v, base)
         );
-        // Each rank once, and every rank below a bin's reach that falls in it held:
-        // a superset of the exact pool's ranks.
-        let mut held = ahead.ranks().to_vec();
+        // A superset of the exact pool's ranks.
+        let held = check_held(&ahead, &s, 5);
+        assert!(exact.ranks().iter().all(|k| held.binary_search(k).is_ok()));
+    }
+
+    /// Checks that each rank is held once, and that every `step`-th bin (split or not,
+    /// children too) holds every rank below its reach that falls in it; the ranks
+    /// held, sorted.
+    pub(in crate::sample) fn check_held(pool: &LodPool, s: &Sampler, step: usize) -> Vec<u32> {
+        let mut held = pool.ranks().to_vec();
         held.sort_unstable();
         held.dedup();
-        assert_eq!(held.len(), ahead.len());
-        assert!(exact.ranks().iter().all(|k| held.binary_search(k).is_ok()));
-        for b in (0..ahead.bins()).step_by(5) {
-            let (segment, leaves) = ahead.bin(b);
-            let mut listed = Vec::new();
-            s.progressive_ranks_in_leaves(
-                seed,
-                segment,
-                leaves,
-                0,
-                ahead.reach(b),
-                usize::MAX,
-                &mut listed,
-            );
+        assert_eq!(held.len(), pool.len(), "a rank held twice");
+        let mut listed = Vec::new();
+        for b in (0..pool.bins()).step_by(step) {
+            let (segment, leaves) = pool.bin(b);
+            listed.clear();
+            let (seed, reach) = (pool.seed(), pool.reach(b));
+            s.progressive_ranks_in_leaves(seed, segment, leaves, 0, reach, usize::MAX, &mut listed);
             assert!(
                 listed.iter().all(|k| held.binary_search(k).is_ok()),
                 "bin {b}"
             );
         }
+        held
     }
 
     #[test]
