@@ -68,9 +68,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mesh.face_count()
     );
     println!(
-        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks evaluated | of them placed | estimate ms | update ms | entries the view needs | shown / budget | base step, probes alone | base step |"
+        "| distance / radius | probes in view | probes alone: shown / budget | ranks averaged | of them in view | ranks evaluated | of them placed | estimate ms | update ms | entries the view needs | pool entries | bins | shown / budget | base step, probes alone | base step |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!(
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    );
     let mut pool = LodPool::new(s, SEED, 0, usize::MAX / 4);
     let mut alone = pool.clone();
     // An empty pool drawing no more than each view needs.
@@ -78,7 +80,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut fades = Vec::new();
     let (mut last, mut last_alone) = (None::<f64>, None::<f64>);
     let (mut worst, mut worst_alone, mut step, mut step_alone) = (0.0f64, 0.0f64, 1.0f64, 1.0f64);
-    let (mut times, mut updates) = (Vec::new(), Vec::new());
+    let (mut times, mut updates, mut close) = (Vec::new(), Vec::new(), Vec::new());
     let (mut frame, mut distance) = (0, 2.0 * radius);
     while distance > 0.01 * radius {
         let eye = target + normal * distance;
@@ -115,6 +117,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (count, update) = shown(&mut pool, s, &v, base, &mut fades);
         let ratio = count / budget;
         updates.push(update);
+        if distance < 0.1 * radius {
+            close.push(update);
+        }
         let ratio_alone = base_alone.map_or(f64::INFINITY, |b| {
             shown(&mut alone, s, &v, b, &mut fades).0 / budget
         });
@@ -132,7 +137,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         worst_alone = worst_alone.max((ratio_alone - 1.0).abs());
         if frame % 8 == 0 {
             println!(
-                "| {:.3} | {} | {ratio_alone:.3} | {} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
+                "| {:.3} | {} | {ratio_alone:.3} | {} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
                 distance / radius,
                 probed.in_view,
                 estimate.ranks,
@@ -143,7 +148,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let mut fresh = empty.clone();
                     fresh.update(s, &v, base);
                     fresh.len()
-                }
+                },
+                pool.len(),
+                pool.bins(),
             );
         }
         last = Some(base);
@@ -153,15 +160,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     times.sort_by(f64::total_cmp);
     updates.sort_by(f64::total_cmp);
+    close.sort_by(f64::total_cmp);
     println!(
-        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}.",
+        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}; closer than 0.1 radius ({} frames, the pool growing most): median {:.2}, 90th percentile {:.2}. Entries held at the end: {}.",
         100.0 * worst_alone,
         100.0 * worst,
         times[times.len() / 2],
         times[times.len() * 9 / 10],
         times[times.len() - 1],
         updates[updates.len() / 2],
-        updates[updates.len() * 9 / 10]
+        updates[updates.len() * 9 / 10],
+        close.len(),
+        close[close.len() / 2],
+        close[close.len() * 9 / 10],
+        pool.len(),
     );
     Ok(())
 }
