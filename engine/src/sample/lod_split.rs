@@ -1,21 +1,22 @@
 //! Finer bins where a view asks for many ranks (issue 19).
 //!
 //! A pool's bins ([`LodPool`]) are about 16,384 runs of cells of equal measure, each
-//! with one bound of a view's multiplier. Close to the surface
-//! a bin is wider than the view's distance to it, and its bound (the multiplier at
-//! its nearest point) lies far above the multiplier over most of it: 0.012 bounding
-//! radii above the bunny the pool held 9.5 times the ranks the view showed, and
-//! drawing them was most of a close frame's update.
+//! with one bound of a view's multiplier. Close to the surface a bin is wider than the
+//! view's distance to it, and its bound (the multiplier at its nearest point) lies far
+//! above the multiplier over most of it: 0.012 bounding radii above the bunny the pool
+//! held 9.5 times the ranks the view showed, and drawing them was most of a close
+//! frame's update.
 //!
 //! A bin whose need asks for many ranks (`need x share` at least [`SPLIT_ENTRIES`]) and
 //! whose bound is loose (at least [`SPLIT_LOOSE`] times the multiplier at its centre)
-//! is therefore split into [`SPLIT_WAYS`] children: runs of its cells of equal measure,
-//! each with its own tight bound (the minimum of its own and its parent's: both bound
-//! it), its own rank cover, and the parent's reach. From then on the children hold the
-//! parent's ranks and the parent needs none; a child can split again. A split is kept
-//! until the pool is rebuilt (merging children that reach different ranks would list
-//! some ranks twice), and the bins stop splitting at [`SPLIT_ROOM`] times the roots,
-//! so that the bounds of an update stay within a few times their cost.
+//! is therefore split into [`SPLIT_WAYS`] children: runs of its cells of about equal
+//! measure, each with its own tight bound (the lesser of its own and its parent's:
+//! both bound it), its own rank cover, and the parent's reach. From then on the
+//! children hold the parent's ranks and the parent needs none; a child can split
+//! again. A split is kept until the pool is rebuilt (merging children that reach
+//! different ranks would list some ranks twice), and the bins stop splitting at
+//! [`SPLIT_ROOM`] times the roots, so that the bounds of an update stay within a few
+//! times their cost.
 //!
 //! Splits change which ranks the pool holds, never which are visible: the roots still
 //! partition the surface (the point budget's refinement enumerates ranks in them), and
@@ -39,8 +40,8 @@ pub const SPLIT_ENTRIES: f64 = 1024.0;
 /// sphere's centre with its cone's axis for normal: a bin wide next to its distance
 /// to the eye, cut by the frustum or turning away from the eye. Tighter bins are
 /// left whole: with the whole bunny in view at 10^6 samples, splitting every bin that
-/// asks for many ranks saved 3% of the entries and doubled the update, whose bounds
-/// it quadrupled.
+/// asked for 256 ranks, tight or not, saved 3% of the entries and doubled the update,
+/// whose bounds it quadrupled.
 pub const SPLIT_LOOSE: f64 = 2.0;
 
 /// The children of a split: runs of the parent's cells of about equal measure (fewer
@@ -59,9 +60,9 @@ fn cuts(cumulative: &[f64], leaves: Range<usize>, ways: usize) -> Vec<Range<usiz
     let mut start = leaves.start;
     for j in 1..ways {
         let at = lo + (hi - lo) * j as f64 / ways as f64;
-        // The leaf boundary nearest `at`, leaving one leaf per run to come.
+        // The first leaf boundary at or past `at`, or the one before it if nearer,
+        // leaving a leaf for each run to come.
         let mut end = start + cumulative[start..leaves.end].partition_point(|&c| c < at);
-        // Or the leaf boundary before it, if nearer.
         if end > start + 1 && at - cumulative[end - 1] < cumulative[end] - at {
             end -= 1;
         }
@@ -159,7 +160,7 @@ impl LodPool {
                         .collect()
                 })
                 .collect();
-            let frustum = self.bounded.as_ref().map(Frustum::new);
+            let frustum = Frustum::new(&view);
             for (&parent, children) in wanted.iter().zip(made) {
                 let first = self.bins.len();
                 for (bin, share, bound) in children {
@@ -176,12 +177,10 @@ impl LodPool {
                 // The children's bounds and needs under the bounded view.
                 let bound = self.multipliers[parent];
                 self.multipliers.resize(self.bins.len(), 0.0);
-                if let Some(frustum) = &frustum {
-                    let dst = &mut self.multipliers[first..];
-                    if bound > 0.0 {
-                        self.bounds.multipliers_into(frustum, first, dst);
-                        dst.iter_mut().for_each(|m| *m = m.min(bound));
-                    }
+                let dst = &mut self.multipliers[first..];
+                if bound > 0.0 {
+                    self.bounds.multipliers_into(&frustum, first, dst);
+                    dst.iter_mut().for_each(|m| *m = m.min(bound));
                 }
                 let needs = self.multipliers[first..]
                     .iter()
@@ -219,8 +218,8 @@ mod tests {
     use crate::surface::tests::torus_sampler;
 
     /// The clamp of the views' multiplier (far above a close view's), and the base
-    /// count: a close view's nearest bins ask for about 10^8 ranks, a few thousand in
-    /// each (splits need 1024).
+    /// count: 0.05 above the torus the nearest bins ask for about 2 x 10^8 ranks, some
+    /// ten thousand in each (splits need 1024).
     const MAX: f64 = 1e5;
     const BASE: f64 = 10_000.0;
 
