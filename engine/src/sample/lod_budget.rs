@@ -197,11 +197,18 @@ impl ShownEstimate {
     }
 
     /// The vertex positions and normals of the current geometry: the sampler's mesh's,
-    /// or the deformation's given to [`set_geometry`](Self::set_geometry).
-    pub(crate) fn vertices<'a>(&'a self, sampler: &'a Sampler) -> (&'a [DVec3], &'a [DVec3]) {
+    /// or the deformation's given to [`set_geometry`](Self::set_geometry); and whether
+    /// it is a deformation.
+    pub(crate) fn vertices<'a>(
+        &'a self,
+        sampler: &'a Sampler,
+    ) -> ((&'a [DVec3], &'a [DVec3]), bool) {
         match &self.deformed {
-            Some([positions, normals, _]) => (positions, normals),
-            None => (sampler.mesh().positions(), sampler.mesh().vertex_normals()),
+            Some([positions, normals, _]) => ((positions, normals), true),
+            None => (
+                (sampler.mesh().positions(), sampler.mesh().vertex_normals()),
+                false,
+            ),
         }
     }
 

@@ -114,9 +114,6 @@ pub struct LodPool {
     /// The split bins and their children, in the order they were split (a parent
     /// before its children's groups).
     pub(super) groups: Vec<(u32, Range<u32>)>,
-    /// Whether the bins are bounded around the parts of faces inside their cells (the
-    /// sampler's mesh) or around whole faces (a deformation of it).
-    pub(super) tight: bool,
     /// Whether bins split for close views.
     pub(super) splitting: bool,
     /// Per bin, its share of the total measure (of the sequence's values): a column
@@ -160,7 +157,6 @@ impl Clone for LodPool {
             roots: self.roots,
             split: self.split.clone(),
             groups: self.groups.clone(),
-            tight: self.tight,
             splitting: self.splitting,
             shares: self.shares.clone(),
             bounds: self.bounds.clone(),
@@ -241,7 +237,6 @@ impl LodPool {
             self.bounds.set(i, bound);
         }
         self.bounded = None;
-        self.tight = false;
         Ok(())
     }
 
@@ -311,7 +306,6 @@ impl LodPool {
             roots: bins.len(),
             split: vec![false; bins.len()],
             groups: Vec::new(),
-            tight: true,
             splitting: true,
             bins,
             bounds,

@@ -133,8 +133,10 @@ impl LodPool {
                 return;
             }
             from = self.bins.len();
-            let geometry = self.estimate.vertices(sampler);
-            let (tight, seed) = (self.tight, self.seed());
+            // Tight bounds on the sampler's mesh, quick ones on a deformation (as
+            // `set_geometry` bounds the other bins).
+            let (geometry, deformed) = self.estimate.vertices(sampler);
+            let (tight, seed) = (!deformed, self.seed());
             let bins = &self.bins;
             let made: Vec<Vec<(Bin, f64, RegionBound)>> = wanted
                 .par_iter()
