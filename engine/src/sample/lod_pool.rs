@@ -49,6 +49,7 @@ use rayon::prelude::*;
 use super::lod::{LodError, ViewLod, check_deformation, fade};
 use super::lod_bounds::{BoundSet, Frustum, RegionBound, bin_bound};
 use super::lod_budget::ShownEstimate;
+use super::lod_split::SPLIT_ROOM;
 use super::progressive::RankCover;
 use super::{SampleSite, Sampler};
 use crate::curve::LeafScratch;
@@ -114,8 +115,9 @@ pub struct LodPool {
     /// The split bins and their children, in the order they were split (a parent
     /// before its children's groups).
     pub(super) groups: Vec<(u32, Range<u32>)>,
-    /// Whether bins split for close views.
-    pub(super) splitting: bool,
+    /// The most bins split bins may make, the roots included (the roots alone: none
+    /// splits).
+    pub(super) max_bins: usize,
     /// Per bin, its share of the total measure (of the sequence's values): a column
     /// of its own, read for every bin that lacks ranks before any of them is drawn.
     pub(super) shares: Vec<f64>,
@@ -157,7 +159,7 @@ impl Clone for LodPool {
             roots: self.roots,
             split: self.split.clone(),
             groups: self.groups.clone(),
-            splitting: self.splitting,
+            max_bins: self.max_bins,
             shares: self.shares.clone(),
             bounds: self.bounds.clone(),
             reach: self.reach.clone(),
@@ -306,7 +308,7 @@ impl LodPool {
             roots: bins.len(),
             split: vec![false; bins.len()],
             groups: Vec::new(),
-            splitting: true,
+            max_bins: bins.len() * SPLIT_ROOM,
             bins,
             bounds,
             todo: Vec::new(),

@@ -15,8 +15,9 @@
 //! children hold the parent's ranks and the parent needs none; a child can split
 //! again. A split is kept until the pool is rebuilt (merging children that reach
 //! different ranks would list some ranks twice), and the bins stop splitting at
-//! [`SPLIT_ROOM`] times the roots, so that the bounds of an update stay within a few
-//! times their cost.
+//! [`SPLIT_ROOM`] times the roots (or the limit
+//! [`with_max_bins`](LodPool::with_max_bins) sets), so that the bounds of an update
+//! stay within a few times their cost.
 //!
 //! Splits change which ranks the pool holds, never which are visible: the roots still
 //! partition the surface (the point budget's refinement enumerates ranks in them), and
@@ -48,7 +49,8 @@ pub const SPLIT_LOOSE: f64 = 2.0;
 /// when it has fewer cells).
 pub const SPLIT_WAYS: usize = 8;
 
-/// The bins stop splitting at this many times the roots.
+/// By default the bins stop splitting at this many times the roots
+/// ([`LodPool::with_max_bins`]).
 pub const SPLIT_ROOM: usize = 4;
 
 /// The cuts of `leaves` into at most `ways` non-empty runs of about equal measure, by
@@ -76,17 +78,35 @@ fn cuts(cumulative: &[f64], leaves: Range<usize>, ways: usize) -> Vec<Range<usiz
 
 /// Finer bins for close views: see the module docs.
 impl LodPool {
-    /// The same pool, splitting bins for close views or not (the default: it does).
-    /// Without splits a view close to the surface draws several times the ranks it
-    /// shows; with them the bins' bounds cost up to [`SPLIT_ROOM`] times as much.
-    pub fn with_splitting(mut self, splitting: bool) -> Self {
-        self.splitting = splitting;
+    /// The same pool, splitting bins for close views or not (the default: it does,
+    /// up to [`SPLIT_ROOM`] times the roots). Without splits a view close to the
+    /// surface draws several times the ranks it shows; with them the bins' bounds cost
+    /// up to [`SPLIT_ROOM`] times as much.
+    pub fn with_splitting(self, splitting: bool) -> Self {
+        let roots = self.roots;
+        self.with_max_bins(if splitting { roots * SPLIT_ROOM } else { roots })
+    }
+
+    /// The same pool, its bins splitting until there are `max_bins` of them, the
+    /// roots included (default [`SPLIT_ROOM`] times the roots; at most the roots, no
+    /// bin splits). More bins hold fewer entries in views close to the surface, and
+    /// each costs its bound in every view's update and estimate. Splits already made
+    /// stay until the pool is rebuilt, whatever the new limit.
+    pub fn with_max_bins(mut self, max_bins: usize) -> Self {
+        self.max_bins = max_bins;
         self
     }
 
-    /// Whether bins split for close views.
+    /// Whether bins split for close views: the limit on the bins leaves room past the
+    /// roots.
     pub fn splitting(&self) -> bool {
-        self.splitting
+        self.max_bins > self.roots
+    }
+
+    /// The most bins splits may make, the roots included
+    /// ([`with_max_bins`](Self::with_max_bins)).
+    pub fn max_bins(&self) -> usize {
+        self.max_bins
     }
 
     /// Lowers each split bin's children's bounds in `out` to their parent's, parents
@@ -112,13 +132,13 @@ impl LodPool {
     /// for many ranks, and their children that do, while there is room: see the module
     /// docs. The children's bounds are computed in parallel.
     pub(super) fn split_for(&mut self, sampler: &Sampler, base: f64) {
-        let Some(view) = self.bounded.filter(|_| self.splitting) else {
+        let Some(view) = self.bounded.filter(|_| self.splitting()) else {
             return;
         };
-        let cap = self.roots * SPLIT_ROOM;
         let mut from = 0;
         loop {
-            let room = cap.saturating_sub(self.bins.len()) / SPLIT_WAYS;
+            // Splits that fit however many children they make.
+            let room = self.max_bins.saturating_sub(self.bins.len()) / SPLIT_WAYS;
             // The columns first, in one pass: most bins are far from asking for many
             // ranks, and a bin's record is a few cache lines.
             let wanted: Vec<usize> = (self.needs[from..].iter())
@@ -323,6 +343,54 @@ mod tests {
             split.len(),
             whole.len()
         );
+    }
+
+    #[test]
+    fn at_its_limit_the_pool_stops_splitting_and_still_shows_every_sample() {
+        let s = torus_sampler();
+        let base = BASE;
+        let unlimited = LodPool::new(&s, 8, 0, usize::MAX / 4);
+        let roots = unlimited.bins();
+        // Room for two splits of eight children, not for a third.
+        let limit = roots + 2 * SPLIT_WAYS + SPLIT_WAYS / 2;
+        let mut capped = unlimited.clone().with_max_bins(limit);
+        let mut whole = unlimited.clone().with_splitting(false);
+        let mut unlimited = unlimited;
+        assert!(capped.splitting() && !whole.splitting() && capped.max_bins() == limit);
+        // A dolly in towards the top of the ring, then a close view of its bottom,
+        // which would split bins of its own.
+        let views = [0.2, 0.1, 0.05, 0.03]
+            .map(|d| close_view(&s, d, false))
+            .into_iter()
+            .chain([close_view(&s, 0.03, true)]);
+        for (t, v) in views.enumerate() {
+            for pool in [&mut capped, &mut whole, &mut unlimited] {
+                let before = pool.len();
+                let change = pool.update(&s, &v, base);
+                assert!(
+                    change == PoolChange::Unchanged
+                        || change == PoolChange::Appended(before..pool.len()),
+                    "step {t}: {change:?}"
+                );
+                assert!(pool.complete(&v, base), "step {t}");
+            }
+            assert!(capped.bins() <= limit, "step {t}: {} bins", capped.bins());
+            let shown = held_visible(&capped, &s, &v, base);
+            assert!(shown.len() > 1000, "step {t}: {}", shown.len());
+            assert_eq!(shown, held_visible(&whole, &s, &v, base), "step {t}");
+            assert_eq!(shown, held_visible(&unlimited, &s, &v, base), "step {t}");
+            check_held(&capped, &s, 1);
+        }
+        // The limit held: two splits made, where the unlimited pool made many.
+        assert_eq!(capped.groups.len(), 2);
+        assert!(capped.bins() > roots + SPLIT_WAYS);
+        assert!(unlimited.groups.len() > 10, "{}", unlimited.groups.len());
+        // The splits made are the unlimited pool's first.
+        assert_eq!(capped.groups[..], unlimited.groups[..2]);
+        // A lower limit keeps the splits made until a rebuild.
+        let lowered = capped.clone().with_max_bins(roots);
+        assert!(!lowered.splitting());
+        assert_eq!(lowered.bins(), capped.bins());
     }
 
     #[test]
