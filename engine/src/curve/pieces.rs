@@ -81,7 +81,7 @@ impl LeafScratch<'_> {
     /// Whether `root` holds the candidates of leaf `leaf` of `curve`: the same curve
     /// (by address, see the type's contract) and the same leaf.
     #[inline]
-    pub(super) fn holds(&self, curve: &SegmentCurve, leaf: usize) -> bool {
+    pub(crate) fn holds(&self, curve: &SegmentCurve, leaf: usize) -> bool {
         matches!(self.root_of, Some((c, l)) if std::ptr::eq(c, curve) && l == leaf)
     }
 }
