@@ -78,6 +78,19 @@ pub enum PoolChange {
     Rebuilt,
 }
 
+/// The rank a bin needs under multiplier bound `bound` with base count `base`:
+/// `(base * bound).ceil() as u32` (saturated at `u32::MAX`, 0 for NaN), without the
+/// call to libm's `ceil` that the baseline x86-64 target makes for it (about 2% of
+/// an update's instructions, one call per bin), so that the loop over the bins
+/// vectorises.
+#[inline]
+pub(super) fn need_of(base: f64, bound: f64) -> u32 {
+    let x = base * bound;
+    // `as` truncates towards zero and saturates; below zero `ceil` is at most 0 too.
+    let t = x as u32;
+    t.saturating_add(u32::from(f64::from(t) < x))
+}
+
 /// A copy of `items` with room for `capacity` entries, the room written once so that
 /// its memory is committed: appending into it later takes no page fault. On the test
 /// machine (2 cores, a virtual machine) the faults of an update appending 15k
@@ -424,8 +437,7 @@ impl LodPool {
     /// `u32::MAX`, and 0 for a split bin (its children hold its ranks).
     fn needs_from(&self, multipliers: &[f64], base: f64, needs: &mut Vec<u32>) {
         needs.clear();
-        // `as` saturates: u32::MAX for a bound past it.
-        needs.extend(multipliers.iter().map(|&b| (base * b).ceil() as u32));
+        needs.extend(multipliers.iter().map(|&b| need_of(base, b)));
         for &(parent, _) in &self.groups {
             needs[parent as usize] = 0;
         }
@@ -725,6 +737,46 @@ pub(crate) mod tests {
             .collect();
         shown.sort_by_key(|e| e.0);
         shown
+    }
+
+    #[test]
+    fn need_of_is_the_ceiling_saturated() {
+        let reference = |base: f64, bound: f64| (base * bound).ceil() as u32;
+        let edges = [
+            0.0,
+            -0.0,
+            -0.5,
+            -7.0,
+            0.25,
+            1.0,
+            1.0 + f64::EPSILON,
+            4_294_967_294.5,
+            4_294_967_295.0,
+            4_294_967_295.5,
+            4_294_967_296.0,
+            1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for x in edges {
+            assert_eq!(need_of(1.0, x), reference(1.0, x), "{x}");
+        }
+        // Bounds and base counts of every magnitude, as a pool's views give them.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        for _ in 0..100_000 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            let bound = 10f64.powf(12.0 * u - 8.0);
+            let base = f64::from((state >> 40) as u32 % 2_000_000);
+            assert_eq!(
+                need_of(base, bound),
+                reference(base, bound),
+                "{base} {bound}"
+            );
+        }
     }
 
     #[test]

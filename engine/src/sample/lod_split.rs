@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use super::Sampler;
 use super::lod::ViewLod;
 use super::lod_bounds::{Frustum, RegionBound, bin_bound};
-use super::lod_pool::{Bin, LodPool};
+use super::lod_pool::{Bin, LodPool, need_of};
 
 /// A bin splits when its need asks for at least this many ranks in it (its need times
 /// its share of the measure).
@@ -204,9 +204,7 @@ impl LodPool {
                     self.bounds.multipliers_into(&frustum, first, dst);
                     dst.iter_mut().for_each(|m| *m = m.min(bound));
                 }
-                let needs = self.multipliers[first..]
-                    .iter()
-                    .map(|&m| (base * m).ceil() as u32);
+                let needs = self.multipliers[first..].iter().map(|&m| need_of(base, m));
                 self.needs.extend(needs);
                 debug_assert_eq!(group.end as usize, self.needs.len());
             }
