@@ -969,13 +969,7 @@ pub(crate) mod tests {
         // Deformed under the same view: the kept bounds are dropped, and the pool
         // holds every rank visible on the stretched surface (longer along z, so it
         // needs more ranks there).
-        let rest = s.mesh();
-        let moved: Vec<DVec3> = rest
-            .positions()
-            .iter()
-            .map(|p| DVec3::new(p.x, p.y, 2.0 * p.z))
-            .collect();
-        let stretched = TriMesh::new(moved, rest.triangles().to_vec()).expect("mesh");
+        let stretched = moved(s.mesh(), |p| DVec3::new(p.x, p.y, 2.0 * p.z));
         let mean = pool.shown_estimate().mean_multiplier(&v);
         pool.set_geometry(&s, &stretched).expect("same topology");
         // The point budget's probes moved with the surface.
@@ -1100,18 +1094,20 @@ pub(crate) mod tests {
         held
     }
 
+    /// `mesh` with every vertex moved by `f` (the same triangles).
+    pub(in crate::sample) fn moved(mesh: &TriMesh, f: impl Fn(&DVec3) -> DVec3) -> TriMesh {
+        let positions = mesh.positions().iter().map(f).collect();
+        TriMesh::new(positions, mesh.triangles().to_vec()).expect("mesh")
+    }
+
     #[test]
     fn bounds_follow_a_deformed_mesh() {
         let s = torus_sampler();
         let mut pool = LodPool::new(&s, 1, 0, 0);
-        let rest = s.mesh();
         // Stretched along z and bent: the bounds of the rest mesh no longer hold.
-        let moved: Vec<DVec3> = rest
-            .positions()
-            .iter()
-            .map(|p| DVec3::new(p.x, p.y + 0.5 * p.x * p.x, 3.0 * p.z))
-            .collect();
-        let bent = TriMesh::new(moved, rest.triangles().to_vec()).expect("mesh");
+        let bent = moved(s.mesh(), |p| {
+            DVec3::new(p.x, p.y + 0.5 * p.x * p.x, 3.0 * p.z)
+        });
         pool.set_geometry(&s, &bent).expect("same topology");
         let v = view(DVec3::new(0.3, 0.8, 2.5), f64::INFINITY);
         let end = 20_000u32;

@@ -231,9 +231,8 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
-    use crate::mesh::TriMesh;
     use crate::sample::faces::position_normal;
-    use crate::sample::lod_pool::tests::{check_held, held_visible};
+    use crate::sample::lod_pool::tests::{check_held, held_visible, moved};
     use crate::sample::{PoolChange, SampleSite};
     use crate::surface::tests::torus_sampler;
 
@@ -437,13 +436,7 @@ mod tests {
         assert_eq!(pool.groups, fresh.groups);
         check_held(&pool, &s, 1);
         // Splits made on a deformed mesh are bounded on it.
-        let rest = s.mesh();
-        let moved: Vec<DVec3> = rest
-            .positions()
-            .iter()
-            .map(|p| DVec3::new(p.x, p.y, 1.5 * p.z))
-            .collect();
-        let tall = TriMesh::new(moved, rest.triangles().to_vec()).expect("mesh");
+        let tall = moved(s.mesh(), |p| DVec3::new(p.x, p.y, 1.5 * p.z));
         let mut bent = LodPool::new(&s, 4, 0, usize::MAX / 4);
         bent.set_geometry(&s, &tall).expect("same topology");
         // The close view of the stretched torus's top, 0.05 above it.
