@@ -13,7 +13,9 @@
 //! frame's update reuses; the sites the last view's refinement evaluated are kept, as a
 //! renderer's estimator keeps them), the frame thread in rayon's pool as in the `lod`
 //! bench. `LOD_BUDGET_COLD=1` times every view's estimate on a copy of an estimator
-//! that has seen no view (each placing every site it evaluates).
+//! that has seen no view (each placing every site it evaluates). For the frames closer
+//! than 0.1 radius the summary also gives the entries the pool drew per frame and the
+//! update's time per entry drawn.
 
 use std::time::Instant;
 
@@ -81,6 +83,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut last, mut last_alone) = (None::<f64>, None::<f64>);
     let (mut worst, mut worst_alone, mut step, mut step_alone) = (0.0f64, 0.0f64, 1.0f64, 1.0f64);
     let (mut times, mut updates, mut close) = (Vec::new(), Vec::new(), Vec::new());
+    // Entries the pool drew in the frames closer than 0.1 radius.
+    let mut close_drawn = 0usize;
     let (mut frame, mut distance) = (0, 2.0 * radius);
     while distance > 0.01 * radius {
         let eye = target + normal * distance;
@@ -114,11 +118,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let base = pool
             .base_for_shown(s, &v, budget)
             .ok_or("nothing in view")?;
+        let held = pool.len();
         let (count, update) = shown(&mut pool, s, &v, base, &mut fades);
         let ratio = count / budget;
         updates.push(update);
         if distance < 0.1 * radius {
             close.push(update);
+            close_drawn += pool.len() - held;
         }
         let ratio_alone = base_alone.map_or(f64::INFINITY, |b| {
             shown(&mut alone, s, &v, b, &mut fades).0 / budget
@@ -162,7 +168,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     updates.sort_by(f64::total_cmp);
     close.sort_by(f64::total_cmp);
     println!(
-        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}; closer than 0.1 radius ({} frames, the pool growing most): median {:.2}, 90th percentile {:.2}. Entries held at the end: {}.",
+        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}; closer than 0.1 radius ({} frames, the pool growing most): median {:.2}, 90th percentile {:.2}, {:.0} entries drawn per frame, {:.0} ns of update per entry drawn. Entries held at the end: {}.",
         100.0 * worst_alone,
         100.0 * worst,
         times[times.len() / 2],
@@ -173,6 +179,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         close.len(),
         close[close.len() / 2],
         close[close.len() * 9 / 10],
+        close_drawn as f64 / close.len() as f64,
+        close.iter().sum::<f64>() * 1e6 / close_drawn as f64,
         pool.len(),
     );
     Ok(())

@@ -523,6 +523,7 @@ impl Sampler {
             let pending = &mut pending[..n];
             pending.sort_unstable();
             for &key in pending.iter() {
+                // The leaf found again: cheaper than keeping each rank's place in it.
                 let i = (key & 0xffff_ffff) as usize;
                 out[i] = site(ranks[i], leaf_of(ranks[i]), scratch);
             }
