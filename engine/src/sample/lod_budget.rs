@@ -196,6 +196,21 @@ impl ShownEstimate {
         self.last = None;
     }
 
+    /// The current geometry, `deformed` (the field of that name, taken alone so that
+    /// the estimator's other fields stay free to borrow) or the sampler's mesh's.
+    fn geometry<'a>(deformed: &'a Option<[Vec<DVec3>; 3]>, sampler: &'a Sampler) -> Geometry<'a> {
+        let mesh = sampler.mesh();
+        let [positions, vertex_normals, face_normals] = match deformed {
+            Some([p, v, f]) => [&p[..], v, f],
+            None => [mesh.positions(), mesh.vertex_normals(), mesh.face_normals()],
+        };
+        Geometry {
+            positions,
+            vertex_normals,
+            face_normals,
+        }
+    }
+
     /// The vertex positions and normals of the current geometry: the sampler's mesh's,
     /// or the deformation's given to [`set_geometry`](Self::set_geometry); and whether
     /// it is a deformation.
@@ -203,13 +218,8 @@ impl ShownEstimate {
         &'a self,
         sampler: &'a Sampler,
     ) -> ((&'a [DVec3], &'a [DVec3]), bool) {
-        match &self.deformed {
-            Some([positions, normals, _]) => ((positions, normals), true),
-            None => (
-                (sampler.mesh().positions(), sampler.mesh().vertex_normals()),
-                false,
-            ),
-        }
+        let g = Self::geometry(&self.deformed, sampler);
+        ((g.positions, g.vertex_normals), self.deformed.is_some())
     }
 
     /// The mean of `view`'s multiplier over the [`PROBES`] alone (no refinement).
@@ -270,18 +280,7 @@ impl ShownEstimate {
         let cache = &mut self.cache;
         cache.slots.resize(shares.len(), None);
         let mesh = sampler.mesh();
-        let geometry = match &self.deformed {
-            Some([positions, vertex_normals, face_normals]) => Geometry {
-                positions,
-                vertex_normals,
-                face_normals,
-            },
-            None => Geometry {
-                positions: mesh.positions(),
-                vertex_normals: mesh.vertex_normals(),
-                face_normals: mesh.face_normals(),
-            },
-        };
+        let geometry = Self::geometry(&self.deformed, sampler);
         let evaluate = |site: &SampleSite| {
             let tri = mesh.triangles()[site.face as usize];
             let (p, n) =
