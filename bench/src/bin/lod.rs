@@ -23,7 +23,10 @@
 //! frames, in millions; the kept share (the samples of
 //! frame t visible in frame t+1 with the same rank and site, over those of frame t,
 //! worst and mean over the steps); the same share among the samples that stay in view
-//! (multiplier above 0 in frame t+1); whether a kept sample ever moved; the CPU time
+//! (multiplier above 0 in frame t+1), worst and mean, and the mean share of them that
+//! the change of the multipliers and base count alone lets stay (expected if the ranks
+//! below a site's threshold were spread evenly: what any visible set following the
+//! issue's definition keeps, the pool aside); whether a kept sample ever moved; the CPU time
 //! of `LodPool::update` per frame (median and mean: the whole per-frame CPU work of a
 //! renderer that culls on the GPU, besides a uniform write); the samples newly visible
 //! per frame (visible in frame t+1 and not kept from frame t), those of them beyond
@@ -118,18 +121,37 @@ fn new_from(a: &[(u32, SampleSite)], b: &[(u32, SampleSite)], from: u32) -> usiz
     count
 }
 
-/// Samples of `a` whose multiplier under `v` is 0 (they left the view).
-fn leaving(a: &[(u32, SampleSite)], s: &Sampler, v: &ViewLod) -> usize {
-    a.iter()
-        .filter(|(k, site)| {
-            let r = s
-                .record(site.face, site.barycentric().map(f64::from), 0, *k, 1)
-                .expect("a pool site is on the mesh");
-            let p = DVec3::from(r.position.map(f64::from));
-            let n = DVec3::from(r.normal.map(f64::from));
-            v.multiplier(p, n) == 0.0
-        })
-        .count()
+/// What the view's change does to the samples `a` visible in frame t (view `v0`, base
+/// `b0`) by frame t+1 (`v1`, `b1`): how many leave the view (multiplier 0 under `v1`),
+/// and how many of the others are expected to leave the visible set through their
+/// threshold alone. A sample of rank `k` is visible while `k < b x multiplier`; if
+/// the ranks below a site's threshold were spread evenly, the share of them past the
+/// new threshold would be `1 - (b1 m1) / (b0 m0)` where the threshold falls. That sum
+/// depends on the multipliers and base counts only, not on the pool, and is what any
+/// visible set following the definition must lose besides the samples leaving
+/// the view.
+fn leaving(
+    a: &[(u32, SampleSite)],
+    s: &Sampler,
+    (v0, b0): (&ViewLod, f64),
+    (v1, b1): (&ViewLod, f64),
+) -> (usize, f64) {
+    let (mut gone, mut forced) = (0, 0.0);
+    for (k, site) in a {
+        let r = s
+            .record(site.face, site.barycentric().map(f64::from), 0, *k, 1)
+            .expect("a pool site is on the mesh");
+        let p = DVec3::from(r.position.map(f64::from));
+        let n = DVec3::from(r.normal.map(f64::from));
+        let m1 = v1.multiplier(p, n);
+        if m1 == 0.0 {
+            gone += 1;
+        } else {
+            let before = b0 * v0.multiplier(p, n);
+            forced += (1.0 - b1 * m1 / before).clamp(0.0, 1.0);
+        }
+    }
+    (gone, forced)
 }
 
 /// A camera path: frame `t`'s view and base count.
@@ -189,10 +211,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         prefix.len() as f64 * 20.0 / 1e6
     );
     println!(
-        "| path | visible (first frame) | visible 10^6, range | kept, worst | kept, mean | kept among those in view, worst | kept moved | update ms, median | update ms, mean | newly visible per frame, mean | of them beyond the prefix | entries per frame, mean | upload KB per frame, mean | pool entries at end |"
+        "| path | visible (first frame) | visible 10^6, range | kept, worst | kept, mean | kept among those in view, worst | the same, mean | expected from the multipliers alone, mean | kept moved | update ms, median | update ms, mean | newly visible per frame, mean | of them beyond the prefix | entries per frame, mean | upload KB per frame, mean | pool entries at end |"
     );
     println!(
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
     let orbit = || -> Path {
@@ -224,18 +246,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let budget = held.then_some(SHOWN as u32);
         let base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| pool.frame_base(s, v, b, budget);
         // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
-        let mut before = vec![];
+        let (mut before, mut last) = (vec![], frame(0));
         for t in -WARM_UP..=0 {
             let (v, b) = frame(t);
             let b = base_of(&mut pool, &v, b);
             pool.update(s, &v, b);
             if t == 0 {
                 before = visible(&pool, s, &v, b, &mut fades);
+                last = (v, b);
             }
         }
         let shown = before.len();
         let (mut shares, mut in_view, mut times, mut bytes) = (vec![], vec![], vec![], vec![]);
         let (mut fresh, mut beyond, mut counts) = (vec![], vec![], vec![]);
+        // Per step, the expected share kept among the samples staying in view, from
+        // the multipliers' change alone (`leaving`).
+        let mut allowed = vec![];
         let mut moved = false;
         for t in 1..=frames as i32 {
             let (v, b) = frame(t);
@@ -254,10 +280,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             fresh.push((after.len() - same) as f64);
             beyond.push(new_from(&before, &after, pool.prefix()) as f64);
             counts.push(after.len() as f64);
-            let gone = leaving(&before, s, &v);
+            let (gone, forced) = leaving(&before, s, (&last.0, last.1), (&v, b));
+            let staying = (before.len() - gone).max(1) as f64;
             shares.push(same as f64 / before.len() as f64);
-            in_view.push(same as f64 / (before.len() - gone).max(1) as f64);
-            before = after;
+            in_view.push(same as f64 / staying);
+            allowed.push(1.0 - forced / staying);
+            (before, last) = (after, (v, b));
         }
         let worst = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
@@ -267,11 +295,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             format!("{:.3}-{:.3}", lo / 1e6, hi / 1e6)
         };
         println!(
-            "| {path} | {shown} | {} | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
+            "| {path} | {shown} | {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
             range(&counts),
             100.0 * worst(&shares),
             100.0 * mean(&shares),
             100.0 * worst(&in_view),
+            100.0 * mean(&in_view),
+            100.0 * mean(&allowed),
             if moved { "yes" } else { "no" },
             median(times.clone()),
             mean(&times),
