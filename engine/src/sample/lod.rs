@@ -203,6 +203,65 @@ impl ViewLod {
         let area = self.focal_pixels * self.focal_pixels * cos.abs() * d / (w * w * w);
         (area / self.reference).min(self.max)
     }
+
+    /// [`multiplier`](Self::multiplier) of each point `(p[0][i], p[1][i], p[2][i])` with
+    /// normal `(n[0][i], n[1][i], n[2][i])` into `out[i]`, the same bits, with the loop
+    /// compiled for AVX2 where the CPU has it. Without branches: the point budget's
+    /// probes are in view and turned away in no order a branch predictor learns, and
+    /// 4096 of them took 0.15 ms one at a time. Panics when a column is shorter than
+    /// `out`.
+    pub(crate) fn multipliers_into(&self, p: [&[f64]; 3], n: [&[f64]; 3], out: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has every feature the function is compiled with.
+            #[allow(unsafe_code)]
+            unsafe {
+                self.multipliers_v3(p, n, out);
+            }
+            return;
+        }
+        self.multipliers_body(p, n, out);
+    }
+
+    /// [`multipliers_body`](Self::multipliers_body) compiled with AVX2 (no fused
+    /// multiply-add enabled, so the same operations round the same).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2")]
+    fn multipliers_v3(&self, p: [&[f64]; 3], n: [&[f64]; 3], out: &mut [f64]) {
+        self.multipliers_body(p, n, out);
+    }
+
+    /// [`multiplier`](Self::multiplier)'s operations in its order (glam's
+    /// matrix-vector product by columns, its dot products left to right), all
+    /// computed and the result selected. Always inlined, so that each caller's target
+    /// features apply to it.
+    #[inline(always)]
+    fn multipliers_body(&self, p: [&[f64]; 3], n: [&[f64]; 3], out: &mut [f64]) {
+        let len = out.len();
+        let [px, py, pz] = p.map(|c| &c[..len]);
+        let [nx, ny, nz] = n.map(|c| &c[..len]);
+        let m = &self.clip_from_world;
+        let row = |r: usize| {
+            let [a, b, c, d] = [m.x_axis, m.y_axis, m.z_axis, m.w_axis].map(|v| v[r]);
+            move |x: f64, y: f64, z: f64| a * x + b * y + c * z + d * 1.0
+        };
+        let (cx, cy, cz, cw) = (row(0), row(1), row(2), row(3));
+        let (eye, ff) = (self.eye, self.focal_pixels * self.focal_pixels);
+        let (reference, max, cull) = (self.reference, self.max, self.cull_back_faces);
+        for i in 0..len {
+            let (x, y, z) = (px[i], py[i], pz[i]);
+            let w = cw(x, y, z);
+            let (qx, qy, qz) = (cx(x, y, z), cy(x, y, z), cz(x, y, z));
+            let inside = (w > 0.0) & (qx.abs() <= w) & (qy.abs() <= w) & (0.0 <= qz) & (qz <= w);
+            let (ex, ey, ez) = (eye.x - x, eye.y - y, eye.z - z);
+            let d = (ex * ex + ey * ey + ez * ez).sqrt();
+            let cos = (nx[i] * ex + ny[i] * ey + nz[i] * ez) / d;
+            let area = ff * cos.abs() * d / (w * w * w);
+            let value = (area / reference).min(max);
+            let shown = inside & (d > 0.0) & !(cull & (cos < 0.0));
+            out[i] = if shown { value } else { 0.0 };
+        }
+    }
 }
 
 /// Whether rank `rank` is visible under base count `base` and multiplier `lod`:
@@ -287,6 +346,58 @@ mod tests {
                 world.in_local_frame(&t),
                 Err(LodError::NotSimilarity { .. })
             ));
+        }
+    }
+
+    #[test]
+    fn batch_multipliers_equal_the_multiplier_bit_for_bit() {
+        let mut rng = crate::rng::Rng::new(19, 0);
+        for (k, eye) in [DVec3::new(0.3, 0.8, 4.0), DVec3::new(-2.0, 0.5, -1.0)]
+            .into_iter()
+            .enumerate()
+        {
+            for cull in [false, true] {
+                let mut v = view(eye, cull);
+                v.max = if k == 0 { f64::INFINITY } else { 3.0 };
+                let len = 1001;
+                let mut cols = [(); 6].map(|_| Vec::with_capacity(len));
+                for i in 0..len {
+                    // Points around the origin, some behind the camera and far off,
+                    // one at the eye; unit normals in every direction.
+                    let p = if i == 0 {
+                        eye
+                    } else {
+                        DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 12.0 - 6.0
+                    };
+                    let n = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) - 0.5;
+                    let n = n.normalize_or(DVec3::Z);
+                    for (c, x) in cols
+                        .iter_mut()
+                        .zip(p.to_array().into_iter().chain(n.to_array()))
+                    {
+                        c.push(x);
+                    }
+                }
+                let mut out = vec![f64::NAN; len];
+                let [px, py, pz, nx, ny, nz] = cols.each_ref().map(Vec::as_slice);
+                v.multipliers_into([px, py, pz], [nx, ny, nz], &mut out);
+                let mut seen = [0usize; 2];
+                for i in 0..len {
+                    let (p, n) = (
+                        DVec3::new(px[i], py[i], pz[i]),
+                        DVec3::new(nx[i], ny[i], nz[i]),
+                    );
+                    let one = v.multiplier(p, n);
+                    assert_eq!(
+                        out[i].to_bits(),
+                        one.to_bits(),
+                        "point {i}: {p}, normal {n}"
+                    );
+                    seen[usize::from(one > 0.0)] += 1;
+                }
+                // Points in view and out of it (or turned away) were both checked.
+                assert!(seen[0] > 100 && seen[1] > 50, "{seen:?}");
+            }
         }
     }
 
