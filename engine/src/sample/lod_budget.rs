@@ -11,9 +11,10 @@
 //! one rank in each `1 / M` of the measure when `M` is a power of two.
 //!
 //! - **The probes.** The first [`PROBES`] ranks: their positions and normals are kept,
-//!   so a view costs one multiplier each: 75-85 us for the 4096 on the test machine,
-//!   with the probes out of cache as they are between frames (the `lod` bench). On the
-//!   bunny's `lod` bench paths this is within 1% of the count.
+//!   so a view costs one multiplier each, computed a block at a time without branches
+//!   (`ViewLod::multipliers_into`): 27-28 us for the 4096 on the test machine (150 one
+//!   at a time), with the probes out of cache as they are between frames (the `lod`
+//!   bench). On the bunny's `lod` bench paths this is within 1% of the count.
 //! - **Refinement in view.** A close view sees a small part of the surface, and few
 //!   probes: on the bunny, 2.7 times the budget shown 0.03 bounding radii from the
 //!   surface, and the base count jumping by up to 1.5 times between frames of a smooth
