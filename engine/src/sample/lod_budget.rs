@@ -159,7 +159,8 @@ impl ShownEstimate {
     pub fn new(sampler: &Sampler, seed: u64) -> Self {
         let mut sites = vec![SampleSite::default(); PROBES];
         sampler.progressive_sites_into(seed, 0, &mut sites);
-        let points = Self::place(&sites, sampler.mesh());
+        let mut points = Default::default();
+        Self::place(&sites, sampler.mesh(), &mut points);
         Self {
             sites,
             points,
@@ -170,8 +171,10 @@ impl ShownEstimate {
         }
     }
 
-    fn place(sites: &[SampleSite], mesh: &TriMesh) -> [Vec<f64>; 6] {
-        let mut columns = [(); 6].map(|_| Vec::with_capacity(sites.len()));
+    /// Writes the positions and normals of `sites` on `mesh` into `columns` (their
+    /// memory reused: a deforming mesh moves the probes every frame).
+    fn place(sites: &[SampleSite], mesh: &TriMesh, columns: &mut [Vec<f64>; 6]) {
+        columns.iter_mut().for_each(Vec::clear);
         for s in sites {
             let (p, n) = position_normal(mesh, s.face, s.barycentric().map(f64::from));
             for (c, x) in columns
@@ -181,7 +184,6 @@ impl ShownEstimate {
                 c.push(x);
             }
         }
-        columns
     }
 
     /// Moves the probes onto `mesh`, a deformation of the sampler's mesh (the same
@@ -196,7 +198,7 @@ impl ShownEstimate {
     /// Keeps a copy of its vertices and face normals for the refinement (what
     /// [`Sampler::record`] reads of a mesh besides its triangles).
     pub(crate) fn move_to(&mut self, mesh: &TriMesh) {
-        self.points = Self::place(&self.sites, mesh);
+        Self::place(&self.sites, mesh, &mut self.points);
         let copy = |from: &[DVec3], to: &mut Vec<DVec3>| {
             to.clear();
             to.extend_from_slice(from);
@@ -788,6 +790,16 @@ mod tests {
         assert!(close.evaluated > 0 && close_moved.ranks == close.ranks);
         assert_eq!(close_moved.in_view, close.in_view);
         assert!((close_moved.mean / close.mean - 1.0).abs() < 1e-9);
+        // Moved back (the probes' columns and the bins' bounds rewritten in place): the
+        // same bits as the pool set on the rest mesh once.
+        pool.set_geometry(&s, rest).expect("the rest mesh");
+        let probes = |p: &LodPool| p.shown_estimate().mean_multiplier(&v).to_bits();
+        assert_eq!(probes(&pool), probes(&at_rest));
+        assert_eq!(pool.bins(), at_rest.bins());
+        for b in 0..pool.bins() {
+            assert_eq!(pool.bound(b, &v).to_bits(), at_rest.bound(b, &v).to_bits());
+        }
+        pool.set_geometry(&s, &moved).expect("same topology");
         let other = TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]])
             .expect("a triangle");
         assert!(matches!(

@@ -156,6 +156,9 @@ pub struct LodPool {
     /// The bins a refinement of the estimate draws in (kept, so that refinements stop
     /// allocating).
     pub(super) live: Vec<u32>,
+    /// The bins' bounds on a new geometry (kept, so that a deforming mesh's
+    /// [`set_geometry`](Self::set_geometry) stops allocating them).
+    rebound: Vec<RegionBound>,
 }
 
 impl Clone for LodPool {
@@ -183,6 +186,7 @@ impl Clone for LodPool {
             lists: self.lists.clone(),
             estimate: self.estimate.clone(),
             live: self.live.clone(),
+            rebound: Vec::new(),
         }
     }
 }
@@ -230,8 +234,9 @@ impl LodPool {
     /// changed, when `mesh` has other vertices or triangles.
     pub fn set_geometry(&mut self, sampler: &Sampler, mesh: &TriMesh) -> Result<(), LodError> {
         check_deformation(sampler.mesh(), mesh)?;
-        let bounds: Vec<RegionBound> = self
-            .bins
+        // Into the kept list: a mesh deforming every frame calls this every frame.
+        let mut bounds = std::mem::take(&mut self.rebound);
+        self.bins
             .par_iter()
             .map_init(Default::default, |buffers, bin| {
                 let leaves = bin.leaves.start as usize..bin.leaves.end as usize;
@@ -245,11 +250,12 @@ impl LodPool {
                     buffers,
                 )
             })
-            .collect();
+            .collect_into_vec(&mut bounds);
         self.estimate.move_to(mesh);
         for (i, bound) in bounds.iter().enumerate() {
             self.bounds.set(i, bound);
         }
+        self.rebound = bounds;
         self.bounded = None;
         Ok(())
     }
@@ -328,6 +334,7 @@ impl LodPool {
             lists: Vec::new(),
             estimate: ShownEstimate::new(sampler, seed),
             live: Vec::new(),
+            rebound: Vec::new(),
         }
     }
 
