@@ -267,6 +267,170 @@ struct Joined {
     faces: [u32; 2],
 }
 
+/// The cut-open patch's vertices (classes) and the joined edges between them.
+struct JoinedGraph {
+    /// Joined edges, in local face and side order.
+    joined: Vec<Joined>,
+    /// Per class, the start of its list in `adjacent` (CSR offsets, `n + 1` long).
+    offsets: Vec<usize>,
+    /// Per class, `(neighbour class, joined edge)`, sorted by both.
+    adjacent: Vec<(u32, u32)>,
+}
+
+impl JoinedGraph {
+    fn new(mesh: &TriMesh, patch: &CutPatch) -> Self {
+        let n = patch.class_count;
+        let mut joined: Vec<Joined> = Vec::new();
+        for (lf, sides) in patch.across.iter().enumerate() {
+            for (k, &lg) in sides.iter().enumerate() {
+                if lg != NONE && (lg as usize) > lf {
+                    let (a, b) = patch.side_classes(lf, k);
+                    joined.push(Joined {
+                        edge: mesh.face_edges()[patch.faces[lf] as usize][k],
+                        ends: [a, b],
+                        faces: [lf as u32, lg],
+                    });
+                }
+            }
+        }
+        // Class adjacency (CSR) over joined edges, each list sorted by (neighbour, edge).
+        let mut offsets = vec![0usize; n + 1];
+        for j in &joined {
+            offsets[j.ends[0] as usize + 1] += 1;
+            offsets[j.ends[1] as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut adjacent = vec![(0u32, 0u32); 2 * joined.len()];
+        for (ji, j) in joined.iter().enumerate() {
+            for s in 0..2 {
+                let v = j.ends[s] as usize;
+                adjacent[fill[v]] = (j.ends[1 - s], ji as u32);
+                fill[v] += 1;
+            }
+        }
+        for v in 0..n {
+            adjacent[offsets[v]..offsets[v + 1]].sort_unstable();
+        }
+        Self {
+            joined,
+            offsets,
+            adjacent,
+        }
+    }
+
+    /// Number of classes (vertices of the cut-open patch).
+    fn class_count(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// `(neighbour class, joined edge)` of class `v`, sorted.
+    fn neighbours(&self, v: usize) -> &[(u32, u32)] {
+        &self.adjacent[self.offsets[v]..self.offsets[v + 1]]
+    }
+
+    /// The cost of joined edge `ji`'s mesh edge.
+    fn cost(&self, costs: &[f64], ji: usize) -> f64 {
+        costs[self.joined[ji].edge as usize]
+    }
+}
+
+/// Step 1's shortest-path forest `T` over the classes.
+struct PathForest {
+    /// Distance from the boundary (or the component's root on a closed component).
+    dist: Vec<f64>,
+    /// Per class, the joined edge to its parent, or `NONE` at a root.
+    pred: Vec<u32>,
+    /// Per class, its closed component's root class, or [`BOUNDARY_ROOT`].
+    component_root: Vec<u32>,
+    /// The root class of each closed component, in order.
+    closed_roots: Vec<u32>,
+}
+
+impl PathForest {
+    /// Dijkstra from all `protected` (boundary) classes at once, then from the first
+    /// unreached class of each closed component; ties go to the lower joined edge.
+    fn grow(graph: &JoinedGraph, costs: &[f64], protected: &[bool]) -> Self {
+        let n = graph.class_count();
+        let mut dist = vec![f64::INFINITY; n];
+        let mut pred = vec![NONE; n];
+        let mut settled = vec![false; n];
+        let mut component_root = vec![NONE; n];
+        let mut closed_roots = Vec::new();
+        let mut heap = BinaryHeap::new();
+        for v in 0..n {
+            if protected[v] {
+                dist[v] = 0.0;
+                component_root[v] = BOUNDARY_ROOT;
+                heap.push(Reverse((0u64, v as u32)));
+            }
+        }
+        let mut next_unreached = 0;
+        loop {
+            while let Some(Reverse((bits, v))) = heap.pop() {
+                let v = v as usize;
+                if settled[v] || bits != dist[v].to_bits() {
+                    continue;
+                }
+                settled[v] = true;
+                for &(w, ji) in graph.neighbours(v) {
+                    let w = w as usize;
+                    if settled[w] {
+                        continue;
+                    }
+                    let nd = dist[v] + graph.cost(costs, ji as usize);
+                    let old = dist[w];
+                    if nd < old || (nd == old && pred[w] != NONE && ji < pred[w]) {
+                        dist[w] = nd;
+                        pred[w] = ji;
+                        component_root[w] = component_root[v];
+                        if nd < old {
+                            heap.push(Reverse((nd.to_bits(), w as u32)));
+                        }
+                    }
+                }
+            }
+            while next_unreached < n && dist[next_unreached].is_finite() {
+                next_unreached += 1;
+            }
+            if next_unreached == n {
+                break;
+            }
+            let r = next_unreached;
+            dist[r] = 0.0;
+            component_root[r] = r as u32;
+            closed_roots.push(r as u32);
+            heap.push(Reverse((0u64, r as u32)));
+        }
+        Self {
+            dist,
+            pred,
+            component_root,
+            closed_roots,
+        }
+    }
+
+    /// Per joined edge, whether it is in the forest.
+    fn tree_edges(&self, joined_count: usize) -> Vec<bool> {
+        let mut in_tree = vec![false; joined_count];
+        for &p in &self.pred {
+            if p != NONE {
+                in_tree[p as usize] = true;
+            }
+        }
+        in_tree
+    }
+
+    /// Length of the loop that joined edge `ji` closes through the root:
+    /// `d(u) + c(u, v) + d(v)`.
+    fn loop_length(&self, graph: &JoinedGraph, costs: &[f64], ji: usize) -> f64 {
+        let j = &graph.joined[ji];
+        self.dist[j.ends[0] as usize] + costs[j.edge as usize] + self.dist[j.ends[1] as usize]
+    }
+}
+
 /// `x`'s bits mapped so that unsigned order is [`f64::total_cmp`]'s order.
 fn total_order_bits(x: f64) -> u64 {
     let bits = x.to_bits();
@@ -274,6 +438,118 @@ fn total_order_bits(x: f64) -> u64 {
         !bits
     } else {
         bits | 1 << 63
+    }
+}
+
+/// Steps 2 and 3: the maximum spanning forest `C` of the `face_count` local faces
+/// across the joined edges outside `in_tree`, by loop length; returns `in_tree` with
+/// the leftover edges `L` (which close the loops) added.
+fn add_leftover_loops(
+    graph: &JoinedGraph,
+    costs: &[f64],
+    forest: &PathForest,
+    face_count: usize,
+    in_tree: Vec<bool>,
+) -> Vec<bool> {
+    let joined = &graph.joined;
+    // Longest loops first, ties by mesh edge (unique per joined edge, so the order is
+    // total and a parallel sort gives the sequential one). Keys computed once: sorting
+    // with the lengths computed in the comparison took 0.19 s of 0.48 on a segment of
+    // 693k faces.
+    let mut cotree: Vec<(u64, u32, u32)> = (0..joined.len())
+        .filter(|&ji| !in_tree[ji])
+        .map(|ji| {
+            (
+                !total_order_bits(forest.loop_length(graph, costs, ji)),
+                joined[ji].edge,
+                ji as u32,
+            )
+        })
+        .collect();
+    cotree.par_sort_unstable();
+    let mut dual = UnionFind::new(face_count);
+    let mut in_cut = in_tree;
+    for (_, _, ji) in cotree {
+        let ji = ji as usize;
+        let [f, g] = joined[ji].faces;
+        if !dual.union(f, g) {
+            in_cut[ji] = true;
+        }
+    }
+    in_cut
+}
+
+/// Step 4: unflags the dangling branches of the cut graph `in_cut`, leaf by leaf,
+/// never at a `protected` (boundary) class.
+fn prune_dangling(graph: &JoinedGraph, protected: &[bool], in_cut: &mut [bool]) {
+    let n = graph.class_count();
+    let mut degree = vec![0u32; n];
+    for (ji, j) in graph.joined.iter().enumerate() {
+        if in_cut[ji] {
+            degree[j.ends[0] as usize] += 1;
+            degree[j.ends[1] as usize] += 1;
+        }
+    }
+    let mut leaves: Vec<u32> = (0..n as u32)
+        .filter(|&v| degree[v as usize] == 1 && !protected[v as usize])
+        .collect();
+    while let Some(v) = leaves.pop() {
+        let v = v as usize;
+        if degree[v] != 1 {
+            continue;
+        }
+        let Some(&(w, ji)) = graph
+            .neighbours(v)
+            .iter()
+            .find(|&&(_, ji)| in_cut[ji as usize])
+        else {
+            continue;
+        };
+        in_cut[ji as usize] = false;
+        degree[v] -= 1;
+        degree[w as usize] -= 1;
+        if degree[w as usize] == 1 && !protected[w as usize] {
+            leaves.push(w);
+        }
+    }
+}
+
+/// Flags the cheapest edge at the root of each closed component that pruned to
+/// nothing (genus 0): a sphere slit along one edge is a disc.
+fn slit_closed_spheres(
+    graph: &JoinedGraph,
+    costs: &[f64],
+    forest: &PathForest,
+    in_cut: &mut [bool],
+) {
+    let joined = &graph.joined;
+    let mut has_cut = vec![false; graph.class_count()];
+    for (ji, j) in joined.iter().enumerate() {
+        if in_cut[ji] {
+            let r = forest.component_root[j.ends[0] as usize];
+            if r != BOUNDARY_ROOT {
+                has_cut[r as usize] = true;
+            }
+        }
+    }
+    for &r in &forest.closed_roots {
+        let r = r as usize;
+        if has_cut[r] {
+            continue;
+        }
+        let cheapest = graph
+            .neighbours(r)
+            .iter()
+            .map(|&(_, ji)| ji as usize)
+            .min_by(|&x, &y| {
+                graph
+                    .cost(costs, x)
+                    .total_cmp(&graph.cost(costs, y))
+                    .then(joined[x].edge.cmp(&joined[y].edge))
+            });
+        if let Some(ji) = cheapest {
+            in_cut[ji] = true;
+        }
     }
 }
 
@@ -307,198 +583,29 @@ fn total_order_bits(x: f64) -> u64 {
 pub fn disc_cuts(mesh: &TriMesh, costs: &[f64], faces: &[u32], cut: &[bool]) -> Vec<u32> {
     assert_eq!(costs.len(), mesh.edge_count(), "one cost per mesh edge");
     let patch = CutPatch::new(mesh, faces, cut);
-    let n = patch.class_count;
-
-    let mut joined: Vec<Joined> = Vec::new();
-    for (lf, sides) in patch.across.iter().enumerate() {
-        for (k, &lg) in sides.iter().enumerate() {
-            if lg != NONE && (lg as usize) > lf {
-                let (a, b) = patch.side_classes(lf, k);
-                joined.push(Joined {
-                    edge: mesh.face_edges()[patch.faces[lf] as usize][k],
-                    ends: [a, b],
-                    faces: [lf as u32, lg],
-                });
-            }
-        }
-    }
-    // Class adjacency (CSR) over joined edges, each list sorted by (neighbour, edge).
-    let mut offsets = vec![0usize; n + 1];
-    for j in &joined {
-        offsets[j.ends[0] as usize + 1] += 1;
-        offsets[j.ends[1] as usize + 1] += 1;
-    }
-    for i in 0..n {
-        offsets[i + 1] += offsets[i];
-    }
-    let mut fill = offsets.clone();
-    let mut adjacent = vec![(0u32, 0u32); 2 * joined.len()];
-    for (ji, j) in joined.iter().enumerate() {
-        for s in 0..2 {
-            let v = j.ends[s] as usize;
-            adjacent[fill[v]] = (j.ends[1 - s], ji as u32);
-            fill[v] += 1;
-        }
-    }
-    for v in 0..n {
-        adjacent[offsets[v]..offsets[v + 1]].sort_unstable();
-    }
+    let graph = JoinedGraph::new(mesh, &patch);
 
     // 1. Shortest-path forest from the boundary, then from one root per closed
     // component.
-    let mut protected = vec![false; n];
+    let mut protected = vec![false; patch.class_count];
     for (lf, k) in patch.boundary_sides() {
         let (a, b) = patch.side_classes(lf, k);
         protected[a as usize] = true;
         protected[b as usize] = true;
     }
-    let mut dist = vec![f64::INFINITY; n];
-    let mut pred = vec![NONE; n];
-    let mut settled = vec![false; n];
-    let mut component_root = vec![NONE; n];
-    let mut closed_roots = Vec::new();
-    let mut heap = BinaryHeap::new();
-    for v in 0..n {
-        if protected[v] {
-            dist[v] = 0.0;
-            component_root[v] = BOUNDARY_ROOT;
-            heap.push(Reverse((0u64, v as u32)));
-        }
-    }
-    let mut next_unreached = 0;
-    loop {
-        while let Some(Reverse((bits, v))) = heap.pop() {
-            let v = v as usize;
-            if settled[v] || bits != dist[v].to_bits() {
-                continue;
-            }
-            settled[v] = true;
-            for &(w, ji) in &adjacent[offsets[v]..offsets[v + 1]] {
-                let w = w as usize;
-                if settled[w] {
-                    continue;
-                }
-                let nd = dist[v] + costs[joined[ji as usize].edge as usize];
-                let old = dist[w];
-                if nd < old || (nd == old && pred[w] != NONE && ji < pred[w]) {
-                    dist[w] = nd;
-                    pred[w] = ji;
-                    component_root[w] = component_root[v];
-                    if nd < old {
-                        heap.push(Reverse((nd.to_bits(), w as u32)));
-                    }
-                }
-            }
-        }
-        while next_unreached < n && dist[next_unreached].is_finite() {
-            next_unreached += 1;
-        }
-        if next_unreached == n {
-            break;
-        }
-        let r = next_unreached;
-        dist[r] = 0.0;
-        component_root[r] = r as u32;
-        closed_roots.push(r as u32);
-        heap.push(Reverse((0u64, r as u32)));
-    }
-    let mut in_tree = vec![false; joined.len()];
-    for &p in &pred {
-        if p != NONE {
-            in_tree[p as usize] = true;
-        }
-    }
+    let forest = PathForest::grow(&graph, costs, &protected);
+    let in_tree = forest.tree_edges(graph.joined.len());
 
     // 2. Maximum spanning forest of the faces across the other joined edges, by loop
     // length; 3. what it leaves over closes the loops.
-    let loop_length = |ji: usize| {
-        let j = &joined[ji];
-        dist[j.ends[0] as usize] + costs[j.edge as usize] + dist[j.ends[1] as usize]
-    };
-    // Longest loops first, ties by mesh edge (unique per joined edge, so the order is
-    // total and a parallel sort gives the sequential one). Keys computed once: sorting
-    // with the lengths computed in the comparison took 0.19 s of 0.48 on a segment of
-    // 693k faces.
-    let mut cotree: Vec<(u64, u32, u32)> = (0..joined.len())
-        .filter(|&ji| !in_tree[ji])
-        .map(|ji| {
-            (
-                !total_order_bits(loop_length(ji)),
-                joined[ji].edge,
-                ji as u32,
-            )
-        })
-        .collect();
-    cotree.par_sort_unstable();
-    let mut dual = UnionFind::new(patch.faces.len());
-    let mut in_cut = in_tree;
-    for (_, _, ji) in cotree {
-        let ji = ji as usize;
-        let [f, g] = joined[ji].faces;
-        if !dual.union(f, g) {
-            in_cut[ji] = true;
-        }
-    }
+    let mut in_cut = add_leftover_loops(&graph, costs, &forest, patch.faces.len(), in_tree);
+    // 4. Prune dangling branches (never at the boundary); a closed component that
+    // pruned to nothing (genus 0) is slit along one edge.
+    prune_dangling(&graph, &protected, &mut in_cut);
+    slit_closed_spheres(&graph, costs, &forest, &mut in_cut);
 
-    // 4. Prune dangling branches (never at the boundary).
-    let mut degree = vec![0u32; n];
-    for (ji, j) in joined.iter().enumerate() {
-        if in_cut[ji] {
-            degree[j.ends[0] as usize] += 1;
-            degree[j.ends[1] as usize] += 1;
-        }
-    }
-    let mut leaves: Vec<u32> = (0..n as u32)
-        .filter(|&v| degree[v as usize] == 1 && !protected[v as usize])
-        .collect();
-    while let Some(v) = leaves.pop() {
-        let v = v as usize;
-        if degree[v] != 1 {
-            continue;
-        }
-        let Some(&(w, ji)) = adjacent[offsets[v]..offsets[v + 1]]
-            .iter()
-            .find(|&&(_, ji)| in_cut[ji as usize])
-        else {
-            continue;
-        };
-        in_cut[ji as usize] = false;
-        degree[v] -= 1;
-        degree[w as usize] -= 1;
-        if degree[w as usize] == 1 && !protected[w as usize] {
-            leaves.push(w);
-        }
-    }
-
-    // A closed component that pruned to nothing (genus 0) is slit along one edge.
-    let mut has_cut = vec![false; n];
-    for (ji, j) in joined.iter().enumerate() {
-        if in_cut[ji] {
-            let r = component_root[j.ends[0] as usize];
-            if r != BOUNDARY_ROOT {
-                has_cut[r as usize] = true;
-            }
-        }
-    }
-    for &r in &closed_roots {
-        let r = r as usize;
-        if has_cut[r] {
-            continue;
-        }
-        let cheapest = adjacent[offsets[r]..offsets[r + 1]]
-            .iter()
-            .map(|&(_, ji)| ji as usize)
-            .min_by(|&x, &y| {
-                costs[joined[x].edge as usize]
-                    .total_cmp(&costs[joined[y].edge as usize])
-                    .then(joined[x].edge.cmp(&joined[y].edge))
-            });
-        if let Some(ji) = cheapest {
-            in_cut[ji] = true;
-        }
-    }
-
-    let mut out: Vec<u32> = joined
+    let mut out: Vec<u32> = graph
+        .joined
         .iter()
         .zip(&in_cut)
         .filter(|&(_, &c)| c)
