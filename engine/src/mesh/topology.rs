@@ -49,11 +49,25 @@ fn check_scale(positions: &[DVec3]) -> Result<(), MeshError> {
     Ok(())
 }
 
+/// Validates, repairs and indexes a mesh: checks the input ([`check_input`]), merges
+/// vertices at equal positions, removes degenerate and duplicated faces and
+/// unreferenced vertices (each repair noted in `warnings`), then builds the adjacency
+/// and geometry ([`assemble`]).
 pub(super) fn build(
     positions: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
     mut warnings: Vec<MeshWarning>,
 ) -> Result<TriMesh, MeshError> {
+    check_input(&positions, &triangles)?;
+    let merged_to = merge_vertices(&positions, &mut warnings);
+    let kept = remove_faces(&positions, &triangles, &merged_to, &mut warnings);
+    let compact = compact_vertices(&positions, kept, &merged_to, &mut warnings)?;
+    Ok(assemble(compact, warnings))
+}
+
+/// Checks that positions are finite and within scale ([`check_scale`]) and that every
+/// index names a vertex.
+fn check_input(positions: &[DVec3], triangles: &[[u32; 3]]) -> Result<(), MeshError> {
     let input_vertices = positions.len();
     for (vertex, p) in positions.iter().enumerate() {
         if !p.is_finite() {
@@ -65,7 +79,7 @@ pub(super) fn build(
             });
         }
     }
-    check_scale(&positions)?;
+    check_scale(positions)?;
     for (face, t) in triangles.iter().enumerate() {
         for &index in t {
             if index as usize >= input_vertices {
@@ -77,8 +91,13 @@ pub(super) fn build(
             }
         }
     }
+    Ok(())
+}
 
-    // Merge vertices at bitwise-identical positions (-0.0 and 0.0 count as equal).
+/// Per input vertex, the first input vertex at its bitwise-identical position (-0.0
+/// and 0.0 count as equal); itself when it is the first.
+fn merge_vertices(positions: &[DVec3], warnings: &mut Vec<MeshWarning>) -> Vec<u32> {
+    let input_vertices = positions.len();
     let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
     let mut first_at: FastMap<[u64; 3], u32> = fast_map(input_vertices);
     let mut merged_to: Vec<u32> = Vec::with_capacity(input_vertices);
@@ -93,10 +112,17 @@ pub(super) fn build(
     if merged > 0 {
         warnings.push(MeshWarning::MergedDuplicateVertices { count: merged });
     }
+    merged_to
+}
 
-    // Remove degenerate (repeated vertex or zero area) and duplicated faces: a face
-    // is a duplicate when an earlier face that is not degenerate has the same vertex
-    // set. Sets are compared by bucketing them by their smallest vertex.
+/// The faces, on merged vertices, that are neither degenerate (repeated vertex or zero
+/// area) nor duplicated (see [`later_duplicates`]), in input order.
+fn remove_faces(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    merged_to: &[u32],
+    warnings: &mut Vec<MeshWarning>,
+) -> Vec<[u32; 3]> {
     let mut degenerate = Vec::new();
     let mut degenerate_count = 0;
     let mut merged_triangles: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
@@ -118,23 +144,9 @@ pub(super) fn build(
             sets.push(Some(sorted));
         }
     }
-    let (starts, by_smallest) = bucket_sort(input_vertices, || {
-        sets.iter()
-            .enumerate()
-            .filter_map(|(f, s)| s.map(|[a, b, c]| (a, [b, c, f as u32])))
-    });
-    let mut duplicate = vec![false; triangles.len()];
-    for bucket in starts.windows(2) {
-        let bucket = &by_smallest[bucket[0] as usize..bucket[1] as usize];
-        for pair in bucket.windows(2) {
-            if pair[0][..2] == pair[1][..2] {
-                duplicate[pair[1][2] as usize] = true; // the later face of the two
-            }
-        }
-    }
-    drop(by_smallest);
+    let duplicate = later_duplicates(&sets, positions.len());
     let duplicate_count = duplicate.iter().filter(|&&d| d).count();
-    let mut kept: Vec<[u32; 3]> = merged_triangles
+    let kept: Vec<[u32; 3]> = merged_triangles
         .into_iter()
         .zip(sets.iter().zip(&duplicate))
         .filter(|(_, (set, duplicate))| set.is_some() && !**duplicate)
@@ -151,8 +163,49 @@ pub(super) fn build(
             count: duplicate_count,
         });
     }
+    kept
+}
 
-    // Compact: keep only referenced vertices, in input order.
+/// Per face, whether it duplicates an earlier face: whether an earlier face that is not
+/// degenerate has the same sorted vertex set (`None` for a degenerate face). Sets are
+/// compared by bucketing them by their smallest vertex, below `vertex_count`.
+fn later_duplicates(sets: &[Option<[u32; 3]>], vertex_count: usize) -> Vec<bool> {
+    let (starts, by_smallest) = bucket_sort(vertex_count, || {
+        sets.iter()
+            .enumerate()
+            .filter_map(|(f, s)| s.map(|[a, b, c]| (a, [b, c, f as u32])))
+    });
+    let mut duplicate = vec![false; sets.len()];
+    for bucket in starts.windows(2) {
+        let bucket = &by_smallest[bucket[0] as usize..bucket[1] as usize];
+        for pair in bucket.windows(2) {
+            if pair[0][..2] == pair[1][..2] {
+                duplicate[pair[1][2] as usize] = true; // the later face of the two
+            }
+        }
+    }
+    duplicate
+}
+
+/// A mesh's kept faces on its referenced vertices only.
+struct Compact {
+    /// Referenced vertices' positions, in input order.
+    positions: Vec<DVec3>,
+    /// Kept faces on the compact vertex numbering.
+    triangles: Vec<[u32; 3]>,
+    /// Per input vertex, its compact vertex, or `NONE` (see [`TriMesh`]).
+    input_vertex_map: Vec<u32>,
+}
+
+/// Keeps only the vertices `kept` references, in input order, and renumbers `kept` on
+/// them; [`MeshError::Empty`] when nothing is left.
+fn compact_vertices(
+    positions: &[DVec3],
+    mut kept: Vec<[u32; 3]>,
+    merged_to: &[u32],
+    warnings: &mut Vec<MeshWarning>,
+) -> Result<Compact, MeshError> {
+    let input_vertices = positions.len();
     let mut new_index = vec![NONE; input_vertices];
     let mut compact_positions = Vec::with_capacity(input_vertices);
     for t in &kept {
@@ -188,7 +241,21 @@ pub(super) fn build(
             faces: kept.len(),
         });
     }
+    Ok(Compact {
+        positions: compact_positions,
+        triangles: kept,
+        input_vertex_map,
+    })
+}
 
+/// The [`TriMesh`] of a valid compact mesh: its topology (edges, vertex rings,
+/// boundary loops, components) and its [`Geometry`].
+fn assemble(compact: Compact, warnings: Vec<MeshWarning>) -> TriMesh {
+    let Compact {
+        positions: compact_positions,
+        triangles: kept,
+        input_vertex_map,
+    } = compact;
     // Topology and geometry are independent: on a large mesh they are built side by
     // side (each is sequential, so the result does not depend on the threads).
     let v_count = compact_positions.len();
@@ -235,7 +302,7 @@ pub(super) fn build(
     mesh.face_areas = geometry.face_areas;
     mesh.face_normals = geometry.face_normals;
     mesh.vertex_normals = geometry.vertex_normals;
-    Ok(mesh)
+    mesh
 }
 
 /// Items grouped by a bucket below `buckets` and sorted within each bucket: the CSR
