@@ -8,7 +8,9 @@ use super::seeds::{MAX_REGION_SHARE, RegionLimits, face_frames, place_seeds_size
 use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, is_disc, patch_topology};
 use super::walk::{random_walk, walk_weights};
-use super::{Segment, SegmentError, SegmentOptions, Segmentation, singularity_clusters};
+use super::{
+    Segment, SegmentError, SegmentOptions, Segmentation, Singularity, singularity_clusters,
+};
 use crate::field::TensorField;
 use crate::mesh::{FaceSet, NONE, TriMesh, connected_parts, group_by_label};
 
@@ -74,7 +76,6 @@ pub(crate) fn segment_sized(
     surface_area: f64,
 ) -> Result<Segmentation, SegmentError> {
     options.validate()?;
-    let f_count = mesh.face_count();
     let frames = face_frames(mesh, field);
     let mut cut = vec![false; mesh.edge_count()];
 
@@ -92,32 +93,7 @@ pub(crate) fn segment_sized(
 
     // 1. Trees between the net singularities of each connected part: cuts the walk
     // may not cross.
-    let net_faces: Vec<u32> = singularity_clusters(mesh, &singularities)
-        .into_iter()
-        .filter(|c| c.is_singular())
-        .flat_map(|c| c.faces)
-        .collect();
-    if !net_faces.is_empty() {
-        let net = FaceSet::new(mesh, &net_faces);
-        let parts = connected_parts(mesh, &vec![0; f_count], &cut);
-        let groups = group_by_label(&parts, 0..f_count as u32);
-        let trees: Vec<Vec<u32>> = groups
-            .par_iter()
-            .map(|faces| {
-                let sing: Vec<u32> = faces.iter().copied().filter(|&f| net.contains(f)).collect();
-                if sing.is_empty() {
-                    return Vec::new();
-                }
-                let region = FaceSet::new(mesh, faces);
-                singularity_tree_to(mesh, &costs, &sing, region.mask(), &flips)
-            })
-            .collect();
-        for tree in &trees {
-            for &e in tree {
-                cut[e as usize] = true;
-            }
-        }
-    }
+    cut_singularity_trees(mesh, &costs, &singularities, &flips, &mut cut);
 
     // 2. Seeds and random walk over the whole mesh, the trees cut.
     let all = FaceSet::all(mesh);
@@ -144,73 +120,146 @@ pub(crate) fn segment_sized(
 
     // 4. Discs.
     for _ in 0..MAX_SPLIT_ROUNDS {
-        let groups = group_by_label(&labels, 0..f_count as u32);
-        let extra: Vec<(usize, Vec<u32>, bool)> = groups
-            .par_iter()
-            .enumerate()
-            .map(|(i, faces)| {
-                if is_disc(mesh, faces, &cut) {
-                    return (i, Vec::new(), true);
-                }
-                let new_cuts = disc_cuts(mesh, &costs, faces, &cut);
-                let mut with = cut.clone();
-                for &e in &new_cuts {
-                    with[e as usize] = true;
-                }
-                (i, new_cuts, is_disc(mesh, faces, &with))
-            })
-            .collect();
-        let mut to_split = Vec::new();
-        for (i, new_cuts, ok) in extra {
-            for e in new_cuts {
-                cut[e as usize] = true;
-            }
-            if !ok {
-                to_split.push(i);
-            }
-        }
+        let groups = group_by_label(&labels, 0..mesh.face_count() as u32);
+        let to_split = cut_to_discs(mesh, &costs, &groups, &mut cut);
         if to_split.is_empty() {
             break;
         }
-        // Fallback: split each remaining non-disc segment in two with the walk,
-        // seeded at its two faces farthest apart in the face graph.
         let weights = walk_weights(mesh, &frames, options.sigma, &cut);
-        let mut next = labels
-            .iter()
-            .copied()
-            .filter(|&l| l != NONE)
-            .max()
-            .unwrap_or(0)
-            + 1;
-        for i in to_split {
-            let faces = &groups[i];
-            let mask = FaceSet::new(mesh, faces);
-            let Some([a, b]) = mask.far_pair(mesh, &cut) else {
-                continue;
-            };
-            if a == b {
-                continue;
-            }
-            let local = random_walk(mesh, &weights, mask.mask(), &[a, b])?;
-            for &f in faces {
-                if local[f as usize] == 1 {
-                    labels[f as usize] = next;
-                }
-            }
-            next += 1;
-        }
+        split_in_two(mesh, &weights, &cut, &groups, &to_split, &mut labels)?;
         labels = connected_parts(mesh, &labels, &cut);
     }
 
-    // Output, segments numbered by their lowest face.
+    Ok(assemble(mesh, &labels, &cut, singularities))
+}
+
+/// Step 1: flags in `cut` the trees of field-following paths (over `costs`) between
+/// the net singularities of each connected part of the mesh (those of clusters with a
+/// non-zero index), reaching each singular face at its comb flip in `flips`.
+fn cut_singularity_trees(
+    mesh: &TriMesh,
+    costs: &[f64],
+    singularities: &[Singularity],
+    flips: &[bool],
+    cut: &mut [bool],
+) {
+    let f_count = mesh.face_count();
+    let net_faces: Vec<u32> = singularity_clusters(mesh, singularities)
+        .into_iter()
+        .filter(|c| c.is_singular())
+        .flat_map(|c| c.faces)
+        .collect();
+    if net_faces.is_empty() {
+        return;
+    }
+    let net = FaceSet::new(mesh, &net_faces);
+    let parts = connected_parts(mesh, &vec![0; f_count], cut);
+    let groups = group_by_label(&parts, 0..f_count as u32);
+    let trees: Vec<Vec<u32>> = groups
+        .par_iter()
+        .map(|faces| {
+            let sing: Vec<u32> = faces.iter().copied().filter(|&f| net.contains(f)).collect();
+            if sing.is_empty() {
+                return Vec::new();
+            }
+            let region = FaceSet::new(mesh, faces);
+            singularity_tree_to(mesh, costs, &sing, region.mask(), flips)
+        })
+        .collect();
+    for tree in &trees {
+        for &e in tree {
+            cut[e as usize] = true;
+        }
+    }
+}
+
+/// One round of step 4: flags in `cut` the disc cuts of every segment (`groups`, one
+/// face list per label) that is not a disc; returns the indices of the segments that
+/// are still not discs after them.
+fn cut_to_discs(mesh: &TriMesh, costs: &[f64], groups: &[Vec<u32>], cut: &mut [bool]) -> Vec<usize> {
+    let before: &[bool] = cut;
+    let extra: Vec<(usize, Vec<u32>, bool)> = groups
+        .par_iter()
+        .enumerate()
+        .map(|(i, faces)| {
+            if is_disc(mesh, faces, before) {
+                return (i, Vec::new(), true);
+            }
+            let new_cuts = disc_cuts(mesh, costs, faces, before);
+            let mut with = before.to_vec();
+            for &e in &new_cuts {
+                with[e as usize] = true;
+            }
+            (i, new_cuts, is_disc(mesh, faces, &with))
+        })
+        .collect();
+    let mut to_split = Vec::new();
+    for (i, new_cuts, ok) in extra {
+        for e in new_cuts {
+            cut[e as usize] = true;
+        }
+        if !ok {
+            to_split.push(i);
+        }
+    }
+    to_split
+}
+
+/// Step 4's fallback: splits each segment `groups[i]` for `i` in `to_split` in two
+/// with the walk (over `weights`), seeded at its two faces farthest apart in the face
+/// graph; the second half gets a new label in `labels`.
+fn split_in_two(
+    mesh: &TriMesh,
+    weights: &[f64],
+    cut: &[bool],
+    groups: &[Vec<u32>],
+    to_split: &[usize],
+    labels: &mut [u32],
+) -> Result<(), SegmentError> {
+    let mut next = labels
+        .iter()
+        .copied()
+        .filter(|&l| l != NONE)
+        .max()
+        .unwrap_or(0)
+        + 1;
+    for &i in to_split {
+        let faces = &groups[i];
+        let mask = FaceSet::new(mesh, faces);
+        let Some([a, b]) = mask.far_pair(mesh, cut) else {
+            continue;
+        };
+        if a == b {
+            continue;
+        }
+        let local = random_walk(mesh, weights, mask.mask(), &[a, b])?;
+        for &f in faces {
+            if local[f as usize] == 1 {
+                labels[f as usize] = next;
+            }
+        }
+        next += 1;
+    }
+    Ok(())
+}
+
+/// The [`Segmentation`] of final `labels`: segments numbered by their lowest face,
+/// with their topology cut open along `cut`, and the cuts that run inside a segment.
+fn assemble(
+    mesh: &TriMesh,
+    labels: &[u32],
+    cut: &[bool],
+    singularities: Vec<Singularity>,
+) -> Segmentation {
+    let f_count = mesh.face_count();
     let all_singular: Vec<u32> = singularities.iter().map(|s| s.face).collect();
     let singular = FaceSet::new(mesh, &all_singular);
-    let groups = group_by_label(&labels, 0..f_count as u32);
+    let groups = group_by_label(labels, 0..f_count as u32);
     let mut face_segment = vec![0u32; f_count];
     let segments: Vec<Segment> = groups
         .par_iter()
         .map(|faces| {
-            let topo = patch_topology(mesh, faces, &cut);
+            let topo = patch_topology(mesh, faces, cut);
             Segment {
                 faces: faces.clone(),
                 boundary_loops: topo.boundary_loops,
@@ -233,12 +282,12 @@ pub(crate) fn segment_sized(
             a != NONE && b != NONE && face_segment[a as usize] == face_segment[b as usize]
         })
         .collect();
-    Ok(Segmentation {
+    Segmentation {
         face_segment,
         segments,
         singularities,
         cut_edges,
-    })
+    }
 }
 
 #[cfg(test)]
