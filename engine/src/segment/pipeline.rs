@@ -4,7 +4,7 @@ use rayon::prelude::*;
 
 use super::comb_flips::comb_flip_vertices;
 use super::paths::{field_edge_costs_with, singularity_tree_to};
-use super::seeds::{MAX_REGION_SHARE, RegionLimits, face_frames, place_seeds_sized};
+use super::seeds::{MAX_REGION_SHARE, RegionLimits, SeedGraph, face_frames, place_seeds_sized};
 use super::singularity::{line_field_transport, singularities_from};
 use super::topology::{disc_cuts, is_disc, patch_topology};
 use super::walk::{random_walk, walk_weights};
@@ -99,10 +99,7 @@ pub(crate) fn segment_sized(
     let all = FaceSet::all(mesh);
     let weights = walk_weights(mesh, &frames, options.sigma, &cut);
     let seeds = place_seeds_sized(
-        mesh,
-        &frames,
-        &weights,
-        all.mask(),
+        SeedGraph::new(mesh, &frames, &weights, all.mask()),
         options.beta,
         options.seed,
         RegionLimits {

@@ -247,10 +247,7 @@ pub fn place_seeds(
     seed: u64,
 ) -> Vec<u32> {
     place_seeds_sized(
-        mesh,
-        faces,
-        weights,
-        mask,
+        SeedGraph::new(mesh, faces, weights, mask),
         beta,
         seed,
         RegionLimits::unbounded(mesh.area()),
@@ -283,15 +280,61 @@ impl RegionLimits {
 
 /// [`place_seeds`] with the area rules of `limits`.
 pub(crate) fn place_seeds_sized(
-    mesh: &TriMesh,
-    faces: &FaceField,
-    weights: &[f64],
-    mask: &[bool],
+    graph: SeedGraph<'_>,
     beta: f64,
     seed: u64,
     limits: RegionLimits,
 ) -> Vec<u32> {
-    grow_regions(mesh, faces, weights, mask, beta, seed, limits).seeds
+    grow_regions(graph, beta, seed, limits).seeds
+}
+
+/// What seeding grows over: the walk's graph (the faces of `mask` joined across edges of
+/// positive `weights`, see [`for_each_walk_neighbor`]) and the field's frame per face.
+#[derive(Clone, Copy)]
+pub(crate) struct SeedGraph<'a> {
+    mesh: &'a TriMesh,
+    faces: &'a FaceField,
+    weights: &'a [f64],
+    mask: &'a [bool],
+}
+
+impl<'a> SeedGraph<'a> {
+    /// The graph of `mesh`'s faces in `mask` across edges of positive `weights`, with
+    /// the frames `faces`.
+    ///
+    /// # Panics
+    /// If `faces`, `weights` or `mask` do not match the mesh's face or edge count.
+    pub(crate) fn new(
+        mesh: &'a TriMesh,
+        faces: &'a FaceField,
+        weights: &'a [f64],
+        mask: &'a [bool],
+    ) -> Self {
+        let n = mesh.face_count();
+        assert_eq!(faces.major.len(), n, "one major direction per face");
+        assert_eq!(faces.anisotropy.len(), n, "one spacing ratio per face");
+        assert_eq!(weights.len(), mesh.edge_count(), "one weight per edge");
+        assert_eq!(mask.len(), n, "one mask flag per face");
+        Self {
+            mesh,
+            faces,
+            weights,
+            mask,
+        }
+    }
+
+    /// Calls `visit(g)` for each neighbour `g` of mask face `f` in the graph.
+    #[inline]
+    fn for_each_neighbor(&self, f: u32, visit: impl FnMut(u32, f64)) {
+        for_each_walk_neighbor(self.mesh, self.weights, self.mask, f, visit);
+    }
+
+    /// The field's turn at face `g` from `reference` (a direction in `g`'s plane): the
+    /// line angle scaled by [`direction_confidence`].
+    fn turn(&self, reference: DVec3, g: u32) -> f64 {
+        line_angle(reference, self.faces.major[g as usize])
+            * direction_confidence(self.faces.anisotropy[g as usize])
+    }
 }
 
 /// The seeding regions behind [`place_seeds`] (the tests check the bound on them).
@@ -308,220 +351,300 @@ pub(crate) struct Regions {
 
 /// [`place_seeds`] with its regions.
 pub(crate) fn grow_regions(
-    mesh: &TriMesh,
-    faces: &FaceField,
-    weights: &[f64],
-    mask: &[bool],
+    graph: SeedGraph<'_>,
     beta: f64,
     seed: u64,
     limits: RegionLimits,
 ) -> Regions {
-    let RegionLimits {
-        surface_area,
-        max_share,
-    } = limits;
-    let n = mesh.face_count();
-    assert_eq!(faces.major.len(), n, "one major direction per face");
-    assert_eq!(faces.anisotropy.len(), n, "one spacing ratio per face");
-    assert_eq!(weights.len(), mesh.edge_count(), "one weight per edge");
-    assert_eq!(mask.len(), n, "one mask flag per face");
-
-    let turn = |reference: DVec3, g: u32| {
-        line_angle(reference, faces.major[g as usize])
-            * direction_confidence(faces.anisotropy[g as usize])
-    };
-    // Everything below is sized by the mask, not the mesh (`at(f)`: face `f`'s place
-    // among the mask's faces).
-    let mask_faces = MaskFaces::new(mask);
-    let members_of_mask = mask_faces.faces();
-    let m = members_of_mask.len();
-    let at = |f: u32| -> usize { mask_faces.index(f).expect("a face of the mask") };
-    // Per face of the region being grown, its reference direction carried into the
-    // face's plane along the growth (unfolded across each edge crossed), so that only
-    // the field's own turning counts, not the surface's bending.
-    let normals = mesh.face_normals();
-    let mut carried = vec![DVec3::ZERO; m];
-
-    let mut component = vec![NONE; m];
-    let mut region = vec![NONE; m];
-    // Faces of withdrawn regions: they cannot seed again (this bounds the work).
-    let mut barren = vec![false; m];
-    let mut depth = vec![NONE; m];
-    let mut seeds = Vec::new();
-    let mut origins = Vec::new();
-    let mut members = Vec::new();
-    let mut ring = VecDeque::new();
-    let mut candidates = VecDeque::new();
-    let mut grown = Vec::new();
+    let mut grower = RegionGrower::new(graph, beta, limits);
     let mut component_count = 0u64;
-    let min_area = MIN_REGION_SHARE * surface_area;
-    let max_area = if max_share < 1.0 {
-        max_share * surface_area
-    } else {
-        f64::INFINITY
-    };
-    let areas = mesh.face_areas();
-    for (i, &start) in members_of_mask.iter().enumerate() {
-        if component[i] != NONE {
+    for i in 0..grower.places.faces().len() {
+        if grower.component[i] != NONE {
             continue;
         }
-        // The component's faces, ascending, so that the draw is independent of the
-        // traversal order.
+        let start = grower.places.faces()[i];
+        grower.find_component(start, component_count as u32);
+        let mut rng = Rng::new(seed, component_count);
+        component_count += 1;
+        let first = grower.members[rng.below(grower.members.len() as u64) as usize];
+        grower.seed_component(first);
+    }
+    grower.into_regions()
+}
+
+/// Grows the seeding regions of one [`SeedGraph`], one at a time, and keeps their
+/// seeds. Everything is sized by the mask, not the mesh (`at(f)`: face `f`'s place
+/// among the mask's faces).
+struct RegionGrower<'a> {
+    graph: SeedGraph<'a>,
+    /// The mask's faces and their places.
+    places: MaskFaces,
+    /// Largest turn from a region's reference at which a face joins it.
+    beta: f64,
+    /// Smallest area of a kept region (besides [`MIN_REGION_FACES`]).
+    min_area: f64,
+    /// Area past which a region grows only through faces within
+    /// [`MAX_REGION_TILT_COS`] of its first face's normal.
+    max_area: f64,
+    /// Per face of the region being grown, its reference direction carried into the
+    /// face's plane along the growth (unfolded across each edge crossed), so that only
+    /// the field's own turning counts, not the surface's bending.
+    carried: Vec<DVec3>,
+    /// Per face, its connected component, or `NONE` before it is reached.
+    component: Vec<u32>,
+    /// Per face, its region, or `NONE`.
+    region: Vec<u32>,
+    /// Faces of withdrawn regions: they cannot seed again (this bounds the work).
+    barren: Vec<bool>,
+    /// Per face, its rings from its region's border ([`Self::region_centre`]'s scratch).
+    depth: Vec<u32>,
+    /// The kept regions' seeds.
+    seeds: Vec<u32>,
+    /// Per kept region, the face its growth started from.
+    origins: Vec<u32>,
+    /// The current component's faces, ascending.
+    members: Vec<u32>,
+    /// Breadth-first queue.
+    ring: VecDeque<u32>,
+    /// Faces the current component's regions did not take, in the order found.
+    candidates: VecDeque<u32>,
+    /// The faces of the region just grown, in growth order.
+    grown: Vec<u32>,
+}
+
+impl<'a> RegionGrower<'a> {
+    fn new(graph: SeedGraph<'a>, beta: f64, limits: RegionLimits) -> Self {
+        let RegionLimits {
+            surface_area,
+            max_share,
+        } = limits;
+        let places = MaskFaces::new(graph.mask);
+        let m = places.faces().len();
+        let min_area = MIN_REGION_SHARE * surface_area;
+        let max_area = if max_share < 1.0 {
+            max_share * surface_area
+        } else {
+            f64::INFINITY
+        };
+        Self {
+            graph,
+            places,
+            beta,
+            min_area,
+            max_area,
+            carried: vec![DVec3::ZERO; m],
+            component: vec![NONE; m],
+            region: vec![NONE; m],
+            barren: vec![false; m],
+            depth: vec![NONE; m],
+            seeds: Vec::new(),
+            origins: Vec::new(),
+            members: Vec::new(),
+            ring: VecDeque::new(),
+            candidates: VecDeque::new(),
+            grown: Vec::new(),
+        }
+    }
+
+    /// Face `f`'s place among the mask's faces.
+    #[inline]
+    fn at(places: &MaskFaces, f: u32) -> usize {
+        places.index(f).expect("a face of the mask")
+    }
+
+    /// Marks the connected component of `start` as `id` and lists its faces, ascending
+    /// (so that the draw is independent of the traversal order), in `members`.
+    fn find_component(&mut self, start: u32, id: u32) {
+        let Self {
+            graph,
+            places,
+            component,
+            members,
+            ring,
+            ..
+        } = self;
         members.clear();
-        component[i] = component_count as u32;
+        component[Self::at(places, start)] = id;
         ring.push_back(start);
         while let Some(f) = ring.pop_front() {
             members.push(f);
-            for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-                let j = at(g);
+            graph.for_each_neighbor(f, |g, _| {
+                let j = Self::at(places, g);
                 if component[j] == NONE {
-                    component[j] = component_count as u32;
+                    component[j] = id;
                     ring.push_back(g);
                 }
             });
         }
         members.sort_unstable();
-        let mut rng = Rng::new(seed, component_count);
-        component_count += 1;
+    }
 
-        candidates.clear();
-        let mut next = Some(members[rng.below(members.len() as u64) as usize]);
-        let mut first = true;
+    /// Grows the regions of one component from its `first` face, then from the
+    /// earliest-found candidate no region has taken, until none is left; keeps the
+    /// first region and the large ones, withdraws the others.
+    fn seed_component(&mut self, first: u32) {
+        self.candidates.clear();
+        let mut next = Some(first);
+        let mut is_first = true;
         while let Some(s) = next {
-            let id = seeds.len() as u32;
-            carried[at(s)] = faces.major[s as usize];
-            region[at(s)] = id;
-            ring.push_back(s);
-            grown.clear();
-            let mut area = areas[s as usize];
-            while let Some(f) = ring.pop_front() {
-                grown.push(f);
-                let lf = at(f);
-                for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-                    let lg = at(g);
-                    if region[lg] != NONE {
-                        return;
-                    }
-                    let reference = unfold(carried[lf], normals[f as usize], normals[g as usize]);
-                    let bounded = area + areas[g as usize] > max_area
-                        && normals[g as usize].dot(normals[s as usize]) < MAX_REGION_TILT_COS;
-                    if turn(reference, g) <= beta && !bounded {
-                        carried[lg] = reference;
-                        region[lg] = id;
-                        area += areas[g as usize];
-                        ring.push_back(g);
-                    } else {
-                        candidates.push_back(g);
-                    }
-                });
-            }
-            let large = grown.len() >= MIN_REGION_FACES
-                && grown.iter().map(|&f| areas[f as usize]).sum::<f64>() >= min_area;
-            if first || large {
-                let local = Local {
-                    region: &region,
-                    at: &at,
-                };
-                seeds.push(region_centre(
-                    mesh, weights, mask, &local, id, &grown, &mut depth, &mut ring,
-                ));
-                origins.push(s);
+            let id = self.seeds.len() as u32;
+            self.grow_region(s, id);
+            if is_first || self.is_large() {
+                let centre = self.region_centre(id);
+                self.seeds.push(centre);
+                self.origins.push(s);
             } else {
                 // Withdrawn: its faces may still join a later region, never seed one.
-                for &f in &grown {
-                    region[at(f)] = NONE;
-                    barren[at(f)] = true;
+                for &f in &self.grown {
+                    let lf = Self::at(&self.places, f);
+                    self.region[lf] = NONE;
+                    self.barren[lf] = true;
                 }
             }
-            first = false;
+            is_first = false;
             next = None;
-            while let Some(c) = candidates.pop_front() {
-                if region[at(c)] == NONE && !barren[at(c)] {
+            while let Some(c) = self.candidates.pop_front() {
+                let lc = Self::at(&self.places, c);
+                if self.region[lc] == NONE && !self.barren[lc] {
                     next = Some(c);
                     break;
                 }
             }
         }
     }
-    let mut per_face = vec![NONE; n];
-    for (&f, &r) in members_of_mask.iter().zip(&region) {
-        per_face[f as usize] = r;
-    }
-    Regions {
-        seeds,
-        origins,
-        region: per_face,
-    }
-}
 
-/// The regions of the mask's faces, indexed through `at` (a face's index among the
-/// mask's faces).
-struct Local<'a, F: Fn(u32) -> usize> {
-    region: &'a [u32],
-    at: &'a F,
-}
-
-/// The face of region `id` (whose faces are `grown`) deepest inside it: the most
-/// rings away from the region's border (faces with an edge leaving the region or the
-/// walk's graph), ties broken by the distance of the barycentre to the region's
-/// area-weighted centroid, then by the lower index. O(|grown|); `depth` is scratch
-/// that must be `NONE` on `grown` (each face is in at most one kept region).
-#[allow(clippy::too_many_arguments)]
-fn region_centre<F: Fn(u32) -> usize>(
-    mesh: &TriMesh,
-    weights: &[f64],
-    mask: &[bool],
-    local: &Local<'_, F>,
-    id: u32,
-    grown: &[u32],
-    depth: &mut [u32],
-    ring: &mut VecDeque<u32>,
-) -> u32 {
-    let (region, at) = (local.region, local.at);
-    let barycentre = |f: u32| mesh.face_positions(f).iter().sum::<DVec3>() / 3.0;
-    let mut area = 0.0;
-    let mut centroid = DVec3::ZERO;
-    for &f in grown {
-        let a = mesh.face_areas()[f as usize];
-        area += a;
-        centroid += barycentre(f) * a;
-        let mut inside = 0;
-        for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-            inside += usize::from(region[at(g)] == id);
-        });
-        if inside < 3 {
-            depth[at(f)] = 0;
-            ring.push_back(f);
+    /// Grows region `id` ring by ring from `s` with `s`'s direction as reference, into
+    /// `grown`: a face within `beta` of the reference carried to it (and, past
+    /// `max_area`, within the tilt of `s`'s normal) joins, any other becomes a
+    /// candidate.
+    fn grow_region(&mut self, s: u32, id: u32) {
+        let Self {
+            graph,
+            places,
+            beta,
+            max_area,
+            carried,
+            region,
+            ring,
+            candidates,
+            grown,
+            ..
+        } = self;
+        let (beta, max_area) = (*beta, *max_area);
+        let normals = graph.mesh.face_normals();
+        let areas = graph.mesh.face_areas();
+        let ls = Self::at(places, s);
+        carried[ls] = graph.faces.major[s as usize];
+        region[ls] = id;
+        ring.push_back(s);
+        grown.clear();
+        let mut area = areas[s as usize];
+        while let Some(f) = ring.pop_front() {
+            grown.push(f);
+            let lf = Self::at(places, f);
+            graph.for_each_neighbor(f, |g, _| {
+                let lg = Self::at(places, g);
+                if region[lg] != NONE {
+                    return;
+                }
+                let reference = unfold(carried[lf], normals[f as usize], normals[g as usize]);
+                let bounded = area + areas[g as usize] > max_area
+                    && normals[g as usize].dot(normals[s as usize]) < MAX_REGION_TILT_COS;
+                if graph.turn(reference, g) <= beta && !bounded {
+                    carried[lg] = reference;
+                    region[lg] = id;
+                    area += areas[g as usize];
+                    ring.push_back(g);
+                } else {
+                    candidates.push_back(g);
+                }
+            });
         }
     }
-    centroid /= area;
-    // Breadth-first depths are non-decreasing in queue order, so the deepest faces are
-    // the last ones reached: only they need their distance to the centroid.
-    let mut deepest: Vec<u32> = Vec::new();
-    let mut max_depth = 0;
-    while let Some(f) = ring.pop_front() {
-        let d = depth[at(f)];
-        if d > max_depth {
-            max_depth = d;
-            deepest.clear();
-        }
-        deepest.push(f);
-        for_each_walk_neighbor(mesh, weights, mask, f, |g, _| {
-            let lg = at(g);
-            if region[lg] == id && depth[lg] == NONE {
-                depth[lg] = d + 1;
-                ring.push_back(g);
+
+    /// Whether the region just grown is large enough to keep its seed: at least
+    /// [`MIN_REGION_FACES`] faces and `min_area`.
+    fn is_large(&self) -> bool {
+        let areas = self.graph.mesh.face_areas();
+        self.grown.len() >= MIN_REGION_FACES
+            && self.grown.iter().map(|&f| areas[f as usize]).sum::<f64>() >= self.min_area
+    }
+
+    /// The face of region `id` (whose faces are `grown`) deepest inside it: the most
+    /// rings away from the region's border (faces with an edge leaving the region or
+    /// the walk's graph), ties broken by the distance of the barycentre to the region's
+    /// area-weighted centroid, then by the lower index. O(|grown|); `depth` must be
+    /// `NONE` on `grown` (each face is in at most one kept region).
+    fn region_centre(&mut self, id: u32) -> u32 {
+        let Self {
+            graph,
+            places,
+            region,
+            depth,
+            ring,
+            grown,
+            ..
+        } = self;
+        let mesh = graph.mesh;
+        let at = |f: u32| Self::at(places, f);
+        let barycentre = |f: u32| mesh.face_positions(f).iter().sum::<DVec3>() / 3.0;
+        let mut area = 0.0;
+        let mut centroid = DVec3::ZERO;
+        for &f in grown.iter() {
+            let a = mesh.face_areas()[f as usize];
+            area += a;
+            centroid += barycentre(f) * a;
+            let mut inside = 0;
+            graph.for_each_neighbor(f, |g, _| {
+                inside += usize::from(region[at(g)] == id);
+            });
+            if inside < 3 {
+                depth[at(f)] = 0;
+                ring.push_back(f);
             }
-        });
+        }
+        centroid /= area;
+        // Breadth-first depths are non-decreasing in queue order, so the deepest faces
+        // are the last ones reached: only they need their distance to the centroid.
+        let mut deepest: Vec<u32> = Vec::new();
+        let mut max_depth = 0;
+        while let Some(f) = ring.pop_front() {
+            let d = depth[at(f)];
+            if d > max_depth {
+                max_depth = d;
+                deepest.clear();
+            }
+            deepest.push(f);
+            graph.for_each_neighbor(f, |g, _| {
+                let lg = at(g);
+                if region[lg] == id && depth[lg] == NONE {
+                    depth[lg] = d + 1;
+                    ring.push_back(g);
+                }
+            });
+        }
+        let mut best = (f64::INFINITY, grown[0]);
+        for f in deepest {
+            let dist = barycentre(f).distance_squared(centroid);
+            if (-dist, std::cmp::Reverse(f)) > (-best.0, std::cmp::Reverse(best.1)) {
+                best = (dist, f);
+            }
+        }
+        best.1
     }
-    let mut best = (f64::INFINITY, grown[0]);
-    for f in deepest {
-        let dist = barycentre(f).distance_squared(centroid);
-        if (-dist, std::cmp::Reverse(f)) > (-best.0, std::cmp::Reverse(best.1)) {
-            best = (dist, f);
+
+    /// The seeds, their origins and each mesh face's region.
+    fn into_regions(self) -> Regions {
+        let mut per_face = vec![NONE; self.graph.mesh.face_count()];
+        for (&f, &r) in self.places.faces().iter().zip(&self.region) {
+            per_face[f as usize] = r;
+        }
+        Regions {
+            seeds: self.seeds,
+            origins: self.origins,
+            region: per_face,
         }
     }
-    best.1
 }
 
 #[cfg(test)]
@@ -678,15 +801,7 @@ pub(crate) mod tests {
         let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         for beta in [FRAC_PI_4, PI / 8.0] {
             for seed in 0..4 {
-                let regions = grow_regions(
-                    &mesh,
-                    &faces,
-                    &w,
-                    &mask,
-                    beta,
-                    seed,
-                    RegionLimits::unbounded(mesh.area()),
-                );
+                let regions = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), beta, seed, RegionLimits::unbounded(mesh.area()));
                 let Regions {
                     seeds,
                     origins,
@@ -769,15 +884,7 @@ pub(crate) mod tests {
             let wt = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
             let mask = vec![true; mesh.face_count()];
             // Seed 0 starts outside the patch.
-            let regions = grow_regions(
-                &mesh,
-                &faces,
-                &wt,
-                &mask,
-                FRAC_PI_4,
-                0,
-                RegionLimits::unbounded(mesh.area()),
-            );
+            let regions = grow_regions(SeedGraph::new(&mesh, &faces, &wt, &mask), FRAC_PI_4, 0, RegionLimits::unbounded(mesh.area()));
             assert!(!turned.contains(&regions.origins[0]));
             assert_eq!(regions.seeds.len(), expected, "{n}: patch {w} x {h}");
             if expected == 1 {
@@ -792,15 +899,7 @@ pub(crate) mod tests {
             if expected == 2 {
                 // Cut out of a surface 1000 times larger (`segment_region`), the same
                 // patch is below the share of that surface and withdrawn.
-                let within = place_seeds_sized(
-                    &mesh,
-                    &faces,
-                    &wt,
-                    &mask,
-                    FRAC_PI_4,
-                    0,
-                    RegionLimits::unbounded(1000.0 * mesh.area()),
-                );
+                let within = place_seeds_sized(SeedGraph::new(&mesh, &faces, &wt, &mask), FRAC_PI_4, 0, RegionLimits::unbounded(1000.0 * mesh.area()));
                 assert_eq!(within.len(), 1, "{n}: patch {w} x {h}");
             }
         }
@@ -842,24 +941,16 @@ pub(crate) mod tests {
                 max_share: 0.125,
             };
             for seed in 0..3 {
-                let free = grow_regions(
-                    &mesh,
-                    &faces,
-                    &w,
-                    &mask,
-                    FRAC_PI_4,
-                    seed,
-                    RegionLimits::unbounded(area),
-                );
+                let free = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, RegionLimits::unbounded(area));
                 assert_eq!(free.seeds.len(), 1);
-                let bounded = grow_regions(&mesh, &faces, &w, &mask, FRAC_PI_4, seed, eighth);
+                let bounded = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, eighth);
                 if bounded_seeds_at_least == 1 {
                     assert_eq!(bounded.seeds.len(), 1, "the plane is one region");
                 } else {
                     assert!(bounded.seeds.len() >= 2, "seed {seed}: {:?}", bounded.seeds);
                 }
                 assert_eq!(
-                    place_seeds_sized(&mesh, &faces, &w, &mask, FRAC_PI_4, seed, eighth),
+                    place_seeds_sized(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, eighth),
                     bounded.seeds
                 );
             }
@@ -883,15 +974,7 @@ pub(crate) mod tests {
         .expect("field");
         let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         for seed in 0..4 {
-            let regions = grow_regions(
-                &mesh,
-                &faces,
-                &w,
-                &mask,
-                FRAC_PI_4,
-                seed,
-                RegionLimits::unbounded(mesh.area()),
-            );
+            let regions = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, RegionLimits::unbounded(mesh.area()));
             for (f, &r) in regions.region.iter().enumerate() {
                 if r == NONE {
                     continue;
