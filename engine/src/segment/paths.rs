@@ -333,15 +333,10 @@ pub fn singularity_tree_to(
         "one end flag per mesh vertex"
     );
     assert_eq!(region.len(), mesh.face_count(), "one region flag per face");
-    let in_region = |f: u32| f != NONE && region[f as usize];
-    let allowed = |e: u32| {
-        let [f0, f1] = mesh.edge_faces()[e as usize];
-        in_region(f0) || in_region(f1)
-    };
     let mut nodes: Vec<u32> = singular_faces
         .iter()
         .copied()
-        .filter(|&f| in_region(f))
+        .filter(|&f| in_region(region, f))
         .collect();
     nodes.sort_unstable();
     nodes.dedup();
@@ -349,108 +344,16 @@ pub fn singularity_tree_to(
     if k == 0 {
         return Vec::new();
     }
-    // Everything below is sized by the region: its allowed edges are those of its
-    // faces, and their ends are its faces' corners (`verts`, ascending; vertex `v` is
-    // entry `at(v)`).
-    let faces: Vec<u32> = (0..mesh.face_count() as u32)
-        .filter(|&f| region[f as usize])
-        .collect();
-    let corners = faces.iter().flat_map(|&f| mesh.triangles()[f as usize]);
-    let places = MaskFaces::from_sorted(
-        distinct_ascending(corners, 3 * faces.len(), mesh.vertex_count()),
-        mesh.vertex_count(),
-    );
-    let verts = places.faces();
-    let edges = distinct_ascending(
-        faces.iter().flat_map(|&f| mesh.face_edges()[f as usize]),
-        3 * faces.len(),
-        mesh.edge_count(),
-    );
-    let at = |v: u32| places.index(v).expect("a corner of a region face");
-    let vertices = Vertices {
-        count: verts.len(),
-        index: &at,
-    };
-    let mut on_boundary = vec![false; verts.len()];
-    for &e in &edges {
-        let [f0, f1] = mesh.edge_faces()[e as usize];
-        let interior = mesh.edge_valence()[e as usize] == 2 && in_region(f0) && in_region(f1);
-        if !interior {
-            for v in mesh.edges()[e as usize] {
-                on_boundary[at(v)] = true;
-            }
-        }
-    }
-    let adjacency = VertexEdges::new(mesh);
+    let part = RegionPart::new(mesh, region);
     let corners = |i: usize| mesh.triangles()[nodes[i] as usize];
-    // Each node is represented by one corner of its face (its lowest flagged one, else
-    // its lowest), so that the tree's paths meet at vertices and the tree is connected
-    // as an edge set.
-    let flagged = |v: &u32| ends.get(*v as usize).copied().unwrap_or(false);
-    let reps: Vec<u32> = (0..k)
-        .map(|i| {
-            let c = corners(i);
-            let flagged = c.into_iter().filter(flagged).min();
-            flagged.or(c.into_iter().min()).unwrap_or(0)
-        })
-        .collect();
-    let mut sources = reps.clone();
-    sources.sort_unstable();
-    sources.dedup();
-
-    // Mehlhorn (1988): one multi-source Dijkstra partitions the region into the nodes'
-    // Voronoi cells; the cheapest edge between two cells, d(u) + c(u, v) + d(v), links
-    // them. A minimum spanning tree of these links is a minimum spanning tree of the
-    // complete graph of pairwise shortest paths, and its expanded paths never cross.
-    let (cells, _) = run_dijkstra(&adjacency, &vertices, costs, &sources, &allowed, &|_| false);
-    let mut node_of_source = vec![NONE; verts.len()];
-    for (i, &r) in reps.iter().enumerate().rev() {
-        node_of_source[at(r)] = i as u32;
-    }
-    let cell = nearest_source_node(mesh, verts, &at, &cells, &node_of_source);
-    let mut sets = UnionFind::new(k);
-    let mut degree = vec![0usize; k];
-    for (i, &r) in reps.iter().enumerate() {
-        let first = node_of_source[at(r)];
-        if first != i as u32 && sets.union(first, i as u32) {
-            degree[i] += 1;
-            degree[first as usize] += 1;
-        }
-    }
-    let mut links: Vec<(f64, u32, u32, u32)> = Vec::new();
-    for &e in &edges {
-        let [a, b] = mesh.edges()[e as usize];
-        let (ia, ib) = (at(a), at(b));
-        let (ca, cb) = (cell[ia], cell[ib]);
-        if ca != NONE && cb != NONE && ca != cb {
-            let w = cells.dist[ia] + costs[e as usize] + cells.dist[ib];
-            links.push((w, ca.min(cb), ca.max(cb), e));
-        }
-    }
-    links.sort_by(|x, y| {
-        x.0.total_cmp(&y.0)
-            .then((x.1, x.2, x.3).cmp(&(y.1, y.2, y.3)))
-    });
-    let mut union = Vec::new();
-    for &(_, i, j, e) in &links {
-        if sets.union(i, j) {
-            degree[i as usize] += 1;
-            degree[j as usize] += 1;
-            let [a, b] = mesh.edges()[e as usize];
-            union.push(e);
-            union.extend(cells.path_edges_in(mesh, a, &at));
-            union.extend(cells.path_edges_in(mesh, b, &at));
-        }
-    }
+    let reps = node_representatives(mesh, &nodes, ends);
+    let (mut union, degree) = part.voronoi_tree(costs, &reps);
     // Path ends that must stay: the singular faces' corners and the boundary ends of
     // lone paths.
     let mut terminal: Vec<u32> = (0..k).flat_map(corners).collect();
     for i in (0..k).filter(|&i| degree[i] == 0) {
-        let stop = |v: u32| on_boundary[at(v)];
-        let (tree, reached) =
-            run_dijkstra(&adjacency, &vertices, costs, &corners(i), &allowed, &stop);
-        if let Some(v) = reached {
-            union.extend(tree.path_edges_in(mesh, v, &at));
+        if let Some((path, v)) = part.path_to_boundary(costs, &corners(i)) {
+            union.extend(path);
             terminal.push(v);
         }
     }
@@ -459,6 +362,180 @@ pub fn singularity_tree_to(
     terminal.sort_unstable();
     terminal.dedup();
     forest_of(mesh, costs, &union, &terminal)
+}
+
+/// Whether face `f` (possibly `NONE`) is flagged in `region`.
+fn in_region(region: &[bool], f: u32) -> bool {
+    f != NONE && region[f as usize]
+}
+
+/// Per node (a singular face of `nodes`), the corner that represents it: its lowest
+/// corner flagged in `ends` (one flag per mesh vertex, or empty), else its lowest, so
+/// that the tree's paths meet at vertices and the tree is connected as an edge set.
+fn node_representatives(mesh: &TriMesh, nodes: &[u32], ends: &[bool]) -> Vec<u32> {
+    let flagged = |v: &u32| ends.get(*v as usize).copied().unwrap_or(false);
+    nodes
+        .iter()
+        .map(|&f| {
+            let c = mesh.triangles()[f as usize];
+            let flagged = c.into_iter().filter(flagged).min();
+            flagged.or(c.into_iter().min()).unwrap_or(0)
+        })
+        .collect()
+}
+
+/// The part of the mesh a region's singularity tree runs in, sized by the region: its
+/// allowed edges are those of its faces, and their ends are its faces' corners
+/// (`places`, ascending; vertex `v` is entry `at(v)`).
+struct RegionPart<'a> {
+    mesh: &'a TriMesh,
+    /// The region's face flags.
+    region: &'a [bool],
+    /// The region's faces' corners and their places.
+    places: MaskFaces,
+    /// The region's faces' edges, ascending.
+    edges: Vec<u32>,
+    /// Per corner, whether it lies on the region's boundary (an edge whose two faces
+    /// are not both in the region, including mesh boundary edges).
+    on_boundary: Vec<bool>,
+}
+
+impl<'a> RegionPart<'a> {
+    fn new(mesh: &'a TriMesh, region: &'a [bool]) -> Self {
+        let faces: Vec<u32> = (0..mesh.face_count() as u32)
+            .filter(|&f| region[f as usize])
+            .collect();
+        let corners = faces.iter().flat_map(|&f| mesh.triangles()[f as usize]);
+        let places = MaskFaces::from_sorted(
+            distinct_ascending(corners, 3 * faces.len(), mesh.vertex_count()),
+            mesh.vertex_count(),
+        );
+        let edges = distinct_ascending(
+            faces.iter().flat_map(|&f| mesh.face_edges()[f as usize]),
+            3 * faces.len(),
+            mesh.edge_count(),
+        );
+        let mut part = Self {
+            mesh,
+            region,
+            places,
+            edges,
+            on_boundary: Vec::new(),
+        };
+        let mut on_boundary = vec![false; part.places.faces().len()];
+        for &e in &part.edges {
+            let [f0, f1] = mesh.edge_faces()[e as usize];
+            let interior =
+                mesh.edge_valence()[e as usize] == 2 && in_region(region, f0) && in_region(region, f1);
+            if !interior {
+                for v in mesh.edges()[e as usize] {
+                    on_boundary[part.at(v)] = true;
+                }
+            }
+        }
+        part.on_boundary = on_boundary;
+        part
+    }
+
+    /// Corner `v`'s entry.
+    fn at(&self, v: u32) -> usize {
+        self.places.index(v).expect("a corner of a region face")
+    }
+
+    /// Whether paths may use mesh edge `e`: at least one of its faces is in the region.
+    fn allowed(&self, e: u32) -> bool {
+        let [f0, f1] = self.mesh.edge_faces()[e as usize];
+        in_region(self.region, f0) || in_region(self.region, f1)
+    }
+
+    /// [`run_dijkstra`] over the region's allowed edges, stored by corner entry.
+    fn dijkstra(
+        &self,
+        costs: &[f64],
+        sources: &[u32],
+        stop: &dyn Fn(u32) -> bool,
+    ) -> (ShortestPaths, Option<u32>) {
+        let at = |v: u32| self.at(v);
+        let vertices = Vertices {
+            count: self.places.faces().len(),
+            index: &at,
+        };
+        let allowed = |e: u32| self.allowed(e);
+        run_dijkstra(
+            &VertexEdges::new(self.mesh),
+            &vertices,
+            costs,
+            sources,
+            &allowed,
+            stop,
+        )
+    }
+
+    /// Mehlhorn (1988): one multi-source Dijkstra from the nodes' representatives
+    /// `reps` partitions the region into their Voronoi cells; the cheapest edge between
+    /// two cells, d(u) + c(u, v) + d(v), links them. A minimum spanning tree of these
+    /// links is a minimum spanning tree of the complete graph of pairwise shortest
+    /// paths, and its expanded paths never cross. Returns the tree's path edges (with
+    /// repeats) and each node's degree in it.
+    fn voronoi_tree(&self, costs: &[f64], reps: &[u32]) -> (Vec<u32>, Vec<usize>) {
+        let mesh = self.mesh;
+        let k = reps.len();
+        let at = |v: u32| self.at(v);
+        let mut sources = reps.to_vec();
+        sources.sort_unstable();
+        sources.dedup();
+        let (cells, _) = self.dijkstra(costs, &sources, &|_| false);
+        let mut node_of_source = vec![NONE; self.places.faces().len()];
+        for (i, &r) in reps.iter().enumerate().rev() {
+            node_of_source[at(r)] = i as u32;
+        }
+        let cell = nearest_source_node(mesh, self.places.faces(), &at, &cells, &node_of_source);
+        let mut sets = UnionFind::new(k);
+        let mut degree = vec![0usize; k];
+        for (i, &r) in reps.iter().enumerate() {
+            let first = node_of_source[at(r)];
+            if first != i as u32 && sets.union(first, i as u32) {
+                degree[i] += 1;
+                degree[first as usize] += 1;
+            }
+        }
+        let mut links: Vec<(f64, u32, u32, u32)> = Vec::new();
+        for &e in &self.edges {
+            let [a, b] = mesh.edges()[e as usize];
+            let (ia, ib) = (at(a), at(b));
+            let (ca, cb) = (cell[ia], cell[ib]);
+            if ca != NONE && cb != NONE && ca != cb {
+                let w = cells.dist[ia] + costs[e as usize] + cells.dist[ib];
+                links.push((w, ca.min(cb), ca.max(cb), e));
+            }
+        }
+        links.sort_by(|x, y| {
+            x.0.total_cmp(&y.0)
+                .then((x.1, x.2, x.3).cmp(&(y.1, y.2, y.3)))
+        });
+        let mut union = Vec::new();
+        for &(_, i, j, e) in &links {
+            if sets.union(i, j) {
+                degree[i as usize] += 1;
+                degree[j as usize] += 1;
+                let [a, b] = mesh.edges()[e as usize];
+                union.push(e);
+                union.extend(cells.path_edges_in(mesh, a, &at));
+                union.extend(cells.path_edges_in(mesh, b, &at));
+            }
+        }
+        (union, degree)
+    }
+
+    /// A lone node's shortest path from any of its face's `corners` to the region's
+    /// boundary and the boundary vertex it ends at; `None` where no boundary is
+    /// reachable.
+    fn path_to_boundary(&self, costs: &[f64], corners: &[u32]) -> Option<(Vec<u32>, u32)> {
+        let at = |v: u32| self.at(v);
+        let stop = |v: u32| self.on_boundary[at(v)];
+        let (tree, reached) = self.dijkstra(costs, corners, &stop);
+        reached.map(|v| (tree.path_edges_in(self.mesh, v, &at), v))
+    }
 }
 
 /// The distinct values of `ids` (about `expected` of them with repeats, each below
