@@ -108,19 +108,28 @@ pub(crate) fn wrap_pi(x: f64) -> f64 {
 pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTransport {
     // Every pass below is a map over vertices, edges or faces: on rayon's threads
     // (from MIN_PARALLEL items), each item computed as it was sequentially.
-    let pos = mesh.positions();
     let frames = vertex_frames(mesh);
-    let two_theta: Vec<f64> = field
-        .tensors()
+    let psi = edge_angles(mesh, &frames);
+    let edge_turn = edge_turns(mesh, field, &frames, &psi);
+    let (mut gamma, beta) = corner_angles(mesh, &psi);
+    for (f, k, delta) in fan_corrections(mesh, &gamma, &beta) {
+        gamma[f][k] += delta;
+    }
+    let face_holonomy = gamma
         .par_iter()
         .with_min_len(MIN_PARALLEL)
-        .zip(&frames)
-        .map(|(t, (e1, e2))| doubled_angle(t, *e1, *e2))
+        .map(|g| g[0] + g[1] + g[2] - PI)
         .collect();
+    LineFieldTransport {
+        edge_turn,
+        face_holonomy,
+    }
+}
 
-    // psi[e] = angle of the edge direction a -> b in the frames of a and of b.
-    let psi: Vec<[f64; 2]> = mesh
-        .edges()
+/// Per edge `a -> b`, `psi`: the angle of its direction in the frames of `a` and of `b`.
+fn edge_angles(mesh: &TriMesh, frames: &[(DVec3, DVec3)]) -> Vec<[f64; 2]> {
+    let pos = mesh.positions();
+    mesh.edges()
         .par_iter()
         .with_min_len(MIN_PARALLEL)
         .map(|&[a, b]| {
@@ -128,18 +137,38 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
             let (fa, fb) = (frames[a as usize], frames[b as usize]);
             [frame_angle(d, fa), frame_angle(d, fb)]
         })
-        .collect();
-    let edge_turn: Vec<f64> = mesh
-        .edges()
+        .collect()
+}
+
+/// Per edge, the line field's turn `delta_ab` relative to the edge (see
+/// [`LineFieldTransport::edge_turn`]), from the edge angles `psi`.
+fn edge_turns(
+    mesh: &TriMesh,
+    field: &TensorField,
+    frames: &[(DVec3, DVec3)],
+    psi: &[[f64; 2]],
+) -> Vec<f64> {
+    let two_theta: Vec<f64> = field
+        .tensors()
         .par_iter()
         .with_min_len(MIN_PARALLEL)
-        .zip(&psi)
+        .zip(frames)
+        .map(|(t, (e1, e2))| doubled_angle(t, *e1, *e2))
+        .collect();
+    mesh.edges()
+        .par_iter()
+        .with_min_len(MIN_PARALLEL)
+        .zip(psi)
         .map(|(&[a, b], p)| {
             wrap_pi((two_theta[b as usize] - 2.0 * p[1]) - (two_theta[a as usize] - 2.0 * p[0]))
         })
-        .collect();
+        .collect()
+}
 
-    // Corner angles gamma (projected, representative nearest the true angle beta).
+/// Per face and corner, the projected corner angle `gamma` (the representative nearest
+/// the true angle) and the true angle `beta`, from the edge angles `psi`.
+fn corner_angles(mesh: &TriMesh, psi: &[[f64; 2]]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let pos = mesh.positions();
     // Angle of the edge leaving corner `v` of a face towards `w`, in v's frame.
     let out_angle = |e: u32, v: u32| -> f64 {
         let [a, _] = mesh.edges()[e as usize];
@@ -147,8 +176,7 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
         // The stored direction is a -> b; seen from b the edge leaves towards a.
         if v == a { p[0] } else { p[1] + PI }
     };
-    let (mut gamma, beta): (Vec<[f64; 3]>, Vec<[f64; 3]>) = mesh
-        .triangles()
+    mesh.triangles()
         .par_iter()
         .with_min_len(MIN_PARALLEL)
         .zip(mesh.face_edges())
@@ -172,12 +200,19 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
             }
             (gamma, beta)
         })
-        .unzip();
+        .unzip()
+}
 
-    // Per interior vertex, make the corner angles sum to 2 pi per closed fan: the
-    // corrections are found per vertex in parallel (each touches one corner of its
-    // own) and applied after.
-    let corrections: Vec<(usize, usize, f64)> = (0..mesh.vertex_count() as u32)
+/// The shifts `(face, corner, multiple of 2 pi)` that make the corner angles `gamma`
+/// around each interior vertex sum to 2 pi per closed fan: at most one per vertex, on
+/// its corner whose projection distorts most (`|gamma - beta|`). Found per vertex in
+/// parallel (each touches one corner of its own), to be applied after.
+fn fan_corrections(
+    mesh: &TriMesh,
+    gamma: &[[f64; 3]],
+    beta: &[[f64; 3]],
+) -> Vec<(usize, usize, f64)> {
+    (0..mesh.vertex_count() as u32)
         .into_par_iter()
         .with_min_len(MIN_PARALLEL)
         .filter_map(|v| {
@@ -201,20 +236,7 @@ pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTra
             let (_, f, k) = worst?;
             (turns != fans as i64).then(|| (f, k, (fans as i64 - turns) as f64 * TAU))
         })
-        .collect();
-    for (f, k, delta) in corrections {
-        gamma[f][k] += delta;
-    }
-
-    let face_holonomy = gamma
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|g| g[0] + g[1] + g[2] - PI)
-        .collect();
-    LineFieldTransport {
-        edge_turn,
-        face_holonomy,
-    }
+        .collect()
 }
 
 /// Items (vertices, edges or faces) below which [`line_field_transport`]'s passes
