@@ -66,109 +66,151 @@ pub fn segment_region(
     faces: &[u32],
     options: &SegmentOptions,
 ) -> Result<Segmentation, RegionError> {
+    let faces = region_faces(faces, mesh.face_count())?;
+    let region = Extracted::new(mesh, field, faces)?;
+    // Seeding regions are measured against the whole surface, as in a whole build.
+    let local = segment_sized(&region.mesh, &region.field, options, mesh.area())?;
+    Ok(region.lift(mesh, local))
+}
+
+/// `faces` sorted without duplicates; [`RegionError::BadFace`] if it is empty or names
+/// a face at or past `face_count`.
+fn region_faces(faces: &[u32], face_count: usize) -> Result<Vec<u32>, RegionError> {
     let mut faces = faces.to_vec();
     faces.sort_unstable();
     faces.dedup();
-    let face_count = mesh.face_count();
     match faces.last() {
-        None => {
-            return Err(RegionError::BadFace {
-                face: u32::MAX,
-                face_count,
-            });
-        }
-        Some(&f) if f as usize >= face_count => {
-            return Err(RegionError::BadFace {
-                face: f,
-                face_count,
-            });
-        }
-        Some(_) => {}
+        None => Err(RegionError::BadFace {
+            face: u32::MAX,
+            face_count,
+        }),
+        Some(&f) if f as usize >= face_count => Err(RegionError::BadFace {
+            face: f,
+            face_count,
+        }),
+        Some(_) => Ok(faces),
     }
-    // Region vertices in ascending mesh order.
-    let mut local_of = vec![NONE; mesh.vertex_count()];
-    for &f in &faces {
-        for v in mesh.triangles()[f as usize] {
-            local_of[v as usize] = 0;
-        }
-    }
-    let mut global_of = Vec::new();
-    for (v, slot) in local_of.iter_mut().enumerate() {
-        if *slot != NONE {
-            *slot = global_of.len() as u32;
-            global_of.push(v as u32);
-        }
-    }
-    let positions = global_of
-        .iter()
-        .map(|&v| mesh.positions()[v as usize])
-        .collect();
-    let triangles: Vec<[u32; 3]> = faces
-        .iter()
-        .map(|&f| mesh.triangles()[f as usize].map(|v| local_of[v as usize]))
-        .collect();
-    let sub = TriMesh::new(positions, triangles.clone())?;
-    // The extracted mesh must be the region face for face, vertex for vertex, so that
-    // its edge of corner k is the mesh's edge of corner k.
-    let identity = sub
-        .input_vertex_map()
-        .iter()
-        .enumerate()
-        .all(|(i, &v)| v == i as u32);
-    if !identity || sub.triangles() != triangles.as_slice() {
-        return Err(RegionError::NotOneToOne);
-    }
-    let tensors = global_of
-        .iter()
-        .map(|&v| field.tensors()[v as usize])
-        .collect();
-    let sub_field = TensorField::new(&sub, tensors)?;
-    // Seeding regions are measured against the whole surface, as in a whole build.
-    let local = segment_sized(&sub, &sub_field, options, mesh.area())?;
+}
 
-    let edge_of = |local_edge: u32| -> u32 {
-        // Find the corner of a face holding this edge and read the mesh's edge there.
+/// A region extracted as a mesh of its own, with the field on it and the maps back to
+/// the mesh's ids.
+struct Extracted {
+    /// The region's mesh: local face `i` is mesh face `faces[i]`, local vertex `j` is
+    /// mesh vertex `global_of[j]`.
+    mesh: TriMesh,
+    /// The mesh's tensors re-projected into the region mesh's tangent planes.
+    field: TensorField,
+    /// Per local face, its mesh face (ascending).
+    faces: Vec<u32>,
+    /// Per local vertex, its mesh vertex (ascending).
+    global_of: Vec<u32>,
+}
+
+impl Extracted {
+    /// Extracts the region of `faces` (sorted, distinct, all in `mesh`): its vertices
+    /// in ascending mesh order. [`RegionError::NotOneToOne`] if building the mesh
+    /// repaired it.
+    fn new(mesh: &TriMesh, field: &TensorField, faces: Vec<u32>) -> Result<Self, RegionError> {
+        let mut local_of = vec![NONE; mesh.vertex_count()];
+        for &f in &faces {
+            for v in mesh.triangles()[f as usize] {
+                local_of[v as usize] = 0;
+            }
+        }
+        let mut global_of = Vec::new();
+        for (v, slot) in local_of.iter_mut().enumerate() {
+            if *slot != NONE {
+                *slot = global_of.len() as u32;
+                global_of.push(v as u32);
+            }
+        }
+        let positions = global_of
+            .iter()
+            .map(|&v| mesh.positions()[v as usize])
+            .collect();
+        let triangles: Vec<[u32; 3]> = faces
+            .iter()
+            .map(|&f| mesh.triangles()[f as usize].map(|v| local_of[v as usize]))
+            .collect();
+        let sub = TriMesh::new(positions, triangles.clone())?;
+        // The extracted mesh must be the region face for face, vertex for vertex, so
+        // that its edge of corner k is the mesh's edge of corner k.
+        let identity = sub
+            .input_vertex_map()
+            .iter()
+            .enumerate()
+            .all(|(i, &v)| v == i as u32);
+        if !identity || sub.triangles() != triangles.as_slice() {
+            return Err(RegionError::NotOneToOne);
+        }
+        let tensors = global_of
+            .iter()
+            .map(|&v| field.tensors()[v as usize])
+            .collect();
+        let sub_field = TensorField::new(&sub, tensors)?;
+        Ok(Self {
+            mesh: sub,
+            field: sub_field,
+            faces,
+            global_of,
+        })
+    }
+
+    /// The mesh edge of local edge `local_edge`: read at the same corner of a face
+    /// holding it.
+    fn mesh_edge(&self, mesh: &TriMesh, local_edge: u32) -> u32 {
+        let sub = &self.mesh;
         let [fa, _] = sub.edge_faces()[local_edge as usize];
         let k = sub.face_edges()[fa as usize]
             .iter()
             .position(|&e| e == local_edge)
             .unwrap_or(0);
-        mesh.face_edges()[faces[fa as usize] as usize][k]
-    };
-    let mut face_segment = vec![NONE; face_count];
-    for (i, &s) in local.face_segment.iter().enumerate() {
-        face_segment[faces[i] as usize] = s;
+        mesh.face_edges()[self.faces[fa as usize] as usize][k]
     }
-    let segments = local
-        .segments
-        .into_iter()
-        .map(|s| Segment {
-            faces: s.faces.iter().map(|&f| faces[f as usize]).collect(),
-            boundary_loops: s
-                .boundary_loops
-                .iter()
-                .map(|l| l.iter().map(|&v| global_of[v as usize]).collect())
-                .collect(),
-            euler_characteristic: s.euler_characteristic,
-            has_singular_face: s.has_singular_face,
-        })
-        .collect();
-    let singularities = local
-        .singularities
-        .iter()
-        .map(|s| Singularity {
-            face: faces[s.face as usize],
-            index: s.index,
-        })
-        .collect();
-    let mut cut_edges: Vec<u32> = local.cut_edges.iter().map(|&e| edge_of(e)).collect();
-    cut_edges.sort_unstable();
-    Ok(Segmentation {
-        face_segment,
-        segments,
-        singularities,
-        cut_edges,
-    })
+
+    /// The region's segmentation `local` in `mesh`'s face, vertex and edge ids (faces
+    /// outside the region with segment `NONE`).
+    fn lift(&self, mesh: &TriMesh, local: Segmentation) -> Segmentation {
+        let (faces, global_of) = (&self.faces, &self.global_of);
+        let mut face_segment = vec![NONE; mesh.face_count()];
+        for (i, &s) in local.face_segment.iter().enumerate() {
+            face_segment[faces[i] as usize] = s;
+        }
+        let segments = local
+            .segments
+            .into_iter()
+            .map(|s| Segment {
+                faces: s.faces.iter().map(|&f| faces[f as usize]).collect(),
+                boundary_loops: s
+                    .boundary_loops
+                    .iter()
+                    .map(|l| l.iter().map(|&v| global_of[v as usize]).collect())
+                    .collect(),
+                euler_characteristic: s.euler_characteristic,
+                has_singular_face: s.has_singular_face,
+            })
+            .collect();
+        let singularities = local
+            .singularities
+            .iter()
+            .map(|s| Singularity {
+                face: faces[s.face as usize],
+                index: s.index,
+            })
+            .collect();
+        let mut cut_edges: Vec<u32> = local
+            .cut_edges
+            .iter()
+            .map(|&e| self.mesh_edge(mesh, e))
+            .collect();
+        cut_edges.sort_unstable();
+        Segmentation {
+            face_segment,
+            segments,
+            singularities,
+            cut_edges,
+        }
+    }
 }
 
 /// Which of `segments` (each a list of faces) a change of field from `old` to `new`
