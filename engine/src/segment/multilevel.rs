@@ -147,10 +147,25 @@ struct CoarseRows {
 }
 
 /// One level of heavy-edge matching: the coarse graph, the fine-to-coarse map and the
-/// coarse nodes holding a seed. Each unmatched node joins its unmatched neighbour of
-/// largest weight (ties: the lower index) along a [`STRONG`] edge, unless both hold
-/// a seed. Coarse nodes are numbered by their lowest fine node; a coarse edge weighs
-/// the sum of the fine edges between its two aggregates.
+/// coarse nodes holding a seed. Nodes are paired by [`heavy_edge_mates`]; coarse nodes
+/// are numbered by their lowest fine node ([`aggregates`]); a coarse edge weighs the
+/// sum of the fine edges between its two aggregates ([`CoarseRows`]).
+fn coarsen(graph: &WalkGraph, seeded: &[bool]) -> (WalkGraph, Vec<u32>, Vec<bool>) {
+    let mate = heavy_edge_mates(graph, seeded);
+    let (map, members) = aggregates(&mate);
+    // Coarse rows by chunks of coarse nodes, in parallel, then concatenated in order.
+    let chunks: Vec<CoarseRows> = members
+        .par_chunks(BUILD_CHUNK)
+        .enumerate()
+        .map(|(k, chunk)| CoarseRows::build(graph, seeded, &map, k * BUILD_CHUNK, chunk))
+        .collect();
+    let (coarse, coarse_seeded) = CoarseRows::concatenate(chunks, members.len());
+    (coarse, map, coarse_seeded)
+}
+
+/// Per node, its mate in the matching (itself where unmatched). Each unmatched node
+/// joins its unmatched neighbour of largest weight (ties: the lower index) along a
+/// [`STRONG`] edge, unless both hold a seed.
 ///
 /// **Visiting order.** Nodes are visited in a fixed pseudo-random order
 /// ([`scatter`] of the index), not in index order. Summed weights overstate the
@@ -164,7 +179,7 @@ struct CoarseRows {
 /// on the scattering, 31% in index order and 107% in index order without the
 /// strength test; on the subdivided bunnies it is within 1% of the exact walk's or
 /// lower (module documentation).
-fn coarsen(graph: &WalkGraph, seeded: &[bool]) -> (WalkGraph, Vec<u32>, Vec<bool>) {
+fn heavy_edge_mates(graph: &WalkGraph, seeded: &[bool]) -> Vec<u32> {
     let n = graph.node_count();
     // The per-node steps run on every core; only the greedy matching is sequential.
     // (At 1.1M faces the whole-mesh walk coarsens for 0.46 s on one core, half of it
@@ -204,6 +219,14 @@ fn coarsen(graph: &WalkGraph, seeded: &[bool]) -> (WalkGraph, Vec<u32>, Vec<bool
             None => mate[v] = v as u32,
         }
     }
+    mate
+}
+
+/// The aggregates of a matching `mate`: per fine node its coarse node, and per coarse
+/// node its fine nodes (a node twice where unmatched), numbered by their lowest fine
+/// node.
+fn aggregates(mate: &[u32]) -> (Vec<u32>, Vec<[u32; 2]>) {
+    let n = mate.len();
     let mut map = vec![NONE; n];
     let mut members: Vec<[u32; 2]> = Vec::with_capacity(n / 2 + 1);
     for v in 0..n {
@@ -214,64 +237,75 @@ fn coarsen(graph: &WalkGraph, seeded: &[bool]) -> (WalkGraph, Vec<u32>, Vec<bool
             members.push([v as u32, mate[v]]);
         }
     }
-    // Coarse rows by chunks of coarse nodes, in parallel, then concatenated in order.
-    // A row lists its neighbours in the order they are first met and sums repeated
-    // ones in that order (a linear search: the longest row over every coarsening of
-    // the bunny subdivided twice holds 12 entries), so the graph is the same for any
-    // thread count, and as the sequential build with a slot table made it.
-    let m = members.len();
-    let chunks: Vec<CoarseRows> = members
-        .par_chunks(BUILD_CHUNK)
-        .enumerate()
-        .map(|(k, chunk)| {
-            let mut rows = CoarseRows::default();
-            for (i, pair) in chunk.iter().enumerate() {
-                let c = (k * BUILD_CHUNK + i) as u32;
-                let start = rows.targets.len();
-                let nodes = if pair[0] == pair[1] {
-                    &pair[..1]
-                } else {
-                    &pair[..]
-                };
-                let mut seeded_here = false;
-                for &v in nodes {
-                    seeded_here |= seeded[v as usize];
-                    for (u, w) in graph.neighbors(v as usize) {
-                        let cu = map[u as usize];
-                        if cu == c {
-                            continue;
-                        }
-                        match rows.targets[start..].iter().position(|&t| t == cu) {
-                            Some(p) => rows.weights[start + p] += w,
-                            None => {
-                                rows.targets.push(cu);
-                                rows.weights.push(w);
-                            }
+    (map, members)
+}
+
+impl CoarseRows {
+    /// The rows of the coarse nodes `first..first + chunk.len()` (whose fine nodes are
+    /// `chunk`). A row lists its neighbours in the order they are first met and sums
+    /// repeated ones in that order (a linear search: the longest row over every
+    /// coarsening of the bunny subdivided twice holds 12 entries), so the graph is the
+    /// same for any thread count, and as the sequential build with a slot table made
+    /// it.
+    fn build(
+        graph: &WalkGraph,
+        seeded: &[bool],
+        map: &[u32],
+        first: usize,
+        chunk: &[[u32; 2]],
+    ) -> Self {
+        let mut rows = CoarseRows::default();
+        for (i, pair) in chunk.iter().enumerate() {
+            let c = (first + i) as u32;
+            let start = rows.targets.len();
+            let nodes = if pair[0] == pair[1] {
+                &pair[..1]
+            } else {
+                &pair[..]
+            };
+            let mut seeded_here = false;
+            for &v in nodes {
+                seeded_here |= seeded[v as usize];
+                for (u, w) in graph.neighbors(v as usize) {
+                    let cu = map[u as usize];
+                    if cu == c {
+                        continue;
+                    }
+                    match rows.targets[start..].iter().position(|&t| t == cu) {
+                        Some(p) => rows.weights[start + p] += w,
+                        None => {
+                            rows.targets.push(cu);
+                            rows.weights.push(w);
                         }
                     }
                 }
-                rows.ends.push(rows.targets.len());
-                rows.seeded.push(seeded_here);
             }
-            rows
-        })
-        .collect();
-    let entries: usize = chunks.iter().map(|r| r.targets.len()).sum();
-    let mut coarse = WalkGraph {
-        offsets: Vec::with_capacity(m + 1),
-        targets: Vec::with_capacity(entries),
-        weights: Vec::with_capacity(entries),
-    };
-    coarse.offsets.push(0);
-    let mut coarse_seeded = Vec::with_capacity(m);
-    for rows in chunks {
-        let base = coarse.targets.len();
-        coarse.offsets.extend(rows.ends.iter().map(|&e| base + e));
-        coarse.targets.extend_from_slice(&rows.targets);
-        coarse.weights.extend_from_slice(&rows.weights);
-        coarse_seeded.extend_from_slice(&rows.seeded);
+            rows.ends.push(rows.targets.len());
+            rows.seeded.push(seeded_here);
+        }
+        rows
     }
-    (coarse, map, coarse_seeded)
+
+    /// The coarse graph of `m` nodes whose rows are `chunks`, in order, and its seeded
+    /// nodes.
+    fn concatenate(chunks: Vec<CoarseRows>, m: usize) -> (WalkGraph, Vec<bool>) {
+        let entries: usize = chunks.iter().map(|r| r.targets.len()).sum();
+        let mut coarse = WalkGraph {
+            offsets: Vec::with_capacity(m + 1),
+            targets: Vec::with_capacity(entries),
+            weights: Vec::with_capacity(entries),
+        };
+        coarse.offsets.push(0);
+        let mut coarse_seeded = Vec::with_capacity(m);
+        for rows in chunks {
+            let base = coarse.targets.len();
+            coarse.offsets.extend(rows.ends.iter().map(|&e| base + e));
+            coarse.targets.extend_from_slice(&rows.targets);
+            coarse.weights.extend_from_slice(&rows.weights);
+            coarse_seeded.extend_from_slice(&rows.seeded);
+        }
+        (coarse, coarse_seeded)
+    }
 }
 
 #[cfg(test)]
