@@ -10,6 +10,8 @@
 //! (`spacing_k = sqrt(M / n) / sqrt(l_k)` with `M` the total density measure, as in
 //! strata's sampler), and a pure function of `(n, seed)`.
 
+use std::collections::BinaryHeap;
+
 use glam::{DVec3, Vec3};
 
 use crate::field::TensorField;
@@ -128,7 +130,6 @@ pub fn mesh_uniform_random(
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn mesh_poisson_disk(mesh: &TriMesh, field: &TensorField, n: usize, seed: u64) -> Vec<Sample> {
-    const R_MAX: f64 = 0.537;
     let candidates = mesh_uniform_random(mesh, field, 5 * n, seed);
     if candidates.len() <= n {
         return candidates;
@@ -142,6 +143,27 @@ pub fn mesh_poisson_disk(mesh: &TriMesh, field: &TensorField, n: usize, seed: u6
             s
         })
         .collect();
+    let (neighbours, weight) = elimination_weights(&cand);
+    let alive = eliminate(&neighbours, weight, n);
+    cand.into_iter()
+        .zip(alive)
+        .filter(|(_, a)| *a)
+        .enumerate()
+        .map(|(k, (mut s, _))| {
+            s.index = k as u32;
+            s
+        })
+        .collect()
+}
+
+/// Yuksel's `r_max` in units of the mean expected spacing of two samples.
+const R_MAX: f64 = 0.537;
+
+/// Per candidate, its neighbours closer than `2 r` (in units of the two samples' mean
+/// expected spacing) with their pair weights `(1 - d_ij / (2 r))^8`, and its weight (the
+/// sum), found through a grid of cells `2 r` median spacings wide. Candidates are
+/// non-empty.
+fn elimination_weights(cand: &[Sample]) -> (Vec<Vec<(u32, f64)>>, Vec<f64>) {
     let pos: Vec<DVec3> = cand
         .iter()
         .map(|s| Vec3::from(s.position).as_dvec3())
@@ -161,7 +183,6 @@ pub fn mesh_poisson_disk(mesh: &TriMesh, field: &TensorField, n: usize, seed: u6
     for (i, p) in pos.iter().enumerate() {
         grid.entry(key(*p)).or_default().push(i as u32);
     }
-    // Neighbour lists with weights.
     let max_iso = sorted[sorted.len() - 1];
     let mut neighbours: Vec<Vec<(u32, f64)>> = vec![Vec::new(); cand.len()];
     let mut weight = vec![0.0; cand.len()];
@@ -190,26 +211,37 @@ pub fn mesh_poisson_disk(mesh: &TriMesh, field: &TensorField, n: usize, seed: u6
             }
         }
     }
-    // Max-heap on weight (ties: the higher index), with lazy deletion.
-    use std::collections::BinaryHeap;
-    #[derive(PartialEq)]
-    struct Entry(f64, u32);
-    impl Eq for Entry {}
-    impl PartialOrd for Entry {
-        fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
-            Some(self.cmp(o))
-        }
+    (neighbours, weight)
+}
+
+/// A candidate in the elimination's max-heap: its weight then its index (ties: the
+/// higher index first).
+#[derive(PartialEq)]
+struct Entry(f64, u32);
+
+impl Eq for Entry {}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
     }
-    impl Ord for Entry {
-        fn cmp(&self, o: &Self) -> std::cmp::Ordering {
-            self.0.total_cmp(&o.0).then(self.1.cmp(&o.1))
-        }
+}
+
+impl Ord for Entry {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&o.0).then(self.1.cmp(&o.1))
     }
-    let mut heap: BinaryHeap<Entry> = (0..cand.len())
+}
+
+/// Which candidates survive the elimination down to `n`: the one of largest `weight`
+/// is removed and its neighbours' weights lose their pair weights with it, until `n`
+/// are left (a max-heap with lazy deletion).
+fn eliminate(neighbours: &[Vec<(u32, f64)>], mut weight: Vec<f64>, n: usize) -> Vec<bool> {
+    let mut heap: BinaryHeap<Entry> = (0..weight.len())
         .map(|i| Entry(weight[i], i as u32))
         .collect();
-    let mut alive = vec![true; cand.len()];
-    let mut remaining = cand.len();
+    let mut alive = vec![true; weight.len()];
+    let mut remaining = weight.len();
     while remaining > n {
         let Some(Entry(w, i)) = heap.pop() else { break };
         let i = i as usize;
@@ -229,15 +261,7 @@ pub fn mesh_poisson_disk(mesh: &TriMesh, field: &TensorField, n: usize, seed: u6
             }
         }
     }
-    cand.into_iter()
-        .zip(alive)
-        .filter(|(_, a)| *a)
-        .enumerate()
-        .map(|(k, (mut s, _))| {
-            s.index = k as u32;
-            s
-        })
-        .collect()
+    alive
 }
 
 #[cfg(test)]
