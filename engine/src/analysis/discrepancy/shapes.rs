@@ -56,22 +56,39 @@ pub(crate) fn origin_triangles_sup(points: &[DVec2]) -> f64 {
 /// The largest deficit or excess over the critical triangles whose hypotenuse lies on
 /// the line of `c` (`c.x u + c.y v = 1`).
 fn sweep_triangle_line(points: &[DVec2], c: DVec2, inv_n: f64) -> f64 {
-    // Parametrise the line by sigma in [lo, hi]. A point q crosses it at
-    // sigma = num / den: with den < 0 it is inside the open triangle for sigma > root
-    // (entering), with den > 0 for sigma < root (leaving); with den == 0 its status is
-    // fixed. num and den are differences of products, exact for coordinates with up to
-    // 26 significant bits, so tied crossings (collinear points on dyadic grids) round
-    // to the same root. `area` is the triangle's area at sigma; `tangent` the sigma of
-    // smallest area.
-    let (lo, hi, tangent) = if c.x > 0.0 && c.y > 0.0 {
-        // sigma = c.x u, so a = c.x / sigma and b = c.y / (1 - sigma).
-        (c.x, 1.0 - c.y, Some(0.5))
-    } else {
-        // Axis line: one leg is fixed, sigma is the other leg in (0, 1].
-        (0.0, 1.0, None)
-    };
-    // (num, den, inside-open and inside-closed when den == 0).
-    let crossing = |q: DVec2| -> (f64, f64, bool, bool) {
+    let line = TriangleLine::new(c);
+    line.crossings(points).sup(&line, inv_n)
+}
+
+/// The line of `c` parametrised by sigma in `[lo, hi]`. A point q crosses it at
+/// sigma = num / den: with den < 0 it is inside the open triangle for sigma > root
+/// (entering), with den > 0 for sigma < root (leaving); with den == 0 its status is
+/// fixed. num and den are differences of products, exact for coordinates with up to
+/// 26 significant bits, so tied crossings (collinear points on dyadic grids) round to
+/// the same root.
+struct TriangleLine {
+    c: DVec2,
+    lo: f64,
+    hi: f64,
+    /// The sigma of smallest triangle area, where there is one.
+    tangent: Option<f64>,
+}
+
+impl TriangleLine {
+    fn new(c: DVec2) -> Self {
+        let (lo, hi, tangent) = if c.x > 0.0 && c.y > 0.0 {
+            // sigma = c.x u, so a = c.x / sigma and b = c.y / (1 - sigma).
+            (c.x, 1.0 - c.y, Some(0.5))
+        } else {
+            // Axis line: one leg is fixed, sigma is the other leg in (0, 1].
+            (0.0, 1.0, None)
+        };
+        Self { c, lo, hi, tangent }
+    }
+
+    /// Point `q`'s crossing: (num, den, inside-open and inside-closed when den == 0).
+    fn crossing(&self, q: DVec2) -> (f64, f64, bool, bool) {
+        let c = self.c;
         if c.y == 0.0 {
             // a = c.x fixed, sigma = b: q.x / c.x + q.y / sigma < 1.
             (-q.y * c.x, q.x - c.x, false, q.y == 0.0)
@@ -84,8 +101,11 @@ fn sweep_triangle_line(points: &[DVec2], c: DVec2, inv_n: f64) -> f64 {
             let den = q.x * c.y - q.y * c.x;
             ((c.y - q.y) * c.x, den, q.y < c.y, q.y <= c.y)
         }
-    };
-    let area = |sigma: f64| -> f64 {
+    }
+
+    /// The triangle's area at `sigma`.
+    fn area(&self, sigma: f64) -> f64 {
+        let c = self.c;
         if c.y == 0.0 {
             0.5 * c.x * sigma
         } else if c.x == 0.0 {
@@ -93,73 +113,98 @@ fn sweep_triangle_line(points: &[DVec2], c: DVec2, inv_n: f64) -> f64 {
         } else {
             0.5 * c.x * c.y / (sigma * (1.0 - sigma))
         }
-    };
-    // Counts that do not change along [lo, hi], then the crossings inside it.
-    let mut open_base = 0usize;
-    let mut closed_base = 0usize;
-    // (root, entering): entering points are inside for sigma > root, leaving ones for
-    // sigma < root; query-only positions are pushed with `None`.
-    let mut events: Vec<(f64, Option<bool>)> = Vec::new();
-    for &q in points {
-        let (num, den, fixed_open, fixed_closed) = crossing(q);
-        if den == 0.0 {
-            open_base += usize::from(fixed_open);
-            closed_base += usize::from(fixed_closed);
-            continue;
-        }
-        let root = num / den;
-        let entering = den < 0.0;
-        if root < lo {
-            let inside = usize::from(entering);
-            open_base += inside;
-            closed_base += inside;
-        } else if root > hi {
-            let inside = usize::from(!entering);
-            open_base += inside;
-            closed_base += inside;
-        } else {
-            events.push((root, Some(entering)));
-        }
     }
-    if lo > 0.0 {
-        events.push((lo, None));
-    }
-    events.push((hi, None));
-    if let Some(t) = tangent.filter(|t| (lo..=hi).contains(t)) {
-        events.push((t, None));
-    }
-    events.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-    let leaving_total = events.iter().filter(|e| e.1 == Some(false)).count();
 
-    let mut best = 0.0f64;
-    let mut entered = 0usize; // entering roots < sigma
-    let mut left = 0usize; // leaving roots < sigma
-    let mut k = 0;
-    while k < events.len() {
-        let sigma = events[k].0;
-        let (mut enter_here, mut leave_here) = (0usize, 0usize);
-        while k < events.len() && events[k].0 == sigma {
-            match events[k].1 {
-                Some(true) => enter_here += 1,
-                Some(false) => leave_here += 1,
-                None => {}
+    /// The counts of `points` that do not change along `[lo, hi]`, then the crossings
+    /// inside it, sorted, with the query-only positions (the ends, the tangent).
+    fn crossings(&self, points: &[DVec2]) -> Crossings {
+        let (lo, hi) = (self.lo, self.hi);
+        let mut open_base = 0usize;
+        let mut closed_base = 0usize;
+        let mut events: Vec<(f64, Option<bool>)> = Vec::new();
+        for &q in points {
+            let (num, den, fixed_open, fixed_closed) = self.crossing(q);
+            if den == 0.0 {
+                open_base += usize::from(fixed_open);
+                closed_base += usize::from(fixed_closed);
+                continue;
             }
-            k += 1;
+            let root = num / den;
+            let entering = den < 0.0;
+            if root < lo {
+                let inside = usize::from(entering);
+                open_base += inside;
+                closed_base += inside;
+            } else if root > hi {
+                let inside = usize::from(!entering);
+                open_base += inside;
+                closed_base += inside;
+            } else {
+                events.push((root, Some(entering)));
+            }
         }
-        // sigma = 0 is the zero-area limit; it is covered by the axis segments.
-        if sigma > 0.0 {
-            let still_in = leaving_total - left;
-            let open = open_base + entered + (still_in - leave_here);
-            let closed = closed_base + entered + enter_here + still_in;
-            let a = area(sigma);
-            best = best
-                .max(a - open as f64 * inv_n)
-                .max(closed as f64 * inv_n - a);
+        if lo > 0.0 {
+            events.push((lo, None));
         }
-        entered += enter_here;
-        left += leave_here;
+        events.push((hi, None));
+        if let Some(t) = self.tangent.filter(|t| (lo..=hi).contains(t)) {
+            events.push((t, None));
+        }
+        events.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        Crossings {
+            open_base,
+            closed_base,
+            events,
+        }
     }
-    best
+}
+
+/// The points' crossings of one [`TriangleLine`].
+struct Crossings {
+    /// Points inside the open triangle all along the line.
+    open_base: usize,
+    /// Points inside the closed triangle all along the line.
+    closed_base: usize,
+    /// (root, entering), sorted by root: entering points are inside for sigma > root,
+    /// leaving ones for sigma < root; query-only positions are `None`.
+    events: Vec<(f64, Option<bool>)>,
+}
+
+impl Crossings {
+    /// The largest deficit or excess at the events along `line`.
+    fn sup(&self, line: &TriangleLine, inv_n: f64) -> f64 {
+        let events = &self.events;
+        let leaving_total = events.iter().filter(|e| e.1 == Some(false)).count();
+        let mut best = 0.0f64;
+        let mut entered = 0usize; // entering roots < sigma
+        let mut left = 0usize; // leaving roots < sigma
+        let mut k = 0;
+        while k < events.len() {
+            let sigma = events[k].0;
+            let (mut enter_here, mut leave_here) = (0usize, 0usize);
+            while k < events.len() && events[k].0 == sigma {
+                match events[k].1 {
+                    Some(true) => enter_here += 1,
+                    Some(false) => leave_here += 1,
+                    None => {}
+                }
+                k += 1;
+            }
+            // sigma = 0 is the zero-area limit; it is covered by the axis segments.
+            if sigma > 0.0 {
+                let still_in = leaving_total - left;
+                let open = self.open_base + entered + (still_in - leave_here);
+                let closed = self.closed_base + entered + enter_here + still_in;
+                let a = line.area(sigma);
+                best = best
+                    .max(a - open as f64 * inv_n)
+                    .max(closed as f64 * inv_n - a);
+            }
+            entered += enter_here;
+            left += leave_here;
+        }
+        best
+    }
 }
 
 /// Sup discrepancy over quarter discs `|q| < r` centred at the origin, measured in the
