@@ -425,8 +425,9 @@ impl<'a> RegionPart<'a> {
         let mut on_boundary = vec![false; part.places.faces().len()];
         for &e in &part.edges {
             let [f0, f1] = mesh.edge_faces()[e as usize];
-            let interior =
-                mesh.edge_valence()[e as usize] == 2 && in_region(region, f0) && in_region(region, f1);
+            let interior = mesh.edge_valence()[e as usize] == 2
+                && in_region(region, f0)
+                && in_region(region, f1);
             if !interior {
                 for v in mesh.edges()[e as usize] {
                     on_boundary[part.at(v)] = true;

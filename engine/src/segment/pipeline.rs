@@ -173,7 +173,12 @@ fn cut_singularity_trees(
 /// One round of step 4: flags in `cut` the disc cuts of every segment (`groups`, one
 /// face list per label) that is not a disc; returns the indices of the segments that
 /// are still not discs after them.
-fn cut_to_discs(mesh: &TriMesh, costs: &[f64], groups: &[Vec<u32>], cut: &mut [bool]) -> Vec<usize> {
+fn cut_to_discs(
+    mesh: &TriMesh,
+    costs: &[f64],
+    groups: &[Vec<u32>],
+    cut: &mut [bool],
+) -> Vec<usize> {
     let before: &[bool] = cut;
     let extra: Vec<(usize, Vec<u32>, bool)> = groups
         .par_iter()

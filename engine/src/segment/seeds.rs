@@ -801,7 +801,12 @@ pub(crate) mod tests {
         let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         for beta in [FRAC_PI_4, PI / 8.0] {
             for seed in 0..4 {
-                let regions = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), beta, seed, RegionLimits::unbounded(mesh.area()));
+                let regions = grow_regions(
+                    SeedGraph::new(&mesh, &faces, &w, &mask),
+                    beta,
+                    seed,
+                    RegionLimits::unbounded(mesh.area()),
+                );
                 let Regions {
                     seeds,
                     origins,
@@ -884,7 +889,12 @@ pub(crate) mod tests {
             let wt = walk_weights(&mesh, &faces, 1.0, &vec![false; mesh.edge_count()]);
             let mask = vec![true; mesh.face_count()];
             // Seed 0 starts outside the patch.
-            let regions = grow_regions(SeedGraph::new(&mesh, &faces, &wt, &mask), FRAC_PI_4, 0, RegionLimits::unbounded(mesh.area()));
+            let regions = grow_regions(
+                SeedGraph::new(&mesh, &faces, &wt, &mask),
+                FRAC_PI_4,
+                0,
+                RegionLimits::unbounded(mesh.area()),
+            );
             assert!(!turned.contains(&regions.origins[0]));
             assert_eq!(regions.seeds.len(), expected, "{n}: patch {w} x {h}");
             if expected == 1 {
@@ -899,7 +909,12 @@ pub(crate) mod tests {
             if expected == 2 {
                 // Cut out of a surface 1000 times larger (`segment_region`), the same
                 // patch is below the share of that surface and withdrawn.
-                let within = place_seeds_sized(SeedGraph::new(&mesh, &faces, &wt, &mask), FRAC_PI_4, 0, RegionLimits::unbounded(1000.0 * mesh.area()));
+                let within = place_seeds_sized(
+                    SeedGraph::new(&mesh, &faces, &wt, &mask),
+                    FRAC_PI_4,
+                    0,
+                    RegionLimits::unbounded(1000.0 * mesh.area()),
+                );
                 assert_eq!(within.len(), 1, "{n}: patch {w} x {h}");
             }
         }
@@ -941,16 +956,31 @@ pub(crate) mod tests {
                 max_share: 0.125,
             };
             for seed in 0..3 {
-                let free = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, RegionLimits::unbounded(area));
+                let free = grow_regions(
+                    SeedGraph::new(&mesh, &faces, &w, &mask),
+                    FRAC_PI_4,
+                    seed,
+                    RegionLimits::unbounded(area),
+                );
                 assert_eq!(free.seeds.len(), 1);
-                let bounded = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, eighth);
+                let bounded = grow_regions(
+                    SeedGraph::new(&mesh, &faces, &w, &mask),
+                    FRAC_PI_4,
+                    seed,
+                    eighth,
+                );
                 if bounded_seeds_at_least == 1 {
                     assert_eq!(bounded.seeds.len(), 1, "the plane is one region");
                 } else {
                     assert!(bounded.seeds.len() >= 2, "seed {seed}: {:?}", bounded.seeds);
                 }
                 assert_eq!(
-                    place_seeds_sized(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, eighth),
+                    place_seeds_sized(
+                        SeedGraph::new(&mesh, &faces, &w, &mask),
+                        FRAC_PI_4,
+                        seed,
+                        eighth
+                    ),
                     bounded.seeds
                 );
             }
@@ -974,7 +1004,12 @@ pub(crate) mod tests {
         .expect("field");
         let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
         for seed in 0..4 {
-            let regions = grow_regions(SeedGraph::new(&mesh, &faces, &w, &mask), FRAC_PI_4, seed, RegionLimits::unbounded(mesh.area()));
+            let regions = grow_regions(
+                SeedGraph::new(&mesh, &faces, &w, &mask),
+                FRAC_PI_4,
+                seed,
+                RegionLimits::unbounded(mesh.area()),
+            );
             for (f, &r) in regions.region.iter().enumerate() {
                 if r == NONE {
                     continue;
