@@ -46,7 +46,6 @@ impl Fnv {
             self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
         }
     }
-
 }
 
 fn scene_fingerprints(only: Option<&str>) -> Result<(), Box<dyn std::error::Error>> {
@@ -94,7 +93,12 @@ fn hash_samples(samples: &[Sample]) -> u64 {
 }
 
 /// The pool's ranks and sites, and the fades of `view` at `base`.
-fn hash_pool(pool: &LodPool, s: &Sampler, view: &strata_engine::sample::lod::ViewLod, base: f64) -> u64 {
+fn hash_pool(
+    pool: &LodPool,
+    s: &Sampler,
+    view: &strata_engine::sample::lod::ViewLod,
+    base: f64,
+) -> u64 {
     let mut h = Fnv::new();
     for r in pool.ranks() {
         h.bytes(&r.to_le_bytes());
