@@ -18,7 +18,6 @@ use faer::{Mat, MatMut, traits::ComplexField};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::cholesky::{self, Cholesky, Storage, Symbolic};
 use super::pattern::VertexPattern;
 use super::vertex_graph::VertexGraph;
 
@@ -27,6 +26,7 @@ use super::line_field::{
     SOLVE_TOLERANCE,
 };
 use super::{tangent_frame, vertex_frames};
+use crate::linalg::cholesky::{self, Cholesky, Storage, Symbolic};
 use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
 use crate::mesh::TriMesh;
 

@@ -47,7 +47,7 @@
 //!   eigenvalue of `A z = lambda M z`, with one factorization of `A + sigma M`
 //!   (`sigma` = [`SHIFT`] times the ratio of the traces of `A` and `M`), from a fixed
 //!   pseudo-random start: Rayleigh-Ritz on the Krylov space of `(A + sigma M)^-1 M`
-//!   (`lanczos.rs`), until the Ritz value settles and the Ritz vector's residual is
+//!   (`linalg/lanczos.rs`), until the Ritz value settles and the Ritz vector's residual is
 //!   small, or the solve budget is spent. Its global phase (a rotation of every line)
 //!   is free; the one returned is the limit of inverse iteration from the same start.
 //!   On the bunny 12 solves give what inverse iteration gave in 64. With multigrid:
@@ -75,7 +75,7 @@
 //! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
 //! solve with that factor per Krylov step. With a smoothness shift the estimate of
 //! `lambda_1` adds one factorization and a few solves (Rayleigh-Ritz on a Krylov space,
-//! `lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`MULTIGRID_VERTICES`] a
+//! `linalg/lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`MULTIGRID_VERTICES`] a
 //! multigrid hierarchy and a few V-cycles. Measured (2 cores, release, `field_design`):
 //! the rocker arm (10k vertices, factored) 0.04 s; the Stanford bunny (35k vertices,
 //! multigrid) 0.16-0.17 s for the designed (curvature-aligned, shifted) field and
@@ -106,7 +106,7 @@ pub const LAMBDA_ITERATIONS: usize = 12;
 
 /// The estimate of `lambda_1` stops once a solve changes it by at most this fraction.
 /// It converges from above and faster than geometrically (Rayleigh-Ritz on a Krylov
-/// space, see `lanczos.rs`), so the last estimate is much closer than its last change:
+/// space, see `linalg/lanczos.rs`), so the last estimate is much closer than its last change:
 /// on the bunny the estimates after 1 to 4 solves are 1441, 516, 489 and 483 against a
 /// converged 482.0, so it stops after 4 solves 0.3% high (5 inverse iterations, the
 /// method before, stopped 0.8% high), as if `smoothness` were 0.5015 instead of 0.5.

@@ -15,9 +15,9 @@ use faer::c64;
 use faer::sparse::{SparseColMat, Triplet};
 
 use super::cancel::face_double_index;
-use super::cholesky::{self, Cholesky};
 use super::connection::Connection;
 use super::line_field::LineFieldError;
+use crate::linalg::cholesky::{self, Cholesky};
 use crate::mesh::TriMesh;
 
 /// The field on the `free` vertices (ascending; those whose faces all lie in the disc

@@ -1,7 +1,7 @@
 //! The smallest eigenpair of the connection Laplacian `A z = lambda M z` for the
 //! line-field solvers of [`design`](super::design): the smoothest field (its vector)
 //! and the estimate of `lambda_1` behind the smoothness shift (its value). With a
-//! direct factor: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)); with
+//! direct factor: Rayleigh-Ritz on a Krylov space (`linalg::lanczos`); with
 //! multigrid: Rayleigh-Ritz on a space grown by preconditioned residuals (Davidson).
 //! Both start from one fixed pseudo-random vector and sum in a fixed order, so results
 //! are deterministic.
@@ -10,9 +10,8 @@ use faer::c64;
 
 use super::connection::{Connection, Factor};
 use super::design::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
-use super::lanczos;
 use super::line_field::LineFieldError;
-use crate::linalg::Amg;
+use crate::linalg::{Amg, lanczos};
 use crate::mesh::TriMesh;
 
 /// A fixed pseudo-random value in `[-1, 1)` for index `i` (SplitMix64 finaliser).
@@ -84,6 +83,7 @@ fn davidson(
         |r, z| amg.apply(r, z, &mut work),
         |x| system.apply(x),
     )
+    .map_err(LineFieldError::from)
 }
 
 /// The stopping rule of [`smallest_eigenpair`] (shared by both of its solvers) with
@@ -118,7 +118,7 @@ type Eigenpair = (Vec<c64>, f64, usize);
 /// `A + shift M`, from the fixed pseudo-random start, until a step changes the value by
 /// at most `tolerance` times the larger of its magnitude and `floor` (and, for the
 /// `vector`, its residual is at most `sqrt(tolerance)` times the value), or after
-/// `max` solves: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)) with a
+/// `max` solves: Rayleigh-Ritz on a Krylov space (`linalg::lanczos`) with a
 /// direct factor, the preconditioned Davidson method
 /// ([`lanczos::smallest_eigenpair_preconditioned`]) with multigrid. Preconditioned
 /// inverse iteration, which it replaces, keeps one vector: it stalled on the vector

@@ -5,6 +5,7 @@
 use glam::DVec3;
 
 use super::{FieldError, TensorField};
+use crate::linalg::LinalgError;
 use crate::mesh::TriMesh;
 
 /// Floor of the cotangent edge weights (dimensionless).
@@ -77,9 +78,25 @@ pub enum LineFieldError {
         /// The step that failed.
         stage: &'static str,
     },
-    /// The multigrid-preconditioned solve failed (see [`LinearSolver`](super::LinearSolver)).
+    /// The multigrid-preconditioned solve failed (see [`LinearSolver`](super::LinearSolver)),
+    /// or the eigenvalue iteration met a zero or non-finite iterate.
     #[error("line-field multigrid solve failed: {0}")]
-    Multigrid(#[from] crate::linalg::LinalgError),
+    Multigrid(crate::linalg::LinalgError),
+}
+
+impl From<LinalgError> for LineFieldError {
+    /// A failed sparse Cholesky step is [`Factorization`](Self::Factorization) with its
+    /// step; everything else (conjugate gradients, multigrid, the eigenvalue iteration)
+    /// is [`Multigrid`](Self::Multigrid).
+    fn from(e: LinalgError) -> Self {
+        match e {
+            LinalgError::Factorization { stage } => Self::Factorization { stage },
+            LinalgError::Iterate => Self::Factorization {
+                stage: "solve (eigenvalue estimate: zero or non-finite iterate)",
+            },
+            other => Self::Multigrid(other),
+        }
+    }
 }
 
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.

@@ -18,7 +18,6 @@
 //! with few singularities (Knöppel et al. 2013).
 
 mod cancel;
-pub(crate) mod cholesky;
 mod connection;
 mod curvature;
 pub mod design;
@@ -30,7 +29,6 @@ mod error;
 mod file;
 mod guidance;
 mod isotropic;
-mod lanczos;
 mod line_field;
 mod params;
 mod pattern;

@@ -31,7 +31,7 @@ use std::ops::Range;
 use faer::{Mat, Side, c64};
 use rayon::prelude::*;
 
-use super::line_field::LineFieldError;
+use super::error::LinalgError;
 
 /// Rows per task of the vector kernels below. Fixed, so that every sum is made in the
 /// same order whatever the thread count.
@@ -224,13 +224,13 @@ enum Expansion<I, P> {
 /// `apply_matrix` returns `A x`. Returns the estimate, the vector and the solves made.
 ///
 /// Errors: a zero or non-finite start or iterate (a failed solve).
-pub(crate) fn smallest_eigenpair(
+pub(crate) fn smallest_eigenpair<E: From<LinalgError>>(
     mass: &[f64],
     start: Vec<c64>,
     options: KrylovOptions,
-    apply_inverse: impl FnMut(&mut [c64]) -> Result<(), LineFieldError>,
+    apply_inverse: impl FnMut(&mut [c64]) -> Result<(), E>,
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
-) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
+) -> Result<(f64, Vec<c64>, usize), E> {
     rayleigh_ritz(
         mass,
         start,
@@ -255,29 +255,29 @@ pub(crate) fn smallest_eigenpair_preconditioned(
     options: KrylovOptions,
     precondition: impl FnMut(&[c64], &mut [c64]),
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
-) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
+) -> Result<(f64, Vec<c64>, usize), LinalgError> {
     rayleigh_ritz(
         mass,
         start,
         options,
-        Expansion::<fn(&mut [c64]) -> Result<(), LineFieldError>, _>::Precondition(precondition),
+        Expansion::<fn(&mut [c64]) -> Result<(), LinalgError>, _>::Precondition(precondition),
         apply_matrix,
     )
 }
 
 /// The Rayleigh-Ritz loop behind [`smallest_eigenpair`] and
 /// [`smallest_eigenpair_preconditioned`].
-fn rayleigh_ritz(
+fn rayleigh_ritz<E: From<LinalgError>>(
     mass: &[f64],
     start: Vec<c64>,
     options: KrylovOptions,
     mut expansion: Expansion<
-        impl FnMut(&mut [c64]) -> Result<(), LineFieldError>,
+        impl FnMut(&mut [c64]) -> Result<(), E>,
         impl FnMut(&[c64], &mut [c64]),
     >,
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
-) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
-    let normalised = |mut x: Vec<c64>| -> Result<Vec<c64>, LineFieldError> {
+) -> Result<(f64, Vec<c64>, usize), E> {
+    let normalised = |mut x: Vec<c64>| -> Result<Vec<c64>, LinalgError> {
         let norm = norm2(mass, &x, false).sqrt();
         if !(norm > 0.0 && norm.is_finite()) {
             return Err(failed());
@@ -373,10 +373,8 @@ fn rayleigh_ritz(
 }
 
 /// A zero or non-finite start or iterate (a failed solve).
-fn failed() -> LineFieldError {
-    LineFieldError::Factorization {
-        stage: "solve (eigenvalue estimate: zero or non-finite iterate)",
-    }
+fn failed() -> LinalgError {
+    LinalgError::Iterate
 }
 
 /// `w` made `M`-orthogonal to the (`M`-orthonormal) `basis` by classical Gram-Schmidt
@@ -388,7 +386,7 @@ fn orthonormalised(
     mass: &[f64],
     basis: &[Vec<c64>],
     mut w: Vec<c64>,
-) -> Result<Option<Vec<c64>>, LineFieldError> {
+) -> Result<Option<Vec<c64>>, LinalgError> {
     let before = norm2(mass, &w, false).sqrt();
     for _ in 0..2 {
         let c = inners(Some(mass), basis, &w);
@@ -446,7 +444,7 @@ mod tests {
                     for ((x, a), m) in x.iter_mut().zip(&self.a).zip(&self.m) {
                         *x *= *m / (*a + self.sigma * *m);
                     }
-                    Ok(())
+                    Ok::<(), LinalgError>(())
                 },
                 |x| x.iter().zip(&self.a).map(|(x, a)| *x * *a).collect(),
             )
@@ -527,7 +525,7 @@ mod tests {
                     for ((x, a), m) in x.iter_mut().zip(&pencil.a).zip(&pencil.m) {
                         *x *= *m / (*a + pencil.sigma * *m);
                     }
-                    Ok(())
+                    Ok::<(), LinalgError>(())
                 },
                 |x| x.iter().zip(&pencil.a).map(|(x, a)| *x * *a).collect(),
             )
@@ -676,7 +674,13 @@ mod tests {
             basis_limit: 8,
             residual: None,
         };
-        let refused = smallest_eigenpair(&pencil.m, zero, options, |_| Ok(()), |x| x.to_vec());
+        let refused = smallest_eigenpair(
+            &pencil.m,
+            zero,
+            options,
+            |_| Ok::<(), LinalgError>(()),
+            |x| x.to_vec(),
+        );
         assert!(refused.is_err());
     }
 }
