@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
-use super::designed::Design;
+use super::design::Design;
 use super::params::{
     self, eigenvalues, finite_point, invalid, non_negative, positive,
     smoothing_iterations as smoothing_iterations_ok, spacing_ratio,

@@ -1,5 +1,5 @@
 //! The field inside a disc of the mesh with no singularity, given its values around
-//! the disc (for [pair cancellation](super::cancel)): the field's doubled angle is
+//! the disc (for pair cancellation, `cancel.rs`): the field's doubled angle is
 //! lifted to real numbers along the boundary, where it winds zero times, and
 //! interpolated inside by the cotangent Laplacian against the connection's angles,
 //! themselves lifted so that around every face they sum to its holonomy.
@@ -14,9 +14,9 @@ use faer::MatMut;
 use faer::c64;
 use faer::sparse::{SparseColMat, Triplet};
 
-use super::cancel::face_double_index;
 use super::connection::Connection;
-use super::line_field::LineFieldError;
+use super::index::{angle, face_double_index};
+use crate::field::LineFieldError;
 use crate::linalg::cholesky::{self, Cholesky};
 use crate::mesh::TriMesh;
 
@@ -154,11 +154,6 @@ pub(super) fn angles_inside(
             })
             .collect(),
     ))
-}
-
-/// The angle of `z`, in `(-pi, pi]`.
-pub(super) fn angle(z: c64) -> f64 {
-    z.im.atan2(z.re)
 }
 
 /// Per edge of the disc `faces` (`edges`, ascending), the connection's rotation angle

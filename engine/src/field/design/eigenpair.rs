@@ -1,5 +1,5 @@
 //! The smallest eigenpair of the connection Laplacian `A z = lambda M z` for the
-//! line-field solvers of [`design`](super::design): the smoothest field (its vector)
+//! line-field solvers of [`design`](super): the smoothest field (its vector)
 //! and the estimate of `lambda_1` behind the smoothness shift (its value). With a
 //! direct factor: Rayleigh-Ritz on a Krylov space (`linalg::lanczos`); with
 //! multigrid: Rayleigh-Ritz on a space grown by preconditioned residuals (Davidson).
@@ -9,10 +9,21 @@
 use faer::c64;
 
 use super::connection::{Connection, Factor};
-use super::design::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
-use super::line_field::LineFieldError;
+use crate::field::LineFieldError;
 use crate::linalg::{Amg, lanczos};
 use crate::mesh::TriMesh;
+
+/// Most solves behind the estimate of `lambda_1` for
+/// [`LineFieldOptions::smoothness`](crate::field::LineFieldOptions::smoothness).
+pub const LAMBDA_ITERATIONS: usize = 12;
+
+/// The estimate of `lambda_1` stops once a solve changes it by at most this fraction.
+/// It converges from above and faster than geometrically (Rayleigh-Ritz on a Krylov
+/// space, see `linalg/lanczos.rs`), so the last estimate is much closer than its last change:
+/// on the bunny the estimates after 1 to 4 solves are 1441, 516, 489 and 483 against a
+/// converged 482.0, so it stops after 4 solves 0.3% high (5 inverse iterations, the
+/// method before, stopped 0.8% high), as if `smoothness` were 0.5015 instead of 0.5.
+pub const LAMBDA_TOLERANCE: f64 = 2e-2;
 
 /// A fixed pseudo-random value in `[-1, 1)` for index `i` (SplitMix64 finaliser).
 pub(crate) fn start_value(i: u64) -> f64 {
