@@ -312,11 +312,7 @@ impl Design {
                 scale,
                 smoothing_iterations,
                 ..
-            } => {
-                positive("floor", *floor)?;
-                non_negative("scale", *scale)?;
-                smoothing_iterations_ok(*smoothing_iterations)?;
-            }
+            } => curvature::check_density(*floor, *scale, *smoothing_iterations)?,
             Density::File(_) => {}
             Density::Shading {
                 light,
@@ -403,15 +399,8 @@ impl Design {
                 smoothing_iterations,
             } => {
                 let k = curvatures.get(mesh, *smoothing_iterations);
-                let c = area_radius(mesh);
-                k.k1.iter()
-                    .zip(&k.k2)
-                    .map(|(k1, k2)| {
-                        let r = (c * k1.abs() + isotropy_curvature)
-                            / (c * k2.abs() + isotropy_curvature);
-                        r.clamp(*min, *max)
-                    })
-                    .collect()
+                let c = curvature::area_radius(mesh);
+                curvature::ratios(k, c, *isotropy_curvature, [*min, *max])
             }
         };
         let densities: Vec<f64> = match &self.density {
@@ -424,7 +413,7 @@ impl Design {
                 smoothing_iterations,
             } => {
                 let k = curvatures.get(mesh, *smoothing_iterations);
-                curvature::densities(mesh, k, *measure, *normalization, *floor, *scale)
+                curvature::densities(mesh, k, *measure, *normalization, *floor, *scale).1
             }
             Density::File(path) => {
                 crate::field::read_field_file(path, mesh)?.vertex_densities(mesh)
@@ -463,11 +452,6 @@ impl CurvatureCache {
         };
         &self.computed[index].1
     }
-}
-
-/// `sqrt(area / 4 pi)`.
-fn area_radius(mesh: &TriMesh) -> f64 {
-    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
 }
 
 /// The vertex nearest to `p` (the lowest index among ties). O(V).
