@@ -316,20 +316,10 @@ fn rayleigh_ritz<E: From<LinalgError>>(
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
         if space.basis.len() >= limit {
-            // Restart from the Ritz vector (its estimate is unchanged); Davidson also
-            // keeps the one before it (in the current basis: `previous` and a zero).
+            let previous = std::mem::take(&mut previous);
             let x = normalised(space.combine(&estimate.1))?;
-            let older = (davidson && previous.len() + 1 == space.basis.len()).then(|| {
-                let mut y = std::mem::take(&mut previous);
-                y.push(c64::new(0.0, 0.0));
-                space.combine(&y)
-            });
-            space = Space::new(x, &apply_matrix);
-            estimate.1 = vec![c64::new(1.0, 0.0)];
-            if let Some(w) = older.and_then(|w| orthonormalised(mass, &space.basis, w).ok()?) {
-                space.push(w, &apply_matrix);
-                estimate = smallest_pair(&space.h).ok_or_else(failed)?;
-            }
+            (space, estimate) =
+                restarted(&space, x, estimate, previous, davidson, mass, &apply_matrix)?;
         }
         // The Ritz pair's residual, when the value has settled or Davidson grows by it.
         let residual = (davidson || settled_at.is_some())
@@ -339,19 +329,7 @@ fn rayleigh_ritz<E: From<LinalgError>>(
         {
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
-        let w = match &mut expansion {
-            Expansion::Precondition(precondition) => {
-                let r = residual.unwrap_or_else(|| space.residual(mass, estimate.0, &estimate.1));
-                let mut w = vec![c64::new(0.0, 0.0); r.len()];
-                precondition(&r, &mut w);
-                w
-            }
-            Expansion::Inverse(apply_inverse) => {
-                let mut w = space.basis[space.basis.len() - 1].clone();
-                apply_inverse(&mut w)?;
-                w
-            }
-        };
+        let w = expansion.grow(&space, mass, &estimate, residual)?;
         solves += 1;
         let Some(w) = orthonormalised(mass, &space.basis, w)? else {
             // The space stopped growing: the estimate is exact for it.
@@ -370,6 +348,63 @@ fn rayleigh_ritz<E: From<LinalgError>>(
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
     }
+}
+
+impl<I, P, E> Expansion<I, P>
+where
+    I: FnMut(&mut [c64]) -> Result<(), E>,
+    P: FnMut(&[c64], &mut [c64]),
+{
+    /// The next direction of the space: `T` applied to the newest basis vector, or the
+    /// preconditioned `residual` of the Ritz pair `estimate` (computed here when not
+    /// given).
+    fn grow(
+        &mut self,
+        space: &Space,
+        mass: &[f64],
+        estimate: &(f64, Vec<c64>),
+        residual: Option<Vec<c64>>,
+    ) -> Result<Vec<c64>, E> {
+        Ok(match self {
+            Expansion::Precondition(precondition) => {
+                let r = residual.unwrap_or_else(|| space.residual(mass, estimate.0, &estimate.1));
+                let mut w = vec![c64::new(0.0, 0.0); r.len()];
+                precondition(&r, &mut w);
+                w
+            }
+            Expansion::Inverse(apply_inverse) => {
+                let mut w = space.basis[space.basis.len() - 1].clone();
+                apply_inverse(&mut w)?;
+                w
+            }
+        })
+    }
+}
+
+/// The space restarted from the Ritz vector `x` (`M`-normalised; its estimate is
+/// unchanged) of `space`; Davidson also keeps the Ritz vector before it (in the current
+/// basis: `previous`, the Ritz pair's coordinates before the newest basis vector, and
+/// a zero). Returns the new space and its Ritz pair.
+fn restarted(
+    space: &Space,
+    x: Vec<c64>,
+    mut estimate: (f64, Vec<c64>),
+    mut previous: Vec<c64>,
+    davidson: bool,
+    mass: &[f64],
+    apply_matrix: &impl Fn(&[c64]) -> Vec<c64>,
+) -> Result<(Space, (f64, Vec<c64>)), LinalgError> {
+    let older = (davidson && previous.len() + 1 == space.basis.len()).then(|| {
+        previous.push(c64::new(0.0, 0.0));
+        space.combine(&previous)
+    });
+    let mut space = Space::new(x, apply_matrix);
+    estimate.1 = vec![c64::new(1.0, 0.0)];
+    if let Some(w) = older.and_then(|w| orthonormalised(mass, &space.basis, w).ok()?) {
+        space.push(w, apply_matrix);
+        estimate = smallest_pair(&space.h).ok_or_else(failed)?;
+    }
+    Ok((space, estimate))
 }
 
 /// A zero or non-finite start or iterate (a failed solve).

@@ -15,6 +15,8 @@ use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
 use super::line_field::{LineField, LinearSolver};
 use crate::field::LineFieldError;
+use crate::field::curvature::area_radius;
+use crate::linalg::Amg;
 use crate::mesh::TriMesh;
 
 /// Settings of the line-field solvers.
@@ -131,11 +133,6 @@ pub struct LineConstraint {
     pub vertex: u32,
     /// World-space direction, not parallel to the vertex normal.
     pub direction: DVec3,
-}
-
-/// `sqrt(area / 4 pi)`: the radius of the sphere with the mesh's area.
-fn area_radius(mesh: &TriMesh) -> f64 {
-    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
 }
 
 /// The smoothest line field of `mesh`: the eigenvector of the smallest eigenvalue of
@@ -301,48 +298,17 @@ pub(crate) fn constrained_line_field_with<'g>(
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let n = mesh.vertex_count();
-    let smoothing = options.smoothing * area_radius(mesh);
-    // lambda_1 depends on the connection alone, so it is estimated beside the guidance
-    // whenever the shift may apply (it is dropped when a component turns out unpinned);
-    // the connection's build keeps both threads busy on its own. Without the shift the
-    // guidance is made beside the build.
-    let may_shift =
-        options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty());
-    let (built, guidance) = if may_shift {
-        let system = Connection::build(mesh, smoothing, options.solver, true)?;
-        rayon::join(
-            move || -> Result<_, LineFieldError> {
-                let lambda = smallest_eigenvalue(mesh, &system, system.shift())?;
-                Ok((system, Some(lambda)))
-            },
-            guidance,
-        )
-    } else {
-        rayon::join(
-            || {
-                Ok((
-                    Connection::build(mesh, smoothing, options.solver, true)?,
-                    None,
-                ))
-            },
-            guidance,
-        )
-    };
-    let (system, lambda_1) = built?;
+    let Built {
+        system,
+        lambda_1,
+        guidance,
+    } = connection_beside(mesh, options, guided, constraints, guidance)?;
     let (lambda_1, hierarchy) = match lambda_1 {
         Some((lambda, hierarchy)) => (Some(lambda), hierarchy),
         None => (None, None),
     };
     let guidance = &*guidance;
-    if !guidance.is_empty() && guidance.len() != n {
-        return Err(LineFieldError::GuidanceLength {
-            expected: n,
-            found: guidance.len(),
-        });
-    }
-    if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
-        return Err(LineFieldError::NonFiniteGuidance { vertex });
-    }
+    check_guidance(guidance, n)?;
     let fixed = fixed_values(mesh, &system, constraints)?;
     let q = if options.weight > 0.0 && !guidance.is_empty() {
         guidance_lines(mesh, &system, guidance)
@@ -353,22 +319,7 @@ pub(crate) fn constrained_line_field_with<'g>(
         return smoothest_on(mesh, &system, options);
     }
 
-    // Unknowns: the free vertices in index order, then the fixed ones (slots >= free).
-    let mut slots = vec![0; n];
-    let mut free = 0;
-    for v in 0..n {
-        if fixed[v].is_none() {
-            slots[v] = free;
-            free += 1;
-        }
-    }
-    let mut next = free;
-    for v in 0..n {
-        if fixed[v].is_some() {
-            slots[v] = next;
-            next += 1;
-        }
-    }
+    let (slots, free) = unknown_slots(&fixed);
     let area: f64 = system.mass.iter().sum();
     let w = options.weight / area;
     // Only a connected component with no guidance and no constraint leaves the system
@@ -416,55 +367,169 @@ pub(crate) fn constrained_line_field_with<'g>(
         }
     }
     if free > 0 {
-        // An estimate of lambda_1 slightly too high could leave the shifted system
-        // indefinite (a failed factorization, or conjugate gradients meeting negative
-        // curvature): then halve the shift (three times at most, then none).
-        let mut attempt = 0;
         // With multigrid, the hierarchy built for lambda_1 (of `A + shift M`)
         // preconditions the shifted system when their ratio is bounded (see
         // `REUSE_CONDITION`), saving a second hierarchy's setup.
-        let mut reuse = hierarchy.filter(|_| {
+        let reuse = hierarchy.filter(|_| {
             free == n
                 && lambda_1.is_some_and(|lambda| {
                     reuse_condition(&extra, &system.mass, shift, lambda) <= REUSE_CONDITION
                 })
         });
-        rhs = loop {
-            let shifted: Vec<f64> = if attempt < 4 {
-                let back = pull * (1.0 - 0.5f64.powi(attempt));
-                extra
-                    .iter()
-                    .zip(&system.mass)
-                    .map(|(d, m)| d + back * m)
-                    .collect()
-            } else {
-                extra
-                    .iter()
-                    .zip(&system.mass)
-                    .map(|(d, m)| d + pull * m)
-                    .collect()
-            };
-            if let Some(amg) = reuse.take()
-                && let Some(z) = system.solve_with_hierarchy(&amg, shift, &shifted, &rhs)
-            {
-                break z;
-            }
-            let mut z = rhs.clone();
-            let solved = system
-                .factor(mesh, &shifted, &slots, free)
-                .and_then(|mut factor| factor.solve(&mut z));
-            match solved {
-                Ok(()) => break z,
-                Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
-                Err(_) => attempt += 1,
-            }
+        let unknowns = Unknowns {
+            slots: &slots,
+            free,
         };
+        rhs = solve_shifted(mesh, &system, &extra, pull, unknowns, reuse, rhs)?;
     }
     let x: Vec<c64> = (0..n)
         .map(|v| fixed[v].unwrap_or_else(|| rhs[slots[v]]))
         .collect();
     let held: Vec<bool> = fixed.iter().map(Option::is_some).collect();
     output(mesh, &system, x, &held, options, 0)
+}
+
+/// The connection (and, when the smoothness shift may apply, the estimate of
+/// `lambda_1` with its multigrid hierarchy) built on one thread, the guidance made on
+/// another. `lambda_1` depends on the connection alone, so it is estimated beside the
+/// guidance whenever the shift may apply (it is dropped when a component turns out
+/// unpinned); the connection's build keeps both threads busy on its own. Without the
+/// shift the guidance is made beside the build.
+fn connection_beside<'g>(
+    mesh: &TriMesh,
+    options: &LineFieldOptions,
+    guided: bool,
+    constraints: &[LineConstraint],
+    guidance: impl FnOnce() -> Cow<'g, [DVec3]> + Send,
+) -> Result<Built<'g>, LineFieldError> {
+    let smoothing = options.smoothing * area_radius(mesh);
+    let may_shift =
+        options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty());
+    let (built, guidance) = if may_shift {
+        let system = Connection::build(mesh, smoothing, options.solver, true)?;
+        rayon::join(
+            move || -> Result<_, LineFieldError> {
+                let lambda = smallest_eigenvalue(mesh, &system, system.shift())?;
+                Ok((system, Some(lambda)))
+            },
+            guidance,
+        )
+    } else {
+        rayon::join(
+            || {
+                Ok((
+                    Connection::build(mesh, smoothing, options.solver, true)?,
+                    None,
+                ))
+            },
+            guidance,
+        )
+    };
+    let (system, lambda_1) = built?;
+    Ok(Built {
+        system,
+        lambda_1,
+        guidance,
+    })
+}
+
+/// What [`connection_beside`] makes.
+struct Built<'g> {
+    system: Connection,
+    /// The estimate of `lambda_1` and, with multigrid, the hierarchy it built.
+    lambda_1: Option<(f64, Option<Amg<c64>>)>,
+    guidance: Cow<'g, [DVec3]>,
+}
+
+/// Checks a guidance: empty or one finite vector per vertex.
+fn check_guidance(guidance: &[DVec3], n: usize) -> Result<(), LineFieldError> {
+    if !guidance.is_empty() && guidance.len() != n {
+        return Err(LineFieldError::GuidanceLength {
+            expected: n,
+            found: guidance.len(),
+        });
+    }
+    if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
+        return Err(LineFieldError::NonFiniteGuidance { vertex });
+    }
+    Ok(())
+}
+
+/// Per vertex its unknown's slot: the free vertices in index order, then the fixed
+/// ones (slots >= free); and the count of free ones.
+fn unknown_slots(fixed: &[Option<c64>]) -> (Vec<usize>, usize) {
+    let n = fixed.len();
+    let mut slots = vec![0; n];
+    let mut free = 0;
+    for v in 0..n {
+        if fixed[v].is_none() {
+            slots[v] = free;
+            free += 1;
+        }
+    }
+    let mut next = free;
+    for v in 0..n {
+        if fixed[v].is_some() {
+            slots[v] = next;
+            next += 1;
+        }
+    }
+    (slots, free)
+}
+
+/// The unknowns of a constrained solve: each vertex's slot and the free count.
+#[derive(Clone, Copy)]
+struct Unknowns<'a> {
+    slots: &'a [usize],
+    free: usize,
+}
+
+/// Solves `(A + diag(extra) + pull M) z = rhs` on the free unknowns, first with the
+/// hierarchy `reuse` when given and it converges. An estimate of `lambda_1` slightly
+/// too high could leave the shifted system indefinite (a failed factorization, or
+/// conjugate gradients meeting negative curvature): then the shift is halved (three
+/// times at most, then none).
+fn solve_shifted(
+    mesh: &TriMesh,
+    system: &Connection,
+    extra: &[f64],
+    pull: f64,
+    unknowns: Unknowns<'_>,
+    mut reuse: Option<Amg<c64>>,
+    rhs: Vec<c64>,
+) -> Result<Vec<c64>, LineFieldError> {
+    let shift = system.shift();
+    let mut attempt = 0;
+    loop {
+        let shifted: Vec<f64> = if attempt < 4 {
+            let back = pull * (1.0 - 0.5f64.powi(attempt));
+            extra
+                .iter()
+                .zip(&system.mass)
+                .map(|(d, m)| d + back * m)
+                .collect()
+        } else {
+            extra
+                .iter()
+                .zip(&system.mass)
+                .map(|(d, m)| d + pull * m)
+                .collect()
+        };
+        if let Some(amg) = reuse.take()
+            && let Some(z) = system.solve_with_hierarchy(&amg, shift, &shifted, &rhs)
+        {
+            return Ok(z);
+        }
+        let mut z = rhs.clone();
+        let solved = system
+            .factor(mesh, &shifted, unknowns.slots, unknowns.free)
+            .and_then(|mut factor| factor.solve(&mut z));
+        match solved {
+            Ok(()) => return Ok(z),
+            Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
+            Err(_) => attempt += 1,
+        }
+    }
 }
 
 /// The largest bound on the condition number of `B^-1 K` under which the shifted
