@@ -25,6 +25,17 @@
 //! one solve (or V-cycle), one product with `A`, `O(k n)` orthogonalisation (in
 //! parallel over fixed blocks of rows, so sums do not depend on the thread count) and
 //! a `k x k` eigenvalue problem.
+//!
+//! Kept rather than faer 0.24's partial eigensolver (`partial_self_adjoint_eigen`,
+//! Krylov-Schur): it builds a basis of at least 32 vectors and then extends it to at
+//! least 64 before its first convergence test (`MIN_DIM` in faer-0.24.4's
+//! `src/operator/eigen/mod.rs`, `partial_self_adjoint_eigen_imp`), one solve with the
+//! factor each, where this loop stops after 4 solves for `lambda_1` and about 12 for
+//! the smoothest field on the bunny (`field::design`'s docs); it works in the plain
+//! inner product, not the mass's; and it needs the exact operator, where the
+//! multigrid path grows its space by a V-cycle of the residual (Davidson), which it has
+//! no form for. Bits: its restarts and small eigenproblems are faer's, so the fields
+//! would change.
 
 use std::ops::Range;
 
