@@ -40,7 +40,7 @@ pub struct LineFieldOptions {
     /// Length over which the surface's normals are smoothed before they define the
     /// connection, as a fraction of the mesh's area radius `R = sqrt(area / 4 pi)`:
     /// bumps smaller than about `smoothing R` then create no singularities (one
-    /// implicit heat step of the normals, see the [module docs](self)). Range
+    /// implicit heat step of the normals, see the [module docs](crate::field::design)). Range
     /// `[0, inf)`, 0 using the mesh's own normals; default 0.
     pub smoothing: f64,
     /// Most solves of the smoothest field. Range `[1, inf)`; default 200.
@@ -55,7 +55,7 @@ pub struct LineFieldOptions {
     /// Opposite singularities (`+1/2` and `-1/2`) whose centres lie at most this far
     /// apart, as a fraction of the area radius `R`, are cancelled after the solve: the
     /// field's angle on a disc around both is interpolated afresh from the disc's
-    /// boundary, around which it winds zero times (see the [module docs](self)). With
+    /// boundary, around which it winds zero times (see the [module docs](crate::field::design)). With
     /// it the result's directions lie in the mesh's own tangent planes. Range
     /// `[0, inf)`, 0 cancelling none; default 0.
     pub cancel_distance: f64,
@@ -136,7 +136,7 @@ pub struct LineConstraint {
 }
 
 /// The smoothest line field of `mesh`: the eigenvector of the smallest eigenvalue of
-/// `A z = lambda M z` (see the [module docs](self)): Rayleigh-Ritz on a Krylov space
+/// `A z = lambda M z` (see the [module docs](crate::field::design)): Rayleigh-Ritz on a Krylov space
 /// with a direct solver, Rayleigh-Ritz on multigrid-preconditioned residuals (the
 /// Davidson method) with multigrid.
 /// `options.weight` is not used.
@@ -233,7 +233,7 @@ pub fn line_field_energy(mesh: &TriMesh, directions: &[DVec3]) -> Result<f64, Li
 
 /// The line field that balances smoothness against `guidance`: the minimiser of
 /// `E(z) + w sum_v m_v c_v |z_v - u_v|^2`, `w = options.weight / area` (see the
-/// [module docs](self)). Each guidance vector is projected into its vertex's tangent
+/// [module docs](crate::field::design)). Each guidance vector is projected into its vertex's tangent
 /// plane; its direction gives the line `u_v` (its sign does not matter) and its length
 /// the confidence `c_v` (a zero vector: no guidance there, the field follows its
 /// neighbours). A weight of 0, or no guidance anywhere, gives
