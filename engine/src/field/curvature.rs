@@ -29,7 +29,7 @@
 
 use glam::{DMat3, DVec3};
 
-use super::params::eigenvalues;
+use super::params::{eigenvalues, non_negative, positive, smoothing_iterations};
 use super::{FieldError, TensorField, eigen_in_plane, outer};
 use crate::mesh::TriMesh;
 
@@ -215,6 +215,12 @@ pub(crate) struct Settings {
     pub isotropy_curvature: f64,
 }
 
+/// `sqrt(area / 4 pi)`: the radius of the sphere of the mesh's area, the factor `c`
+/// of [`CurvatureNormalization::AreaRadius`].
+pub(crate) fn area_radius(mesh: &TriMesh) -> f64 {
+    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
+}
+
 /// The normalization factor `c` of [`CurvatureNormalization`] for per-vertex
 /// `measures` on `mesh`.
 fn normalization_factor(
@@ -222,7 +228,7 @@ fn normalization_factor(
     normalization: CurvatureNormalization,
     measures: &[f64],
 ) -> f64 {
-    let area_radius = (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt();
+    let area_radius = area_radius(mesh);
     match normalization {
         CurvatureNormalization::AreaRadius => area_radius,
         CurvatureNormalization::Raw => 1.0,
@@ -237,9 +243,12 @@ fn normalization_factor(
     }
 }
 
-/// Per-vertex density `floor + scale * c * measure(k1, k2)` (the density of
-/// [`FieldSpec::Curvature`](super::FieldSpec::Curvature), shared with the designed
-/// field's curvature density).
+/// The curvature-density block of every curvature source: per vertex the density
+/// `floor + scale * c * measure(k1, k2)`, with `c` the factor of `normalization` (see
+/// [`FieldSpec::Curvature`](super::FieldSpec::Curvature)); returns `c` with the
+/// densities, for the spacing ratios ([`ratios`]) of the same source. Used by
+/// [`FieldSpec::Curvature`](super::FieldSpec::Curvature) and the designed field's
+/// [`Density::Curvature`](crate::field::Density::Curvature).
 pub(crate) fn densities(
     mesh: &TriMesh,
     k: &PrincipalCurvatures,
@@ -247,14 +256,36 @@ pub(crate) fn densities(
     normalization: CurvatureNormalization,
     floor: f64,
     scale: f64,
-) -> Vec<f64> {
+) -> (f64, Vec<f64>) {
     let measures: Vec<f64> =
         k.k1.iter()
             .zip(&k.k2)
             .map(|(&k1, &k2)| measure.eval(k1, k2))
             .collect();
     let c = normalization_factor(mesh, normalization, &measures);
-    measures.iter().map(|m| floor + scale * c * m).collect()
+    let densities = measures.iter().map(|m| floor + scale * c * m).collect();
+    (c, densities)
+}
+
+/// Per vertex the spacing ratio `clamp((c |k1| + eps) / (c |k2| + eps), min, max)`:
+/// high where the surface bends one way only, 1 where it is flat or umbilic. Used by
+/// [`FieldSpec::Curvature`](super::FieldSpec::Curvature) (`c` its normalization,
+/// `min` 1) and the designed field's
+/// [`Anisotropy::Curvature`](crate::field::Anisotropy::Curvature) (`c` the area radius).
+pub(crate) fn ratios(k: &PrincipalCurvatures, c: f64, eps: f64, [min, max]: [f64; 2]) -> Vec<f64> {
+    k.k1.iter()
+        .zip(&k.k2)
+        .map(|(k1, k2)| ((c * k1.abs() + eps) / (c * k2.abs() + eps)).clamp(min, max))
+        .collect()
+}
+
+/// Checks the density settings of a curvature source (`floor` > 0, `scale` >= 0, at
+/// most 1000 smoothing rounds), shared by [`FieldSpec::Curvature`](super::FieldSpec::Curvature)
+/// and [`Density::Curvature`](crate::field::Density::Curvature).
+pub(crate) fn check_density(floor: f64, scale: f64, smoothing: u32) -> Result<(), FieldError> {
+    positive("floor", floor)?;
+    non_negative("scale", scale)?;
+    smoothing_iterations(smoothing)
 }
 
 /// The sampling tensor field of the curvature source (formulas on
@@ -264,21 +295,12 @@ pub(crate) fn sampling_field(
     k: &PrincipalCurvatures,
     s: &Settings,
 ) -> Result<TensorField, FieldError> {
-    let measures: Vec<f64> =
-        k.k1.iter()
-            .zip(&k.k2)
-            .map(|(&k1, &k2)| s.measure.eval(k1, k2))
-            .collect();
-    let c = normalization_factor(mesh, s.normalization, &measures);
-    let eps = s.isotropy_curvature;
-    let eigen: Vec<[f64; 2]> = measures
+    let (c, densities) = densities(mesh, k, s.measure, s.normalization, s.floor, s.scale);
+    let ratios = ratios(k, c, s.isotropy_curvature, [1.0, s.max_anisotropy]);
+    let eigen: Vec<[f64; 2]> = densities
         .iter()
-        .zip(k.k1.iter().zip(&k.k2))
-        .map(|(&m, (&k1, &k2))| {
-            let density = s.floor + s.scale * c * m;
-            let ratio = (c * k1.abs() + eps) / (c * k2.abs() + eps);
-            eigenvalues(density, ratio.clamp(1.0, s.max_anisotropy))
-        })
+        .zip(&ratios)
+        .map(|(&density, &ratio)| eigenvalues(density, ratio))
         .collect();
     TensorField::from_frames(mesh, &k.d1, &eigen)
 }

@@ -1,6 +1,9 @@
-//! Errors of the field stage.
+//! Errors of the field stage: building a field ([`FieldError`]) and designing a line
+//! field ([`LineFieldError`], which a designed field's error wraps).
 
 use std::path::PathBuf;
+
+use crate::linalg::LinalgError;
 
 /// Everything that can go wrong building a [`TensorField`](super::TensorField).
 #[derive(Debug, thiserror::Error)]
@@ -108,7 +111,95 @@ pub enum FieldError {
         /// What must hold, in words.
         what: &'static str,
     },
-    /// The designed field's line-field solve failed (see [`LineFieldError`](super::LineFieldError)).
+    /// The designed field's line-field solve failed (see [`LineFieldError`]).
     #[error("field design: {0}")]
-    Design(#[from] super::LineFieldError),
+    Design(#[from] LineFieldError),
+}
+
+/// Everything that can go wrong designing a line field.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LineFieldError {
+    /// The mesh has no vertices or no area.
+    #[error("the mesh has no vertices or zero area")]
+    EmptyMesh,
+    /// The guidance has a different length from the mesh's vertex count.
+    #[error("guidance has {found} values but the mesh has {expected} vertices")]
+    GuidanceLength {
+        /// Mesh vertex count.
+        expected: usize,
+        /// Values given.
+        found: usize,
+    },
+    /// A guidance vector has a NaN or infinite coordinate.
+    #[error("guidance at vertex {vertex} is not finite")]
+    NonFiniteGuidance {
+        /// Vertex index.
+        vertex: usize,
+    },
+    /// A constraint names a vertex the mesh does not have.
+    #[error("constraint {index} names vertex {vertex}, but the mesh has {vertices} vertices")]
+    ConstraintVertex {
+        /// Position of the constraint in the list.
+        index: usize,
+        /// The vertex it names.
+        vertex: u32,
+        /// Mesh vertex count.
+        vertices: usize,
+    },
+    /// A constraint's direction is not finite or has no part in the tangent plane.
+    #[error(
+        "constraint {index} at vertex {vertex}: the direction is not finite or is normal to the surface"
+    )]
+    ConstraintDirection {
+        /// Position of the constraint in the list.
+        index: usize,
+        /// Its vertex.
+        vertex: u32,
+    },
+    /// Two constraints fix the same vertex.
+    #[error("constraints {first} and {second} both fix vertex {vertex}")]
+    DuplicateConstraint {
+        /// The earlier constraint.
+        first: usize,
+        /// The later one.
+        second: usize,
+        /// The vertex both fix.
+        vertex: u32,
+    },
+    /// A setting is out of its range.
+    #[error("line-field option `{option}` = {value} is invalid: {expected}")]
+    InvalidOption {
+        /// The option's name.
+        option: &'static str,
+        /// The value given.
+        value: f64,
+        /// The valid range, in words.
+        expected: &'static str,
+    },
+    /// The sparse solve failed.
+    #[error("line-field solve failed in the {stage}")]
+    Factorization {
+        /// The step that failed.
+        stage: &'static str,
+    },
+    /// The multigrid-preconditioned solve failed (see [`LinearSolver`](crate::field::LinearSolver)),
+    /// or the eigenvalue iteration met a zero or non-finite iterate.
+    #[error("line-field multigrid solve failed: {0}")]
+    Multigrid(crate::linalg::LinalgError),
+}
+
+impl From<LinalgError> for LineFieldError {
+    /// A failed sparse Cholesky step is [`Factorization`](Self::Factorization) with its
+    /// step; everything else (conjugate gradients, multigrid, the eigenvalue iteration)
+    /// is [`Multigrid`](Self::Multigrid).
+    fn from(e: LinalgError) -> Self {
+        match e {
+            LinalgError::Factorization { stage } => Self::Factorization { stage },
+            LinalgError::Iterate => Self::Factorization {
+                stage: "solve (eigenvalue estimate: zero or non-finite iterate)",
+            },
+            other => Self::Multigrid(other),
+        }
+    }
 }

@@ -97,14 +97,7 @@ pub fn parse_field_file(
         let line = index + 1;
         last_line = line;
         let content = raw.split_once('#').map_or(raw, |(before, _)| before);
-        let mut words = [""; 8];
-        let mut count = 0;
-        for word in content.split_whitespace() {
-            if count < words.len() {
-                words[count] = word;
-            }
-            count += 1;
-        }
+        let (words, count) = split_words(content);
         if count == 0 {
             continue;
         }
@@ -114,18 +107,7 @@ pub fn parse_field_file(
             what,
         };
         if !header_seen {
-            if words[0] != MAGIC {
-                return Err(syntax(format!(
-                    "expected the header `{MAGIC} {VERSION}`, found `{}`",
-                    content.trim()
-                )));
-            }
-            if count != 2 || words[1] != VERSION {
-                return Err(syntax(format!(
-                    "unsupported header `{}`: this reader understands `{MAGIC} {VERSION}`",
-                    content.trim()
-                )));
-            }
+            check_header(&words, count, content).map_err(syntax)?;
             header_seen = true;
             continue;
         }
@@ -139,39 +121,7 @@ pub fn parse_field_file(
         check_entry(&entry).map_err(bad)?;
         let target = map.get(vertex).copied().unwrap_or(NONE);
         if target != NONE && tensors[target as usize].is_none() {
-            let n = normals[target as usize];
-            let range = |l1: f64, l2: f64| {
-                if super::out_of_range(l1, l2) {
-                    return Err(bad(format!(
-                        "eigenvalues {l1:.3e} and {l2:.3e} are outside the supported range \
-                         [1e-100, 1e100]; densities are relative, so scale every density \
-                         of the file by one factor into it"
-                    )));
-                }
-                Ok(())
-            };
-            let tensor = match entry {
-                Entry::Frame { l1, l2, direction } => {
-                    range(l1.max(l2), l1.min(l2))?;
-                    let m1 = project_direction(direction, n);
-                    let m2 = n.cross(m1);
-                    outer(m1, m1) * l1 + outer(m2, m2) * l2
-                }
-                Entry::Tensor(t) => {
-                    let p = DMat3::IDENTITY - outer(n, n);
-                    let restricted = p * t * p;
-                    let e = eigen_in_plane(&restricted, n);
-                    if !(e.l2 > 0.0) {
-                        return Err(bad(format!(
-                            "tensor is not positive definite in the tangent plane of mesh \
-                             vertex {target} (eigenvalues {}, {})",
-                            e.l1, e.l2
-                        )));
-                    }
-                    range(e.l1, e.l2)?;
-                    restricted
-                }
-            };
+            let tensor = entry_tensor(entry, normals[target as usize], target).map_err(bad)?;
             tensors[target as usize] = Some(tensor);
         }
         vertex += 1;
@@ -199,6 +149,75 @@ pub fn parse_field_file(
             found: map.iter().filter(|&&v| v != NONE).count(),
         }),
     }
+}
+
+/// The first eight whitespace-separated words of `content` and the count of all its
+/// words.
+fn split_words(content: &str) -> ([&str; 8], usize) {
+    let mut words = [""; 8];
+    let mut count = 0;
+    for word in content.split_whitespace() {
+        if count < words.len() {
+            words[count] = word;
+        }
+        count += 1;
+    }
+    (words, count)
+}
+
+/// Checks the header line (`count` words, the first of them in `words`).
+fn check_header(words: &[&str], count: usize, content: &str) -> Result<(), String> {
+    if words[0] != MAGIC {
+        return Err(format!(
+            "expected the header `{MAGIC} {VERSION}`, found `{}`",
+            content.trim()
+        ));
+    }
+    if count != 2 || words[1] != VERSION {
+        return Err(format!(
+            "unsupported header `{}`: this reader understands `{MAGIC} {VERSION}`",
+            content.trim()
+        ));
+    }
+    Ok(())
+}
+
+/// The tensor of a checked entry at mesh vertex `target` with unit normal `n`, in its
+/// tangent plane. Errors: eigenvalues outside [`EIGENVALUE_RANGE`](super::EIGENVALUE_RANGE),
+/// a tensor not positive definite in the plane.
+fn entry_tensor(entry: Entry, n: DVec3, target: u32) -> Result<DMat3, String> {
+    let range = |l1: f64, l2: f64| {
+        if super::out_of_range(l1, l2) {
+            return Err(format!(
+                "eigenvalues {l1:.3e} and {l2:.3e} are outside the supported range \
+                 [1e-100, 1e100]; densities are relative, so scale every density \
+                 of the file by one factor into it"
+            ));
+        }
+        Ok(())
+    };
+    Ok(match entry {
+        Entry::Frame { l1, l2, direction } => {
+            range(l1.max(l2), l1.min(l2))?;
+            let m1 = project_direction(direction, n);
+            let m2 = n.cross(m1);
+            outer(m1, m1) * l1 + outer(m2, m2) * l2
+        }
+        Entry::Tensor(t) => {
+            let p = DMat3::IDENTITY - outer(n, n);
+            let restricted = p * t * p;
+            let e = eigen_in_plane(&restricted, n);
+            if !(e.l2 > 0.0) {
+                return Err(format!(
+                    "tensor is not positive definite in the tangent plane of mesh \
+                     vertex {target} (eigenvalues {}, {})",
+                    e.l1, e.l2
+                ));
+            }
+            range(e.l1, e.l2)?;
+            restricted
+        }
+    })
 }
 
 /// Parses the words of one vertex line (`count` may exceed `words.len()` when the line

@@ -17,41 +17,30 @@
 //! Field design ([`smoothest_line_field`], [`guided_line_field`]): smooth line fields
 //! with few singularities (Knöppel et al. 2013).
 
-mod cancel;
-pub(crate) mod cholesky;
-mod connection;
 mod curvature;
 pub mod design;
-mod designed;
-mod disc_angles;
 mod eigen;
-mod eigenpair;
 mod error;
 mod file;
 mod guidance;
 mod isotropic;
-mod lanczos;
-mod line_field;
 mod params;
-mod pattern;
 mod shading;
 mod spec;
-mod vertex_graph;
 mod warp;
 
 pub use curvature::{
     CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
 };
 pub use design::{
-    LineConstraint, LineField, LineFieldError, LineFieldOptions, LinearSolver, MULTIGRID_VERTICES,
-    SOLVE_TOLERANCE, constrained_line_field, guided_line_field, line_field_energy,
-    smoothest_line_field,
+    Anisotropy, Constraint, Density, Design, Guidance, LineConstraint, LineField, LineFieldOptions,
+    LinearSolver, MULTIGRID_VERTICES, SOLVE_TOLERANCE, Site, constrained_line_field,
+    guided_line_field, line_field_energy, smoothest_line_field,
 };
-pub use designed::{Anisotropy, Constraint, Density, Design, Guidance, Site};
 pub use eigen::{
     Eigen2, eigen_2x2, eigen_in_plane, frame_angle, principal_axis, tangent_frame, vertex_frames,
 };
-pub use error::FieldError;
+pub use error::{FieldError, LineFieldError};
 pub use file::{format_field_file, parse_field_file, read_field_file};
 pub use guidance::{curvature_guidance, direction_guidance};
 pub use isotropic::{

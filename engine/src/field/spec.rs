@@ -9,11 +9,8 @@ use std::path::{Path, PathBuf};
 use glam::{DVec2, DVec3};
 
 use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
-use super::designed::Design;
-use super::params::{
-    self, eigenvalues, finite_point, invalid, non_negative, positive,
-    smoothing_iterations as smoothing_iterations_ok, spacing_ratio,
-};
+use super::design::Design;
+use super::params::{self, eigenvalues, finite_point, invalid, positive, spacing_ratio};
 use super::warp::PlanarWarp;
 use super::{FieldError, TensorField};
 use crate::mesh::TriMesh;
@@ -347,12 +344,9 @@ impl FieldSpec {
                 smoothing_iterations,
                 ..
             } => {
-                positive("floor", *floor)?;
-                non_negative("scale", *scale)?;
+                curvature::check_density(*floor, *scale, *smoothing_iterations)?;
                 spacing_ratio("max_anisotropy", *max_anisotropy)?;
-                positive("isotropy_curvature", *isotropy_curvature)?;
-                smoothing_iterations_ok(*smoothing_iterations)?;
-                Ok(())
+                positive("isotropy_curvature", *isotropy_curvature)
             }
         }
     }

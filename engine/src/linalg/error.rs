@@ -1,4 +1,6 @@
-//! Errors of the sparse solvers.
+//! The one error type of the linear algebra ([`LinalgError`]): sparse Cholesky,
+//! conjugate gradients, multigrid and the Rayleigh-Ritz eigensolver report it, and each
+//! stage maps it into its own error.
 
 /// Why a solve failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -32,6 +34,15 @@ pub enum LinalgError {
     /// A non-finite value appeared (a non-finite input or an overflow).
     #[error("non-finite value in a solve")]
     NonFinite,
+    /// A sparse Cholesky step failed (symbolic or numeric factorization, or its memory).
+    #[error("sparse Cholesky failed in the {stage}")]
+    Factorization {
+        /// The step that failed, in words.
+        stage: &'static str,
+    },
+    /// The eigensolver met a zero or non-finite start or iterate (a failed solve).
+    #[error("eigenvalue iteration met a zero or non-finite iterate")]
+    Iterate,
     /// The coarsening stopped with more unknowns than a dense factor can take.
     #[error("multigrid coarsening stalled at {unknowns} unknowns")]
     Coarsening {

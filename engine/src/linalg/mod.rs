@@ -8,6 +8,13 @@
 //! factor of a Laplacian holds 51M non-zeros, 92 per vertex, against 52 at 35k). A
 //! multigrid-preconditioned solve costs a bounded number of linear-time cycles.
 //!
+//! The crate's other linear algebra lives here too: the sparse Cholesky factor whose
+//! buffers are reused across factorizations (`cholesky`, faer's supernodal `L L^H`,
+//! used by the field design, the parameterization and the segmentation's random
+//! walker), and the Rayleigh-Ritz eigensolver for the smallest eigenpair of a pencil
+//! `A z = lambda M z` with diagonal `M` (`lanczos`). Every part reports one error type,
+//! [`LinalgError`], which each stage maps into its own.
+//!
 //! ```
 //! use strata_engine::linalg::{Amg, AmgOptions, Csr, pcg};
 //! // The 1D Laplacian plus a small mass: tridiagonal, positive definite.
@@ -33,10 +40,14 @@
 //! ```
 
 mod amg;
+pub(crate) mod cholesky;
 mod csr;
 mod dense;
 pub mod dissection;
 mod error;
+#[cfg(test)]
+mod faer_comparison;
+pub(crate) mod lanczos;
 pub mod pcg;
 mod scalar;
 

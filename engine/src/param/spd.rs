@@ -20,8 +20,8 @@ use faer::{Mat, Side};
 use glam::DVec3;
 
 use super::ParamError;
-use crate::field::LineFieldError;
-use crate::field::cholesky::Cholesky;
+use crate::linalg::LinalgError;
+use crate::linalg::cholesky::Cholesky;
 use crate::linalg::dissection::nested_dissection;
 
 /// From this many unknowns a system whose unknowns have positions is ordered by nested
@@ -57,10 +57,10 @@ pub(crate) fn solve_spd(
         .map_err(|_| ParamError::Solver {
             stage: "symbolic factorization",
         })?;
-    // The numeric factorization and the solve are the field's (`field::cholesky`).
-    let solver = |e: LineFieldError| ParamError::Solver {
+    // The numeric factorization and the solve are the shared `linalg::cholesky`.
+    let solver = |e: LinalgError| ParamError::Solver {
         stage: match e {
-            LineFieldError::Factorization { stage } => stage,
+            LinalgError::Factorization { stage } => stage,
             _ => "numeric factorization",
         },
     };

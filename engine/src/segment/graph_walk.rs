@@ -5,24 +5,19 @@
 //! With `L` the graph's weighted Laplacian, split into unknown nodes `U` and seed
 //! nodes, the probability `x_k` that a walk from each unknown node reaches seed `k`
 //! first solves `L_U x_k = b_k`, `b_k[i]` the total weight of edges from unknown `i`
-//! to seed `k`. One sparse Cholesky factorization (faer, AMD ordering, sequential)
-//! serves every seed; right-hand sides are solved in blocks of [`RHS_BLOCK`] columns.
+//! to seed `k`. One sparse Cholesky factorization (`linalg::cholesky`: faer, AMD
+//! ordering, sequential) serves every seed; right-hand sides are solved in blocks of
+//! [`RHS_BLOCK`] columns.
 
 use std::collections::VecDeque;
 use std::ops::Range;
 
 use faer::Mat;
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::prelude::*;
-use faer::sparse::linalg::cholesky::{
-    LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
-};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Side};
 use rayon::prelude::*;
 
 use super::SegmentError;
+use crate::linalg::cholesky::{self, Cholesky};
 use crate::mesh::NONE;
 
 /// Right-hand sides (seeds) solved together. Measured on the bunny (69k unknowns, 1.9M
@@ -34,6 +29,11 @@ pub const RHS_BLOCK: usize = 16;
 /// An undirected graph with positive edge weights in compressed rows: node `v`'s
 /// neighbours are `targets[offsets[v]..offsets[v + 1]]`, with the same-index
 /// `weights`. Every edge is listed from both ends with the same weight.
+///
+/// Not a [`Csr`](crate::linalg::Csr): a row keeps its neighbours in the order they were
+/// met (a face's edge order, or first meeting when coarsening), not sorted by column,
+/// and the walk's sums (the Laplacian's diagonal, the coarse weights) run in that
+/// order, so sorting the rows would change the labels' bits.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct WalkGraph {
     pub offsets: Vec<usize>,
@@ -89,7 +89,7 @@ pub(crate) struct GraphWalk {
     rhs_offsets: Vec<usize>,
     rhs: Vec<(u32, f64)>,
     /// The Cholesky factor of `L_U` (absent when there are no unknowns).
-    factor: Option<(SymbolicCholesky<usize>, Vec<f64>)>,
+    factor: Option<Cholesky<f64>>,
 }
 
 /// Why a [`GraphWalk`] could not be built.
@@ -181,9 +181,7 @@ impl GraphWalk {
 
     /// Number of unknowns (nodes that are not seeds).
     pub fn unknown_count(&self) -> usize {
-        self.factor
-            .as_ref()
-            .map_or(0, |(symbolic, _)| symbolic.nrows())
+        self.factor.as_ref().map_or(0, Cholesky::dim)
     }
 
     /// Solves `L_U x_k = b_k` for the seeds in `seeds` (one block), as columns of a
@@ -191,7 +189,7 @@ impl GraphWalk {
     fn solve_block(&self, seeds: Range<usize>) -> Mat<f64> {
         let unknowns = self.unknown_count();
         let mut x = Mat::<f64>::zeros(unknowns, seeds.len());
-        let Some((symbolic, values)) = &self.factor else {
+        let Some(factor) = &self.factor else {
             return x;
         };
         for (c, k) in seeds.enumerate() {
@@ -199,14 +197,7 @@ impl GraphWalk {
                 x[(i as usize, c)] += w;
             }
         }
-        let columns = x.ncols();
-        let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(columns, Par::Seq));
-        LltRef::new(symbolic, values).solve_in_place_with_conj(
-            Conj::No,
-            x.as_mut(),
-            Par::Seq,
-            MemStack::new(&mut scratch),
-        );
+        factor.solve_shared(x.as_mut());
         x
     }
 
@@ -295,30 +286,10 @@ impl GraphWalk {
 fn factorize(
     n: usize,
     triplets: &[Triplet<usize, usize, f64>],
-) -> Result<(SymbolicCholesky<usize>, Vec<f64>), SegmentError> {
+) -> Result<Cholesky<f64>, SegmentError> {
     let solver = |what: String| SegmentError::Solver { what };
     let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, triplets)
         .map_err(|e| solver(format!("assembling L_U: {e:?}")))?;
-    let symbolic = factorize_symbolic_cholesky(
-        a.symbolic(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        Default::default(),
-    )
-    .map_err(|e| solver(format!("symbolic Cholesky: {e:?}")))?;
-    let mut values = vec![0.0; symbolic.len_val()];
-    let mut scratch =
-        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
-    symbolic
-        .factorize_numeric_llt(
-            &mut values,
-            a.as_ref(),
-            Side::Lower,
-            LltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut scratch),
-            Default::default(),
-        )
-        .map_err(|e| solver(format!("numeric Cholesky: {e:?}")))?;
-    Ok((symbolic, values))
+    let symbolic = cholesky::symbolic(a.symbolic()).map_err(|e| solver(e.to_string()))?;
+    Cholesky::new(symbolic, a.as_ref(), None).map_err(|e| solver(e.to_string()))
 }

@@ -1,86 +1,14 @@
-//! The line-field types shared by the solver ([`design`](super::design)) and its
-//! system (`connection.rs`): the result [`LineField`], the error [`LineFieldError`]
-//! and the floor of the edge weights. Kept below both so neither depends on the other.
+//! The line-field types shared by the solver (`solve.rs`) and its system
+//! (`connection.rs`): the result [`LineField`], the choice of [`LinearSolver`] and the
+//! solvers' constants. Kept below both so neither depends on the other.
 
 use glam::DVec3;
 
-use super::{FieldError, TensorField};
+use crate::field::{FieldError, TensorField};
 use crate::mesh::TriMesh;
 
 /// Floor of the cotangent edge weights (dimensionless).
 pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
-
-/// Everything that can go wrong designing a line field.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum LineFieldError {
-    /// The mesh has no vertices or no area.
-    #[error("the mesh has no vertices or zero area")]
-    EmptyMesh,
-    /// The guidance has a different length from the mesh's vertex count.
-    #[error("guidance has {found} values but the mesh has {expected} vertices")]
-    GuidanceLength {
-        /// Mesh vertex count.
-        expected: usize,
-        /// Values given.
-        found: usize,
-    },
-    /// A guidance vector has a NaN or infinite coordinate.
-    #[error("guidance at vertex {vertex} is not finite")]
-    NonFiniteGuidance {
-        /// Vertex index.
-        vertex: usize,
-    },
-    /// A constraint names a vertex the mesh does not have.
-    #[error("constraint {index} names vertex {vertex}, but the mesh has {vertices} vertices")]
-    ConstraintVertex {
-        /// Position of the constraint in the list.
-        index: usize,
-        /// The vertex it names.
-        vertex: u32,
-        /// Mesh vertex count.
-        vertices: usize,
-    },
-    /// A constraint's direction is not finite or has no part in the tangent plane.
-    #[error(
-        "constraint {index} at vertex {vertex}: the direction is not finite or is normal to the surface"
-    )]
-    ConstraintDirection {
-        /// Position of the constraint in the list.
-        index: usize,
-        /// Its vertex.
-        vertex: u32,
-    },
-    /// Two constraints fix the same vertex.
-    #[error("constraints {first} and {second} both fix vertex {vertex}")]
-    DuplicateConstraint {
-        /// The earlier constraint.
-        first: usize,
-        /// The later one.
-        second: usize,
-        /// The vertex both fix.
-        vertex: u32,
-    },
-    /// A setting is out of its range.
-    #[error("line-field option `{option}` = {value} is invalid: {expected}")]
-    InvalidOption {
-        /// The option's name.
-        option: &'static str,
-        /// The value given.
-        value: f64,
-        /// The valid range, in words.
-        expected: &'static str,
-    },
-    /// The sparse solve failed.
-    #[error("line-field solve failed in the {stage}")]
-    Factorization {
-        /// The step that failed.
-        stage: &'static str,
-    },
-    /// The multigrid-preconditioned solve failed (see [`LinearSolver`](super::LinearSolver)).
-    #[error("line-field multigrid solve failed: {0}")]
-    Multigrid(#[from] crate::linalg::LinalgError),
-}
 
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
 pub const SHIFT: f64 = 1e-8;
@@ -121,15 +49,15 @@ pub enum LinearSolver {
     Multigrid,
 }
 
-/// A line field, the output of the solvers in [`design`](super::design): per vertex, a unit tangent direction (world space; its negation is the
+/// A line field, the output of the solvers in [`design`](super): per vertex, a unit tangent direction (world space; its negation is the
 /// same line) and the magnitude `|z_v|` of the solution.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LineField {
     /// Unit direction per vertex, in the vertex's tangent plane (the first axis of the
     /// tangent frame where the magnitude is 0): the smoothed normal's plane with
-    /// [`LineFieldOptions::smoothing`](super::LineFieldOptions::smoothing), the
+    /// [`LineFieldOptions::smoothing`](crate::field::design::LineFieldOptions::smoothing), the
     /// mesh's own with pair cancellation
-    /// ([`LineFieldOptions::cancel_distance`](super::LineFieldOptions::cancel_distance)).
+    /// ([`LineFieldOptions::cancel_distance`](crate::field::design::LineFieldOptions::cancel_distance)).
     pub directions: Vec<DVec3>,
     /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1`; for a
     /// guided field about 1 where it follows confident guidance or a constraint, smaller

@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use super::*;
-use crate::field::eigenpair::start_value;
+use crate::field::design::eigenpair::start_value;
 use crate::field::{TensorField, tangent_frame};
 use crate::mesh::shapes;
 use crate::segment::detect_singularities;

@@ -25,13 +25,24 @@
 //! one solve (or V-cycle), one product with `A`, `O(k n)` orthogonalisation (in
 //! parallel over fixed blocks of rows, so sums do not depend on the thread count) and
 //! a `k x k` eigenvalue problem.
+//!
+//! Kept rather than faer 0.24's partial eigensolver (`partial_self_adjoint_eigen`,
+//! Krylov-Schur): it builds a basis of at least 32 vectors and then extends it to at
+//! least 64 before its first convergence test (`MIN_DIM` in faer-0.24.4's
+//! `src/operator/eigen/mod.rs`, `partial_self_adjoint_eigen_imp`), one solve with the
+//! factor each, where this loop stops after 4 solves for `lambda_1` and about 12 for
+//! the smoothest field on the bunny (`field::design`'s docs); it works in the plain
+//! inner product, not the mass's; and it needs the exact operator, where the
+//! multigrid path grows its space by a V-cycle of the residual (Davidson), which it has
+//! no form for. Bits: its restarts and small eigenproblems are faer's, so the fields
+//! would change.
 
 use std::ops::Range;
 
 use faer::{Mat, Side, c64};
 use rayon::prelude::*;
 
-use super::line_field::LineFieldError;
+use super::error::LinalgError;
 
 /// Rows per task of the vector kernels below. Fixed, so that every sum is made in the
 /// same order whatever the thread count.
@@ -224,13 +235,13 @@ enum Expansion<I, P> {
 /// `apply_matrix` returns `A x`. Returns the estimate, the vector and the solves made.
 ///
 /// Errors: a zero or non-finite start or iterate (a failed solve).
-pub(crate) fn smallest_eigenpair(
+pub(crate) fn smallest_eigenpair<E: From<LinalgError>>(
     mass: &[f64],
     start: Vec<c64>,
     options: KrylovOptions,
-    apply_inverse: impl FnMut(&mut [c64]) -> Result<(), LineFieldError>,
+    apply_inverse: impl FnMut(&mut [c64]) -> Result<(), E>,
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
-) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
+) -> Result<(f64, Vec<c64>, usize), E> {
     rayleigh_ritz(
         mass,
         start,
@@ -255,29 +266,29 @@ pub(crate) fn smallest_eigenpair_preconditioned(
     options: KrylovOptions,
     precondition: impl FnMut(&[c64], &mut [c64]),
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
-) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
+) -> Result<(f64, Vec<c64>, usize), LinalgError> {
     rayleigh_ritz(
         mass,
         start,
         options,
-        Expansion::<fn(&mut [c64]) -> Result<(), LineFieldError>, _>::Precondition(precondition),
+        Expansion::<fn(&mut [c64]) -> Result<(), LinalgError>, _>::Precondition(precondition),
         apply_matrix,
     )
 }
 
 /// The Rayleigh-Ritz loop behind [`smallest_eigenpair`] and
 /// [`smallest_eigenpair_preconditioned`].
-fn rayleigh_ritz(
+fn rayleigh_ritz<E: From<LinalgError>>(
     mass: &[f64],
     start: Vec<c64>,
     options: KrylovOptions,
     mut expansion: Expansion<
-        impl FnMut(&mut [c64]) -> Result<(), LineFieldError>,
+        impl FnMut(&mut [c64]) -> Result<(), E>,
         impl FnMut(&[c64], &mut [c64]),
     >,
     apply_matrix: impl Fn(&[c64]) -> Vec<c64>,
-) -> Result<(f64, Vec<c64>, usize), LineFieldError> {
-    let normalised = |mut x: Vec<c64>| -> Result<Vec<c64>, LineFieldError> {
+) -> Result<(f64, Vec<c64>, usize), E> {
+    let normalised = |mut x: Vec<c64>| -> Result<Vec<c64>, LinalgError> {
         let norm = norm2(mass, &x, false).sqrt();
         if !(norm > 0.0 && norm.is_finite()) {
             return Err(failed());
@@ -316,20 +327,10 @@ fn rayleigh_ritz(
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
         if space.basis.len() >= limit {
-            // Restart from the Ritz vector (its estimate is unchanged); Davidson also
-            // keeps the one before it (in the current basis: `previous` and a zero).
+            let previous = std::mem::take(&mut previous);
             let x = normalised(space.combine(&estimate.1))?;
-            let older = (davidson && previous.len() + 1 == space.basis.len()).then(|| {
-                let mut y = std::mem::take(&mut previous);
-                y.push(c64::new(0.0, 0.0));
-                space.combine(&y)
-            });
-            space = Space::new(x, &apply_matrix);
-            estimate.1 = vec![c64::new(1.0, 0.0)];
-            if let Some(w) = older.and_then(|w| orthonormalised(mass, &space.basis, w).ok()?) {
-                space.push(w, &apply_matrix);
-                estimate = smallest_pair(&space.h).ok_or_else(failed)?;
-            }
+            (space, estimate) =
+                restarted(&space, x, estimate, previous, davidson, mass, &apply_matrix)?;
         }
         // The Ritz pair's residual, when the value has settled or Davidson grows by it.
         let residual = (davidson || settled_at.is_some())
@@ -339,19 +340,7 @@ fn rayleigh_ritz(
         {
             return Ok((estimate.0, phased(space.combine(&estimate.1)), solves));
         }
-        let w = match &mut expansion {
-            Expansion::Precondition(precondition) => {
-                let r = residual.unwrap_or_else(|| space.residual(mass, estimate.0, &estimate.1));
-                let mut w = vec![c64::new(0.0, 0.0); r.len()];
-                precondition(&r, &mut w);
-                w
-            }
-            Expansion::Inverse(apply_inverse) => {
-                let mut w = space.basis[space.basis.len() - 1].clone();
-                apply_inverse(&mut w)?;
-                w
-            }
-        };
+        let w = expansion.grow(&space, mass, &estimate, residual)?;
         solves += 1;
         let Some(w) = orthonormalised(mass, &space.basis, w)? else {
             // The space stopped growing: the estimate is exact for it.
@@ -372,11 +361,66 @@ fn rayleigh_ritz(
     }
 }
 
-/// A zero or non-finite start or iterate (a failed solve).
-fn failed() -> LineFieldError {
-    LineFieldError::Factorization {
-        stage: "solve (eigenvalue estimate: zero or non-finite iterate)",
+impl<I, P, E> Expansion<I, P>
+where
+    I: FnMut(&mut [c64]) -> Result<(), E>,
+    P: FnMut(&[c64], &mut [c64]),
+{
+    /// The next direction of the space: `T` applied to the newest basis vector, or the
+    /// preconditioned `residual` of the Ritz pair `estimate` (computed here when not
+    /// given).
+    fn grow(
+        &mut self,
+        space: &Space,
+        mass: &[f64],
+        estimate: &(f64, Vec<c64>),
+        residual: Option<Vec<c64>>,
+    ) -> Result<Vec<c64>, E> {
+        Ok(match self {
+            Expansion::Precondition(precondition) => {
+                let r = residual.unwrap_or_else(|| space.residual(mass, estimate.0, &estimate.1));
+                let mut w = vec![c64::new(0.0, 0.0); r.len()];
+                precondition(&r, &mut w);
+                w
+            }
+            Expansion::Inverse(apply_inverse) => {
+                let mut w = space.basis[space.basis.len() - 1].clone();
+                apply_inverse(&mut w)?;
+                w
+            }
+        })
     }
+}
+
+/// The space restarted from the Ritz vector `x` (`M`-normalised; its estimate is
+/// unchanged) of `space`; Davidson also keeps the Ritz vector before it (in the current
+/// basis: `previous`, the Ritz pair's coordinates before the newest basis vector, and
+/// a zero). Returns the new space and its Ritz pair.
+fn restarted(
+    space: &Space,
+    x: Vec<c64>,
+    mut estimate: (f64, Vec<c64>),
+    mut previous: Vec<c64>,
+    davidson: bool,
+    mass: &[f64],
+    apply_matrix: &impl Fn(&[c64]) -> Vec<c64>,
+) -> Result<(Space, (f64, Vec<c64>)), LinalgError> {
+    let older = (davidson && previous.len() + 1 == space.basis.len()).then(|| {
+        previous.push(c64::new(0.0, 0.0));
+        space.combine(&previous)
+    });
+    let mut space = Space::new(x, apply_matrix);
+    estimate.1 = vec![c64::new(1.0, 0.0)];
+    if let Some(w) = older.and_then(|w| orthonormalised(mass, &space.basis, w).ok()?) {
+        space.push(w, apply_matrix);
+        estimate = smallest_pair(&space.h).ok_or_else(failed)?;
+    }
+    Ok((space, estimate))
+}
+
+/// A zero or non-finite start or iterate (a failed solve).
+fn failed() -> LinalgError {
+    LinalgError::Iterate
 }
 
 /// `w` made `M`-orthogonal to the (`M`-orthonormal) `basis` by classical Gram-Schmidt
@@ -388,7 +432,7 @@ fn orthonormalised(
     mass: &[f64],
     basis: &[Vec<c64>],
     mut w: Vec<c64>,
-) -> Result<Option<Vec<c64>>, LineFieldError> {
+) -> Result<Option<Vec<c64>>, LinalgError> {
     let before = norm2(mass, &w, false).sqrt();
     for _ in 0..2 {
         let c = inners(Some(mass), basis, &w);
@@ -446,7 +490,7 @@ mod tests {
                     for ((x, a), m) in x.iter_mut().zip(&self.a).zip(&self.m) {
                         *x *= *m / (*a + self.sigma * *m);
                     }
-                    Ok(())
+                    Ok::<(), LinalgError>(())
                 },
                 |x| x.iter().zip(&self.a).map(|(x, a)| *x * *a).collect(),
             )
@@ -527,7 +571,7 @@ mod tests {
                     for ((x, a), m) in x.iter_mut().zip(&pencil.a).zip(&pencil.m) {
                         *x *= *m / (*a + pencil.sigma * *m);
                     }
-                    Ok(())
+                    Ok::<(), LinalgError>(())
                 },
                 |x| x.iter().zip(&pencil.a).map(|(x, a)| *x * *a).collect(),
             )
@@ -676,7 +720,13 @@ mod tests {
             basis_limit: 8,
             residual: None,
         };
-        let refused = smallest_eigenpair(&pencil.m, zero, options, |_| Ok(()), |x| x.to_vec());
+        let refused = smallest_eigenpair(
+            &pencil.m,
+            zero,
+            options,
+            |_| Ok::<(), LinalgError>(()),
+            |x| x.to_vec(),
+        );
         assert!(refused.is_err());
     }
 }

@@ -8,7 +8,7 @@
 
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
 
-use super::line_field::LineFieldError;
+use crate::field::LineFieldError;
 use crate::mesh::TriMesh;
 
 /// The lower-triangle pattern of a mesh's vertex graph (see the [module docs](self)).

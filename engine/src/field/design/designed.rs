@@ -1,5 +1,5 @@
-//! The designed field source ([`FieldSpec::Designed`](super::FieldSpec::Designed)): a
-//! smooth line field with few singularities ([`constrained_line_field`](super::constrained_line_field)) for the
+//! The designed field source ([`FieldSpec::Designed`](crate::field::FieldSpec::Designed)): a
+//! smooth line field with few singularities ([`constrained_line_field`](super::solve::constrained_line_field)) for the
 //! direction, and per-vertex anisotropy and density from their own sources.
 //!
 //! Input: a mesh and a [`Design`]. Output: a [`TensorField`] and the [`LineField`]
@@ -12,16 +12,15 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::curvature::{self, CurvatureMeasure, CurvatureNormalization};
-use super::design::{
-    LineConstraint, LineField, LineFieldOptions, LinearSolver, constrained_line_field_with,
-};
-use super::guidance::{curvature_guidance, direction_guidance};
-use super::params::{
+use super::line_field::{LineField, LinearSolver};
+use super::solve::{LineConstraint, LineFieldOptions, constrained_line_field_with};
+use crate::field::curvature::{self, CurvatureMeasure, CurvatureNormalization};
+use crate::field::guidance::{curvature_guidance, direction_guidance};
+use crate::field::params::{
     direction, eigenvalues, invalid, non_negative, positive,
     smoothing_iterations as smoothing_iterations_ok, spacing_ratio,
 };
-use super::{FieldError, PrincipalCurvatures, TensorField, principal_curvatures};
+use crate::field::{FieldError, PrincipalCurvatures, TensorField, principal_curvatures};
 use crate::mesh::TriMesh;
 
 /// What a designed line field aligns to.
@@ -46,7 +45,7 @@ pub enum Guidance {
     },
     /// A world direction projected into each tangent plane, trusted where it lies in
     /// the surface (see [`direction_guidance`]); unlike
-    /// [`FieldSpec::Constant`](super::FieldSpec::Constant) the field turns smoothly
+    /// [`FieldSpec::Constant`](crate::field::FieldSpec::Constant) the field turns smoothly
     /// where the surface faces the direction instead of flipping.
     Direction(
         /// World direction, finite and non-zero.
@@ -94,7 +93,7 @@ pub enum Anisotropy {
     /// `clamp((R |k1| + eps) / (R |k2| + eps), min, max)` from principal curvatures
     /// smoothed `smoothing_iterations` times (`R` the area radius, `eps` =
     /// `isotropy_curvature`): high where the surface bends one way only, 1 where it
-    /// is flat or umbilic (as [`FieldSpec::Curvature`](super::FieldSpec::Curvature)).
+    /// is flat or umbilic (as [`FieldSpec::Curvature`](crate::field::FieldSpec::Curvature)).
     Curvature {
         /// Smallest ratio, >= 1. Default 1.
         #[cfg_attr(feature = "serde", serde(default = "one"))]
@@ -131,7 +130,7 @@ pub enum Density {
     /// The same density everywhere, finite and > 0.
     Constant(f64),
     /// `floor + scale * c * measure(k1, k2)`, as
-    /// [`FieldSpec::Curvature`](super::FieldSpec::Curvature).
+    /// [`FieldSpec::Curvature`](crate::field::FieldSpec::Curvature).
     Curvature {
         /// Which curvature measure. Default RMS.
         #[cfg_attr(feature = "serde", serde(default))]
@@ -153,14 +152,14 @@ pub enum Density {
         smoothing_iterations: u32,
     },
     /// The densities `sqrt(l1 l2)` of the tensors in a field file (see
-    /// [`read_field_file`](super::read_field_file)); its directions are not used.
+    /// [`read_field_file`](crate::field::read_field_file)); its directions are not used.
     File(
         /// The field file (relative paths as for `FieldSpec::File`).
         PathBuf,
     ),
     /// Density that follows tone, for stippling: `lit` where the surface faces the
     /// light, growing to `shadow` where it turns away
-    /// ([`shading_densities`](super::shading_densities)).
+    /// ([`shading_densities`](crate::field::shading_densities)).
     Shading {
         /// Direction toward the light in the mesh's coordinates, finite and non-zero.
         /// Default `(0.4, 0.8, 0.45)`, the renderer's light.
@@ -185,7 +184,7 @@ impl Default for Density {
     }
 }
 
-/// The settings of a designed field ([`FieldSpec::Designed`](super::FieldSpec::Designed)).
+/// The settings of a designed field ([`FieldSpec::Designed`](crate::field::FieldSpec::Designed)).
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
@@ -257,7 +256,7 @@ fn four() -> f64 {
 
 #[cfg(feature = "serde")]
 fn default_light() -> [f64; 3] {
-    super::shading::DEFAULT_LIGHT
+    crate::field::DEFAULT_LIGHT
 }
 
 impl Design {
@@ -313,11 +312,7 @@ impl Design {
                 scale,
                 smoothing_iterations,
                 ..
-            } => {
-                positive("floor", *floor)?;
-                non_negative("scale", *scale)?;
-                smoothing_iterations_ok(*smoothing_iterations)?;
-            }
+            } => curvature::check_density(*floor, *scale, *smoothing_iterations)?,
             Density::File(_) => {}
             Density::Shading {
                 light,
@@ -404,15 +399,8 @@ impl Design {
                 smoothing_iterations,
             } => {
                 let k = curvatures.get(mesh, *smoothing_iterations);
-                let c = area_radius(mesh);
-                k.k1.iter()
-                    .zip(&k.k2)
-                    .map(|(k1, k2)| {
-                        let r = (c * k1.abs() + isotropy_curvature)
-                            / (c * k2.abs() + isotropy_curvature);
-                        r.clamp(*min, *max)
-                    })
-                    .collect()
+                let c = curvature::area_radius(mesh);
+                curvature::ratios(k, c, *isotropy_curvature, [*min, *max])
             }
         };
         let densities: Vec<f64> = match &self.density {
@@ -425,15 +413,17 @@ impl Design {
                 smoothing_iterations,
             } => {
                 let k = curvatures.get(mesh, *smoothing_iterations);
-                curvature::densities(mesh, k, *measure, *normalization, *floor, *scale)
+                curvature::densities(mesh, k, *measure, *normalization, *floor, *scale).1
             }
-            Density::File(path) => super::read_field_file(path, mesh)?.vertex_densities(mesh),
+            Density::File(path) => {
+                crate::field::read_field_file(path, mesh)?.vertex_densities(mesh)
+            }
             Density::Shading {
                 light,
                 lit,
                 shadow,
                 exponent,
-            } => super::shading_densities(mesh, *light, *lit, *shadow, *exponent),
+            } => crate::field::shading_densities(mesh, *light, *lit, *shadow, *exponent),
         };
         let eigen: Vec<[f64; 2]> = densities
             .iter()
@@ -462,11 +452,6 @@ impl CurvatureCache {
         };
         &self.computed[index].1
     }
-}
-
-/// `sqrt(area / 4 pi)`.
-fn area_radius(mesh: &TriMesh) -> f64 {
-    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
 }
 
 /// The vertex nearest to `p` (the lowest index among ties). O(V).

@@ -1,7 +1,7 @@
 //! The smallest eigenpair of the connection Laplacian `A z = lambda M z` for the
-//! line-field solvers of [`design`](super::design): the smoothest field (its vector)
+//! line-field solvers of [`design`](super): the smoothest field (its vector)
 //! and the estimate of `lambda_1` behind the smoothness shift (its value). With a
-//! direct factor: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)); with
+//! direct factor: Rayleigh-Ritz on a Krylov space (`linalg::lanczos`); with
 //! multigrid: Rayleigh-Ritz on a space grown by preconditioned residuals (Davidson).
 //! Both start from one fixed pseudo-random vector and sum in a fixed order, so results
 //! are deterministic.
@@ -9,11 +9,21 @@
 use faer::c64;
 
 use super::connection::{Connection, Factor};
-use super::design::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
-use super::lanczos;
-use super::line_field::LineFieldError;
-use crate::linalg::Amg;
+use crate::field::LineFieldError;
+use crate::linalg::{Amg, lanczos};
 use crate::mesh::TriMesh;
+
+/// Most solves behind the estimate of `lambda_1` for
+/// [`LineFieldOptions::smoothness`](crate::field::LineFieldOptions::smoothness).
+pub const LAMBDA_ITERATIONS: usize = 12;
+
+/// The estimate of `lambda_1` stops once a solve changes it by at most this fraction.
+/// It converges from above and faster than geometrically (Rayleigh-Ritz on a Krylov
+/// space, see `linalg/lanczos.rs`), so the last estimate is much closer than its last change:
+/// on the bunny the estimates after 1 to 4 solves are 1441, 516, 489 and 483 against a
+/// converged 482.0, so it stops after 4 solves 0.3% high (5 inverse iterations, the
+/// method before, stopped 0.8% high), as if `smoothness` were 0.5015 instead of 0.5.
+pub const LAMBDA_TOLERANCE: f64 = 2e-2;
 
 /// A fixed pseudo-random value in `[-1, 1)` for index `i` (SplitMix64 finaliser).
 pub(crate) fn start_value(i: u64) -> f64 {
@@ -84,6 +94,7 @@ fn davidson(
         |r, z| amg.apply(r, z, &mut work),
         |x| system.apply(x),
     )
+    .map_err(LineFieldError::from)
 }
 
 /// The stopping rule of [`smallest_eigenpair`] (shared by both of its solvers) with
@@ -118,7 +129,7 @@ type Eigenpair = (Vec<c64>, f64, usize);
 /// `A + shift M`, from the fixed pseudo-random start, until a step changes the value by
 /// at most `tolerance` times the larger of its magnitude and `floor` (and, for the
 /// `vector`, its residual is at most `sqrt(tolerance)` times the value), or after
-/// `max` solves: Rayleigh-Ritz on a Krylov space ([`lanczos`](super::lanczos)) with a
+/// `max` solves: Rayleigh-Ritz on a Krylov space (`linalg::lanczos`) with a
 /// direct factor, the preconditioned Davidson method
 /// ([`lanczos::smallest_eigenpair_preconditioned`]) with multigrid. Preconditioned
 /// inverse iteration, which it replaces, keeps one vector: it stalled on the vector

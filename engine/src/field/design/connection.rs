@@ -1,5 +1,5 @@
 //! The discrete connection Laplacian of line fields on vertex tangent planes, the
-//! system behind [`design`](super::design) (see its module docs for the energy).
+//! system behind [`design`](super) (see its module docs for the energy).
 //!
 //! Input: a [`TriMesh`] and a smoothing length. Output: a [`Connection`]: per edge the
 //! cotangent weight and the rotation `r_ab = e^(2 i (psi_b - psi_a))`, per vertex the
@@ -18,15 +18,15 @@ use faer::{Mat, MatMut, traits::ComplexField};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::cholesky::{self, Cholesky, Storage, Symbolic};
 use super::pattern::VertexPattern;
 use super::vertex_graph::VertexGraph;
 
 use super::line_field::{
-    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
-    SOLVE_TOLERANCE,
+    LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
 };
-use super::{tangent_frame, vertex_frames};
+use crate::field::LineFieldError;
+use crate::field::{tangent_frame, vertex_frames};
+use crate::linalg::cholesky::{self, Cholesky, Storage, Symbolic};
 use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
 use crate::mesh::TriMesh;
 
@@ -99,7 +99,7 @@ const REUSE_MAX_ITERATIONS: usize = 60;
 const NORMALS_TOLERANCE: f64 = 1e-4;
 
 /// `e^(i psi)` for the angle `psi` of `d` in the frame `(e1, e2)`
-/// ([`frame_angle`](super::frame_angle) without trigonometry); 1 where `d` has no
+/// ([`frame_angle`](crate::field::frame_angle) without trigonometry); 1 where `d` has no
 /// tangent part, as `atan2(0, 0) = 0` gives.
 fn unit_direction(d: DVec3, (e1, e2): (DVec3, DVec3)) -> c64 {
     let (c, s) = (d.dot(e1), d.dot(e2));

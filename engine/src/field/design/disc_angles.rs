@@ -1,5 +1,5 @@
 //! The field inside a disc of the mesh with no singularity, given its values around
-//! the disc (for [pair cancellation](super::cancel)): the field's doubled angle is
+//! the disc (for pair cancellation, `cancel.rs`): the field's doubled angle is
 //! lifted to real numbers along the boundary, where it winds zero times, and
 //! interpolated inside by the cotangent Laplacian against the connection's angles,
 //! themselves lifted so that around every face they sum to its holonomy.
@@ -14,10 +14,10 @@ use faer::MatMut;
 use faer::c64;
 use faer::sparse::{SparseColMat, Triplet};
 
-use super::cancel::face_double_index;
-use super::cholesky::{self, Cholesky};
 use super::connection::Connection;
-use super::line_field::LineFieldError;
+use super::index::{angle, face_double_index};
+use crate::field::LineFieldError;
+use crate::linalg::cholesky::{self, Cholesky};
 use crate::mesh::TriMesh;
 
 /// The field on the `free` vertices (ascending; those whose faces all lie in the disc
@@ -38,7 +38,6 @@ pub(super) fn angles_inside(
     free: &[u32],
 ) -> Result<Option<Vec<c64>>, LineFieldError> {
     let edges = distinct(faces.iter().flat_map(|&f| mesh.face_edges()[f as usize]));
-    let in_disc = |e: u32| edges.binary_search(&e).is_ok();
     let is_free = |v: u32| free.binary_search(&v).is_ok();
     // Interior vertices that are held would need the lift through them.
     let held_inside = corners(mesh, faces).any(|v| {
@@ -71,12 +70,33 @@ pub(super) fn angles_inside(
             -r
         }
     };
-    // Lift the boundary's angles: breadth first along the disc's edges between fixed
-    // vertices, each step taking the turn nearest the transport.
     let boundary = distinct(corners(mesh, faces).filter(|&v| !is_free(v)));
-    if boundary.is_empty() {
+    let Some(lifted) = lift_boundary(mesh, z, &boundary, &edges, &rho) else {
         return Ok(None);
+    };
+    let disc = Disc {
+        free,
+        boundary: &boundary,
+        lifted: &lifted,
+    };
+    solve_inside(mesh, system, z, disc, &rho).map(Some)
+}
+
+/// The doubled angles of the field at the disc's `boundary` vertices (ascending) lifted
+/// to real numbers: breadth first along the disc's `edges` between boundary vertices,
+/// each step taking the turn nearest the transport `rho(e, u)` (the connection angle of
+/// edge `e` walked from `u`). `None` where the boundary is empty or not joined by edges.
+fn lift_boundary(
+    mesh: &TriMesh,
+    z: &[c64],
+    boundary: &[u32],
+    edges: &[u32],
+    rho: &impl Fn(u32, u32) -> f64,
+) -> Option<Vec<f64>> {
+    if boundary.is_empty() {
+        return None;
     }
+    let in_disc = |e: u32| edges.binary_search(&e).is_ok();
     let mut lifted = vec![f64::NAN; boundary.len()];
     lifted[0] = angle(z[boundary[0] as usize]);
     let mut queue = std::collections::VecDeque::from([0usize]);
@@ -101,12 +121,33 @@ pub(super) fn angles_inside(
             }
         }
     }
-    if lifted.iter().any(|t| t.is_nan()) {
-        return Ok(None);
-    }
-    // The cotangent Laplacian on the free vertices (definite: the boundary is held),
-    // two right-hand sides: the angle
-    // and the magnitude.
+    (!lifted.iter().any(|t| t.is_nan())).then_some(lifted)
+}
+
+/// A disc's vertices: the free ones (ascending), the held boundary (ascending) and the
+/// boundary's lifted angles.
+#[derive(Clone, Copy)]
+struct Disc<'a> {
+    free: &'a [u32],
+    boundary: &'a [u32],
+    lifted: &'a [f64],
+}
+
+/// The field on the disc's free vertices: angle and magnitude interpolated from the
+/// boundary by the cotangent Laplacian on the free vertices (definite: the boundary is
+/// held), one factorization for the two right-hand sides.
+fn solve_inside(
+    mesh: &TriMesh,
+    system: &Connection,
+    z: &[c64],
+    disc: Disc<'_>,
+    rho: &impl Fn(u32, u32) -> f64,
+) -> Result<Vec<c64>, LineFieldError> {
+    let Disc {
+        free,
+        boundary,
+        lifted,
+    } = disc;
     let k = free.len();
     let mut lower = Vec::with_capacity(4 * k);
     let mut rhs = vec![0.0; 2 * k];
@@ -146,19 +187,12 @@ pub(super) fn angles_inside(
             stage: "disc solve",
         });
     }
-    Ok(Some(
-        (0..k)
-            .map(|i| {
-                let (s, c) = rhs[i].sin_cos();
-                c64::new(c, s) * rhs[k + i].max(0.0)
-            })
-            .collect(),
-    ))
-}
-
-/// The angle of `z`, in `(-pi, pi]`.
-pub(super) fn angle(z: c64) -> f64 {
-    z.im.atan2(z.re)
+    Ok((0..k)
+        .map(|i| {
+            let (s, c) = rhs[i].sin_cos();
+            c64::new(c, s) * rhs[k + i].max(0.0)
+        })
+        .collect())
 }
 
 /// Per edge of the disc `faces` (`edges`, ascending), the connection's rotation angle

@@ -1,91 +1,9 @@
-//! Field design: smooth line fields (2-direction fields) on vertex tangent planes with
-//! few singularities, after Knöppel, Crane, Pinkall and Schröder, "Globally optimal
-//! direction fields" (SIGGRAPH 2013).
+//! The line-field solvers' entry points ([`smoothest_line_field`], [`guided_line_field`],
+//! [`constrained_line_field`], [`line_field_energy`]) and their options; the method is
+//! in the [folder's docs](super).
 //!
-//! # Representation
-//! Each vertex `v` has the tangent frame `(e1, e2)` of [`tangent_frame`](super::tangent_frame) of its vertex
-//! normal. A line field is a complex number per vertex, `z_v = r_v e^(2 i theta_v)`, in
-//! that frame: the doubled angle makes `theta` and `theta + pi` the same line, so no sign
-//! has to be chosen anywhere.
-//!
-//! # Connection and energy
-//! Along edge `a -> b` with direction `d`, let `psi_v` be the angle of `d` projected into
-//! the tangent plane of `v`, in `v`'s frame (the discrete Levi-Civita connection of the
-//! paper: transport keeps the angle to the edge). A line at doubled angle `alpha` at `a`
-//! arrives at `b` as `alpha + 2 (psi_b - psi_a)`, i.e. multiplied by
-//! `r_ab = e^(2 i (psi_b - psi_a))`. This is the same connection as the singularity
-//! detector's ([`line_field_transport`](crate::segment::line_field_transport)), so a
-//! field that is smooth here turns little there. The energy is
-//!
-//! `E(z) = sum_edges w_ab |z_b - r_ab z_a|^2 = z^H A z`,
-//!
-//! with `A` Hermitian positive semi-definite. The weights are the cotangent weights
-//! `w_ab = (cot alpha + cot beta) / 2` of the two opposite corners, clamped from below at
-//! [`MIN_EDGE_WEIGHT`] (cotangents are negative at obtuse corners, and a negative weight
-//! would break positivity; the floor also keeps every edge coupled). The mass `M` is
-//! lumped: a third of the adjacent face areas per vertex.
-//!
-//! # Solves
-//! The complex Hermitian `n x n` systems are factored by faer's sparse Cholesky over
-//! `c64` (sequential), with one symbolic factorization (AMD ordering) of the mesh's
-//! pattern shared by every solve on the whole mesh (see `connection.rs`). From
-//! [`MULTIGRID_VERTICES`] vertices ([`LinearSolver::Auto`]) they are solved instead by
-//! conjugate gradients preconditioned with algebraic multigrid ([`crate::linalg`]) to
-//! [`SOLVE_TOLERANCE`], since a factor's fill grows faster than the mesh; the
-//! eigen-solves then take one V-cycle on the eigen-residual per step instead of a
-//! solve (the Davidson method, Rayleigh-Ritz on the space of those corrections).
-//!
-//! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the frames and
-//! the rotations `r_ab` are measured in the tangent planes of the vertex normals after
-//! one implicit heat step `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the
-//! clamped cotangent Laplacian): bumps smaller than about `l` no longer turn the
-//! connection, so they no longer attract singularities (Ray, Vallet, Alonso and Lévy
-//! 2009 make fields ignore small details in the same spirit). Output directions lie in
-//! the smoothed planes; [`TensorField::from_frames`](super::TensorField::from_frames)
-//! projects them into the mesh's.
-//! - Smoothest field ([`smoothest_line_field`]): the eigenvector of the smallest
-//!   eigenvalue of `A z = lambda M z`, with one factorization of `A + sigma M`
-//!   (`sigma` = [`SHIFT`] times the ratio of the traces of `A` and `M`), from a fixed
-//!   pseudo-random start: Rayleigh-Ritz on the Krylov space of `(A + sigma M)^-1 M`
-//!   (`lanczos.rs`), until the Ritz value settles and the Ritz vector's residual is
-//!   small, or the solve budget is spent. Its global phase (a rotation of every line)
-//!   is free; the one returned is the limit of inverse iteration from the same start.
-//!   On the bunny 12 solves give what inverse iteration gave in 64. With multigrid:
-//!   30 V-cycles on the bunny Loop-subdivided once (`eigenpair.rs`).
-//! - Guided field ([`guided_line_field`], [`constrained_line_field`]): given a guidance
-//!   per vertex (a unit line `u_v` and a confidence `c_v >= 0`), a weight and optional
-//!   hard constraints, one solve for the minimiser of
-//!   `E(z) + w sum_v m_v c_v |z_v - u_v|^2` with `z_k = u_k` fixed at constrained
-//!   vertices (they are eliminated: their terms move to the right-hand side). Where the
-//!   confidence is 0 the field is free and interpolates its surroundings harmonically,
-//!   so regions without guidance follow their neighbours instead of shrinking to zero
-//!   (a plain `w |z - q|^2` pull toward `q = 0` would). A tiny shift `sigma M` (as for
-//!   the smoothest field) keeps the system definite in a connected component that
-//!   nothing pins (its field is then zero, and its directions are the frames' first
-//!   axes). Weight 0 and no constraints give the smoothest field.
-//! - Pair cancellation ([`LineFieldOptions::cancel_distance`], `cancel.rs`): after
-//!   either solve, opposite singularities closer than a distance are removed together
-//!   by re-solving the field's angle on a disc around both (Zhang, Hays and Turk 2007).
-//!   It works in the mesh's own vertex frames, where the segmentation measures
-//!   singularities, and the field is then returned in those frames.
-//!
-//! Input: a [`TriMesh`] (and a guidance per vertex). Output: a [`LineField`], a unit
-//! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
-//! turns into a [`TensorField`](super::TensorField). Cost: O(V + E) assembly, one AMD ordering, one
-//! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
-//! solve with that factor per Krylov step. With a smoothness shift the estimate of
-//! `lambda_1` adds one factorization and a few solves (Rayleigh-Ritz on a Krylov space,
-//! `lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`MULTIGRID_VERTICES`] a
-//! multigrid hierarchy and a few V-cycles. Measured (2 cores, release, `field_design`):
-//! the rocker arm (10k vertices, factored) 0.04 s; the Stanford bunny (35k vertices,
-//! multigrid) 0.16-0.17 s for the designed (curvature-aligned, shifted) field and
-//! 0.17-0.18 s for the smoothest field. Two threads:
-//! the AMD ordering beside the weights, the factor buffers' allocation beside the
-//! normals' smoothing, the guidance (the designed field's curvature) beside the
-//! estimate of `lambda_1`; the factors reuse one set of buffers (`cholesky.rs`).
-//! Deterministic: fixed iteration order, sequential solves, fixed start vector, the
-//! eigen-solvers' vector sums over fixed blocks of rows; the second thread computes an
-//! independent input, so the thread count changes nothing.
+//! Input: a mesh, options, guidance and constraints. Output: a [`LineField`]. Cost:
+//! see the [folder's docs](super).
 
 use std::borrow::Cow;
 
@@ -95,22 +13,11 @@ use glam::DVec3;
 use super::cancel::cancel_pairs;
 use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
-pub use super::line_field::{
-    LineField, LineFieldError, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
-    SOLVE_TOLERANCE,
-};
+use super::line_field::{LineField, LinearSolver};
+use crate::field::LineFieldError;
+use crate::field::curvature::area_radius;
+use crate::linalg::Amg;
 use crate::mesh::TriMesh;
-
-/// Most solves behind the estimate of `lambda_1` for [`LineFieldOptions::smoothness`].
-pub const LAMBDA_ITERATIONS: usize = 12;
-
-/// The estimate of `lambda_1` stops once a solve changes it by at most this fraction.
-/// It converges from above and faster than geometrically (Rayleigh-Ritz on a Krylov
-/// space, see `lanczos.rs`), so the last estimate is much closer than its last change:
-/// on the bunny the estimates after 1 to 4 solves are 1441, 516, 489 and 483 against a
-/// converged 482.0, so it stops after 4 solves 0.3% high (5 inverse iterations, the
-/// method before, stopped 0.8% high), as if `smoothness` were 0.5015 instead of 0.5.
-pub const LAMBDA_TOLERANCE: f64 = 2e-2;
 
 /// Settings of the line-field solvers.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -126,14 +33,14 @@ pub struct LineFieldOptions {
     /// Shift `s` toward the smoothest field in guided solves: the system becomes
     /// `A - s lambda_1 M + w M C` (Knöppel et al. 2013's `lambda_t`), where `lambda_1` is
     /// the smallest eigenvalue of the connection Laplacian (estimated from above in at
-    /// most [`LAMBDA_ITERATIONS`] solves). 0 is the plain guided solve; near 1
+    /// most [`LAMBDA_ITERATIONS`](crate::field::design::LAMBDA_ITERATIONS) solves). 0 is the plain guided solve; near 1
     /// the field keeps the smoothest field's few singularities and takes only its
     /// rotation and local detail from the guidance. Range `[0, 0.95]`; default 0.
     pub smoothness: f64,
     /// Length over which the surface's normals are smoothed before they define the
     /// connection, as a fraction of the mesh's area radius `R = sqrt(area / 4 pi)`:
     /// bumps smaller than about `smoothing R` then create no singularities (one
-    /// implicit heat step of the normals, see the [module docs](self)). Range
+    /// implicit heat step of the normals, see the [module docs](crate::field::design)). Range
     /// `[0, inf)`, 0 using the mesh's own normals; default 0.
     pub smoothing: f64,
     /// Most solves of the smoothest field. Range `[1, inf)`; default 200.
@@ -148,7 +55,7 @@ pub struct LineFieldOptions {
     /// Opposite singularities (`+1/2` and `-1/2`) whose centres lie at most this far
     /// apart, as a fraction of the area radius `R`, are cancelled after the solve: the
     /// field's angle on a disc around both is interpolated afresh from the disc's
-    /// boundary, around which it winds zero times (see the [module docs](self)). With
+    /// boundary, around which it winds zero times (see the [module docs](crate::field::design)). With
     /// it the result's directions lie in the mesh's own tangent planes. Range
     /// `[0, inf)`, 0 cancelling none; default 0.
     pub cancel_distance: f64,
@@ -228,13 +135,8 @@ pub struct LineConstraint {
     pub direction: DVec3,
 }
 
-/// `sqrt(area / 4 pi)`: the radius of the sphere with the mesh's area.
-fn area_radius(mesh: &TriMesh) -> f64 {
-    (mesh.area() / (4.0 * std::f64::consts::PI)).sqrt()
-}
-
 /// The smoothest line field of `mesh`: the eigenvector of the smallest eigenvalue of
-/// `A z = lambda M z` (see the [module docs](self)): Rayleigh-Ritz on a Krylov space
+/// `A z = lambda M z` (see the [module docs](crate::field::design)): Rayleigh-Ritz on a Krylov space
 /// with a direct solver, Rayleigh-Ritz on multigrid-preconditioned residuals (the
 /// Davidson method) with multigrid.
 /// `options.weight` is not used.
@@ -331,7 +233,7 @@ pub fn line_field_energy(mesh: &TriMesh, directions: &[DVec3]) -> Result<f64, Li
 
 /// The line field that balances smoothness against `guidance`: the minimiser of
 /// `E(z) + w sum_v m_v c_v |z_v - u_v|^2`, `w = options.weight / area` (see the
-/// [module docs](self)). Each guidance vector is projected into its vertex's tangent
+/// [module docs](crate::field::design)). Each guidance vector is projected into its vertex's tangent
 /// plane; its direction gives the line `u_v` (its sign does not matter) and its length
 /// the confidence `c_v` (a zero vector: no guidance there, the field follows its
 /// neighbours). A weight of 0, or no guidance anywhere, gives
@@ -396,48 +298,17 @@ pub(crate) fn constrained_line_field_with<'g>(
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let n = mesh.vertex_count();
-    let smoothing = options.smoothing * area_radius(mesh);
-    // lambda_1 depends on the connection alone, so it is estimated beside the guidance
-    // whenever the shift may apply (it is dropped when a component turns out unpinned);
-    // the connection's build keeps both threads busy on its own. Without the shift the
-    // guidance is made beside the build.
-    let may_shift =
-        options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty());
-    let (built, guidance) = if may_shift {
-        let system = Connection::build(mesh, smoothing, options.solver, true)?;
-        rayon::join(
-            move || -> Result<_, LineFieldError> {
-                let lambda = smallest_eigenvalue(mesh, &system, system.shift())?;
-                Ok((system, Some(lambda)))
-            },
-            guidance,
-        )
-    } else {
-        rayon::join(
-            || {
-                Ok((
-                    Connection::build(mesh, smoothing, options.solver, true)?,
-                    None,
-                ))
-            },
-            guidance,
-        )
-    };
-    let (system, lambda_1) = built?;
+    let Built {
+        system,
+        lambda_1,
+        guidance,
+    } = connection_beside(mesh, options, guided, constraints, guidance)?;
     let (lambda_1, hierarchy) = match lambda_1 {
         Some((lambda, hierarchy)) => (Some(lambda), hierarchy),
         None => (None, None),
     };
     let guidance = &*guidance;
-    if !guidance.is_empty() && guidance.len() != n {
-        return Err(LineFieldError::GuidanceLength {
-            expected: n,
-            found: guidance.len(),
-        });
-    }
-    if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
-        return Err(LineFieldError::NonFiniteGuidance { vertex });
-    }
+    check_guidance(guidance, n)?;
     let fixed = fixed_values(mesh, &system, constraints)?;
     let q = if options.weight > 0.0 && !guidance.is_empty() {
         guidance_lines(mesh, &system, guidance)
@@ -448,22 +319,7 @@ pub(crate) fn constrained_line_field_with<'g>(
         return smoothest_on(mesh, &system, options);
     }
 
-    // Unknowns: the free vertices in index order, then the fixed ones (slots >= free).
-    let mut slots = vec![0; n];
-    let mut free = 0;
-    for v in 0..n {
-        if fixed[v].is_none() {
-            slots[v] = free;
-            free += 1;
-        }
-    }
-    let mut next = free;
-    for v in 0..n {
-        if fixed[v].is_some() {
-            slots[v] = next;
-            next += 1;
-        }
-    }
+    let (slots, free) = unknown_slots(&fixed);
     let area: f64 = system.mass.iter().sum();
     let w = options.weight / area;
     // Only a connected component with no guidance and no constraint leaves the system
@@ -511,55 +367,169 @@ pub(crate) fn constrained_line_field_with<'g>(
         }
     }
     if free > 0 {
-        // An estimate of lambda_1 slightly too high could leave the shifted system
-        // indefinite (a failed factorization, or conjugate gradients meeting negative
-        // curvature): then halve the shift (three times at most, then none).
-        let mut attempt = 0;
         // With multigrid, the hierarchy built for lambda_1 (of `A + shift M`)
         // preconditions the shifted system when their ratio is bounded (see
         // `REUSE_CONDITION`), saving a second hierarchy's setup.
-        let mut reuse = hierarchy.filter(|_| {
+        let reuse = hierarchy.filter(|_| {
             free == n
                 && lambda_1.is_some_and(|lambda| {
                     reuse_condition(&extra, &system.mass, shift, lambda) <= REUSE_CONDITION
                 })
         });
-        rhs = loop {
-            let shifted: Vec<f64> = if attempt < 4 {
-                let back = pull * (1.0 - 0.5f64.powi(attempt));
-                extra
-                    .iter()
-                    .zip(&system.mass)
-                    .map(|(d, m)| d + back * m)
-                    .collect()
-            } else {
-                extra
-                    .iter()
-                    .zip(&system.mass)
-                    .map(|(d, m)| d + pull * m)
-                    .collect()
-            };
-            if let Some(amg) = reuse.take()
-                && let Some(z) = system.solve_with_hierarchy(&amg, shift, &shifted, &rhs)
-            {
-                break z;
-            }
-            let mut z = rhs.clone();
-            let solved = system
-                .factor(mesh, &shifted, &slots, free)
-                .and_then(|mut factor| factor.solve(&mut z));
-            match solved {
-                Ok(()) => break z,
-                Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
-                Err(_) => attempt += 1,
-            }
+        let unknowns = Unknowns {
+            slots: &slots,
+            free,
         };
+        rhs = solve_shifted(mesh, &system, &extra, pull, unknowns, reuse, rhs)?;
     }
     let x: Vec<c64> = (0..n)
         .map(|v| fixed[v].unwrap_or_else(|| rhs[slots[v]]))
         .collect();
     let held: Vec<bool> = fixed.iter().map(Option::is_some).collect();
     output(mesh, &system, x, &held, options, 0)
+}
+
+/// The connection (and, when the smoothness shift may apply, the estimate of
+/// `lambda_1` with its multigrid hierarchy) built on one thread, the guidance made on
+/// another. `lambda_1` depends on the connection alone, so it is estimated beside the
+/// guidance whenever the shift may apply (it is dropped when a component turns out
+/// unpinned); the connection's build keeps both threads busy on its own. Without the
+/// shift the guidance is made beside the build.
+fn connection_beside<'g>(
+    mesh: &TriMesh,
+    options: &LineFieldOptions,
+    guided: bool,
+    constraints: &[LineConstraint],
+    guidance: impl FnOnce() -> Cow<'g, [DVec3]> + Send,
+) -> Result<Built<'g>, LineFieldError> {
+    let smoothing = options.smoothing * area_radius(mesh);
+    let may_shift =
+        options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty());
+    let (built, guidance) = if may_shift {
+        let system = Connection::build(mesh, smoothing, options.solver, true)?;
+        rayon::join(
+            move || -> Result<_, LineFieldError> {
+                let lambda = smallest_eigenvalue(mesh, &system, system.shift())?;
+                Ok((system, Some(lambda)))
+            },
+            guidance,
+        )
+    } else {
+        rayon::join(
+            || {
+                Ok((
+                    Connection::build(mesh, smoothing, options.solver, true)?,
+                    None,
+                ))
+            },
+            guidance,
+        )
+    };
+    let (system, lambda_1) = built?;
+    Ok(Built {
+        system,
+        lambda_1,
+        guidance,
+    })
+}
+
+/// What [`connection_beside`] makes.
+struct Built<'g> {
+    system: Connection,
+    /// The estimate of `lambda_1` and, with multigrid, the hierarchy it built.
+    lambda_1: Option<(f64, Option<Amg<c64>>)>,
+    guidance: Cow<'g, [DVec3]>,
+}
+
+/// Checks a guidance: empty or one finite vector per vertex.
+fn check_guidance(guidance: &[DVec3], n: usize) -> Result<(), LineFieldError> {
+    if !guidance.is_empty() && guidance.len() != n {
+        return Err(LineFieldError::GuidanceLength {
+            expected: n,
+            found: guidance.len(),
+        });
+    }
+    if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
+        return Err(LineFieldError::NonFiniteGuidance { vertex });
+    }
+    Ok(())
+}
+
+/// Per vertex its unknown's slot: the free vertices in index order, then the fixed
+/// ones (slots >= free); and the count of free ones.
+fn unknown_slots(fixed: &[Option<c64>]) -> (Vec<usize>, usize) {
+    let n = fixed.len();
+    let mut slots = vec![0; n];
+    let mut free = 0;
+    for v in 0..n {
+        if fixed[v].is_none() {
+            slots[v] = free;
+            free += 1;
+        }
+    }
+    let mut next = free;
+    for v in 0..n {
+        if fixed[v].is_some() {
+            slots[v] = next;
+            next += 1;
+        }
+    }
+    (slots, free)
+}
+
+/// The unknowns of a constrained solve: each vertex's slot and the free count.
+#[derive(Clone, Copy)]
+struct Unknowns<'a> {
+    slots: &'a [usize],
+    free: usize,
+}
+
+/// Solves `(A + diag(extra) + pull M) z = rhs` on the free unknowns, first with the
+/// hierarchy `reuse` when given and it converges. An estimate of `lambda_1` slightly
+/// too high could leave the shifted system indefinite (a failed factorization, or
+/// conjugate gradients meeting negative curvature): then the shift is halved (three
+/// times at most, then none).
+fn solve_shifted(
+    mesh: &TriMesh,
+    system: &Connection,
+    extra: &[f64],
+    pull: f64,
+    unknowns: Unknowns<'_>,
+    mut reuse: Option<Amg<c64>>,
+    rhs: Vec<c64>,
+) -> Result<Vec<c64>, LineFieldError> {
+    let shift = system.shift();
+    let mut attempt = 0;
+    loop {
+        let shifted: Vec<f64> = if attempt < 4 {
+            let back = pull * (1.0 - 0.5f64.powi(attempt));
+            extra
+                .iter()
+                .zip(&system.mass)
+                .map(|(d, m)| d + back * m)
+                .collect()
+        } else {
+            extra
+                .iter()
+                .zip(&system.mass)
+                .map(|(d, m)| d + pull * m)
+                .collect()
+        };
+        if let Some(amg) = reuse.take()
+            && let Some(z) = system.solve_with_hierarchy(&amg, shift, &shifted, &rhs)
+        {
+            return Ok(z);
+        }
+        let mut z = rhs.clone();
+        let solved = system
+            .factor(mesh, &shifted, unknowns.slots, unknowns.free)
+            .and_then(|mut factor| factor.solve(&mut z));
+        match solved {
+            Ok(()) => return Ok(z),
+            Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
+            Err(_) => attempt += 1,
+        }
+    }
 }
 
 /// The largest bound on the condition number of `B^-1 K` under which the shifted
@@ -659,5 +629,5 @@ fn fixed_values(
 }
 
 #[cfg(test)]
-#[path = "design_tests.rs"]
+#[path = "solve_tests.rs"]
 mod tests;

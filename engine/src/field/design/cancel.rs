@@ -24,54 +24,15 @@
 
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
-use std::f64::consts::TAU;
 
 use faer::c64;
 use glam::DVec3;
-use rayon::prelude::*;
 
-use super::connection::{Connection, EdgeTerm};
-use super::disc_angles::{angle, angles_inside, corners, distinct, is_disc};
-use super::line_field::LineFieldError;
+use super::connection::Connection;
+use super::disc_angles::{angles_inside, corners, distinct, is_disc};
+use super::index::{face_double_index, face_double_indices};
+use crate::field::LineFieldError;
 use crate::mesh::{TriMesh, touching_groups};
-
-/// Twice the index of every face of the line field `z` (doubled angles in the
-/// connection's vertex frames): the turn of the field against the connection's
-/// transport around the face, plus the face's holonomy, over `2 pi`. The same index
-/// as the segmentation's, measured in the connection's (possibly smoothed) frames.
-pub(crate) fn face_double_indices(mesh: &TriMesh, system: &Connection, z: &[c64]) -> Vec<i32> {
-    let edges = &system.edges;
-    (0..mesh.face_count())
-        .into_par_iter()
-        .map(|f| face_double_index(mesh, edges, z, f))
-        .collect()
-}
-
-/// Twice the index of face `f` (see [`face_double_indices`]), with `edges` the
-/// connection's edge terms.
-pub(super) fn face_double_index(mesh: &TriMesh, edges: &[EdgeTerm], z: &[c64], f: usize) -> i32 {
-    let t = mesh.triangles()[f];
-    let fe = mesh.face_edges()[f];
-    let mut turns = [c64::new(1.0, 0.0); 4];
-    for k in 0..3 {
-        let (u, v) = (t[k] as usize, t[(k + 1) % 3] as usize);
-        let e = &edges[fe[k] as usize];
-        // The stored rotation transports a -> b; walking b -> a takes its inverse.
-        let r = if e.a == u {
-            e.rotation
-        } else {
-            e.rotation.conj()
-        };
-        turns[3] *= r;
-        turns[k] = z[v] * (r * z[u]).conj();
-    }
-    // Four angles under pi/4 each sum to less than pi: index 0 without any arctangent
-    // (most faces of a smooth field).
-    if turns.iter().all(|c| c.re > c.im.abs()) {
-        return 0;
-    }
-    (turns.iter().map(|&c| angle(c)).sum::<f64>() / TAU).round() as i32
-}
 
 /// Singular faces that share a vertex, with a non-zero net index.
 #[derive(Debug)]

@@ -1,0 +1,126 @@
+//! Field design: smooth line fields (2-direction fields) on vertex tangent planes with
+//! few singularities, after Knöppel, Crane, Pinkall and Schröder, "Globally optimal
+//! direction fields" (SIGGRAPH 2013).
+//!
+//! # Representation
+//! Each vertex `v` has the tangent frame `(e1, e2)` of [`tangent_frame`](crate::field::tangent_frame) of its vertex
+//! normal. A line field is a complex number per vertex, `z_v = r_v e^(2 i theta_v)`, in
+//! that frame: the doubled angle makes `theta` and `theta + pi` the same line, so no sign
+//! has to be chosen anywhere.
+//!
+//! # Connection and energy
+//! Along edge `a -> b` with direction `d`, let `psi_v` be the angle of `d` projected into
+//! the tangent plane of `v`, in `v`'s frame (the discrete Levi-Civita connection of the
+//! paper: transport keeps the angle to the edge). A line at doubled angle `alpha` at `a`
+//! arrives at `b` as `alpha + 2 (psi_b - psi_a)`, i.e. multiplied by
+//! `r_ab = e^(2 i (psi_b - psi_a))`. This is the same connection as the singularity
+//! detector's ([`line_field_transport`](crate::segment::line_field_transport)), so a
+//! field that is smooth here turns little there. The energy is
+//!
+//! `E(z) = sum_edges w_ab |z_b - r_ab z_a|^2 = z^H A z`,
+//!
+//! with `A` Hermitian positive semi-definite. The weights are the cotangent weights
+//! `w_ab = (cot alpha + cot beta) / 2` of the two opposite corners, clamped from below at
+//! [`MIN_EDGE_WEIGHT`] (cotangents are negative at obtuse corners, and a negative weight
+//! would break positivity; the floor also keeps every edge coupled). The mass `M` is
+//! lumped: a third of the adjacent face areas per vertex.
+//!
+//! # Solves
+//! The complex Hermitian `n x n` systems are factored by faer's sparse Cholesky over
+//! `c64` (sequential), with one symbolic factorization (AMD ordering) of the mesh's
+//! pattern shared by every solve on the whole mesh (see `design/connection.rs`). From
+//! [`MULTIGRID_VERTICES`] vertices ([`LinearSolver::Auto`]) they are solved instead by
+//! conjugate gradients preconditioned with algebraic multigrid ([`crate::linalg`]) to
+//! [`SOLVE_TOLERANCE`], since a factor's fill grows faster than the mesh; the
+//! eigen-solves then take one V-cycle on the eigen-residual per step instead of a
+//! solve (the Davidson method, Rayleigh-Ritz on the space of those corrections).
+//!
+//! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the frames and
+//! the rotations `r_ab` are measured in the tangent planes of the vertex normals after
+//! one implicit heat step `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the
+//! clamped cotangent Laplacian): bumps smaller than about `l` no longer turn the
+//! connection, so they no longer attract singularities (Ray, Vallet, Alonso and Lévy
+//! 2009 make fields ignore small details in the same spirit). Output directions lie in
+//! the smoothed planes; [`TensorField::from_frames`](crate::field::TensorField::from_frames)
+//! projects them into the mesh's.
+//! - Smoothest field ([`smoothest_line_field`]): the eigenvector of the smallest
+//!   eigenvalue of `A z = lambda M z`, with one factorization of `A + sigma M`
+//!   (`sigma` = [`SHIFT`] times the ratio of the traces of `A` and `M`), from a fixed
+//!   pseudo-random start: Rayleigh-Ritz on the Krylov space of `(A + sigma M)^-1 M`
+//!   (`linalg/lanczos.rs`), until the Ritz value settles and the Ritz vector's residual is
+//!   small, or the solve budget is spent. Its global phase (a rotation of every line)
+//!   is free; the one returned is the limit of inverse iteration from the same start.
+//!   On the bunny 12 solves give what inverse iteration gave in 64. With multigrid:
+//!   30 V-cycles on the bunny Loop-subdivided once (`design/eigenpair.rs`).
+//! - Guided field ([`guided_line_field`], [`constrained_line_field`]): given a guidance
+//!   per vertex (a unit line `u_v` and a confidence `c_v >= 0`), a weight and optional
+//!   hard constraints, one solve for the minimiser of
+//!   `E(z) + w sum_v m_v c_v |z_v - u_v|^2` with `z_k = u_k` fixed at constrained
+//!   vertices (they are eliminated: their terms move to the right-hand side). Where the
+//!   confidence is 0 the field is free and interpolates its surroundings harmonically,
+//!   so regions without guidance follow their neighbours instead of shrinking to zero
+//!   (a plain `w |z - q|^2` pull toward `q = 0` would). A tiny shift `sigma M` (as for
+//!   the smoothest field) keeps the system definite in a connected component that
+//!   nothing pins (its field is then zero, and its directions are the frames' first
+//!   axes). Weight 0 and no constraints give the smoothest field.
+//! - Pair cancellation ([`LineFieldOptions::cancel_distance`], `design/cancel.rs`): after
+//!   either solve, opposite singularities closer than a distance are removed together
+//!   by re-solving the field's angle on a disc around both (Zhang, Hays and Turk 2007).
+//!   It works in the mesh's own vertex frames, where the segmentation measures
+//!   singularities, and the field is then returned in those frames.
+//!
+//! Input: a [`TriMesh`](crate::mesh::TriMesh) (and a guidance per vertex). Output: a [`LineField`], a unit
+//! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
+//! turns into a [`TensorField`](crate::field::TensorField). Cost: O(V + E) assembly, one AMD ordering, one
+//! complex `V x V` sparse Cholesky (plus a real one for the smoothed normals), and one
+//! solve with that factor per Krylov step. With a smoothness shift the estimate of
+//! `lambda_1` adds one factorization and a few solves (Rayleigh-Ritz on a Krylov space,
+//! `linalg/lanczos.rs`; [`LAMBDA_TOLERANCE`]), or from [`MULTIGRID_VERTICES`] a
+//! multigrid hierarchy and a few V-cycles. Measured (2 cores, release, `field_design`):
+//! the rocker arm (10k vertices, factored) 0.04 s; the Stanford bunny (35k vertices,
+//! multigrid) 0.16-0.17 s for the designed (curvature-aligned, shifted) field and
+//! 0.17-0.18 s for the smoothest field. Two threads:
+//! the AMD ordering beside the weights, the factor buffers' allocation beside the
+//! normals' smoothing, the guidance (the designed field's curvature) beside the
+//! estimate of `lambda_1`; the factors reuse one set of buffers (`linalg/cholesky.rs`).
+//! Deterministic: fixed iteration order, sequential solves, fixed start vector, the
+//! eigen-solvers' vector sums over fixed blocks of rows; the second thread computes an
+//! independent input, so the thread count changes nothing.
+
+//!
+//! # Parts
+//! - `solve.rs`: the solvers' entry points and options ([`smoothest_line_field`],
+//!   [`guided_line_field`], [`constrained_line_field`], [`LineFieldOptions`]).
+//! - `line_field.rs`: the result [`LineField`], [`LinearSolver`] and the solver
+//!   constants, below the solver and its system.
+//! - `connection.rs`: the connection Laplacian, its factors and multigrid solves, on
+//!   the vertex pattern (`pattern.rs`) or the vertex graph (`vertex_graph.rs`).
+//! - `eigenpair.rs`: the smallest eigenpair of the connection Laplacian (the
+//!   eigensolver itself is `linalg::lanczos`).
+//! - `index.rs`, `disc_angles.rs`, `cancel.rs`: face indices of a field, the angle
+//!   re-solve on a disc, and pair cancellation built on both.
+//! - `designed.rs`: the designed field source ([`Design`]), a line field with
+//!   anisotropy and density from their own sources.
+
+mod cancel;
+mod connection;
+mod designed;
+mod disc_angles;
+mod eigenpair;
+mod index;
+mod line_field;
+mod pattern;
+mod solve;
+mod vertex_graph;
+
+pub use designed::{Anisotropy, Constraint, Density, Design, Guidance, Site};
+pub use eigenpair::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
+pub use line_field::{
+    LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
+};
+pub use solve::{
+    LineConstraint, LineFieldOptions, constrained_line_field, guided_line_field, line_field_energy,
+    smoothest_line_field,
+};
+
+pub use crate::field::error::LineFieldError;
