@@ -218,7 +218,10 @@ mod tests {
         for t in [&a, &b] {
             assert_eq!(t.path().parent(), Some(dir.path()));
             let name = t.path().file_name().expect("name").to_string_lossy();
-            assert!(name.starts_with(".t.txt.") && name.ends_with(".tmp"), "{name}");
+            assert!(
+                name.starts_with(".t.txt.") && name.ends_with(".tmp"),
+                "{name}"
+            );
         }
         drop((a, b));
         assert!(names(dir.path()).is_empty());

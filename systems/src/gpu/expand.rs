@@ -194,8 +194,7 @@ impl SiteExpander {
         scoped(device, "building the sample expansion pass", || {
             let passes = ExpandPasses::new(device);
             let params = uniform_buffer(device, "strata expand params", PARAMS_BYTES);
-            let ranked_params =
-                uniform_buffer(device, "strata expand ranked params", PARAMS_BYTES);
+            let ranked_params = uniform_buffer(device, "strata expand ranked params", PARAMS_BYTES);
             let mesh = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("strata expand mesh"),
                 contents: bytemuck::cast_slice(&words),

@@ -17,8 +17,8 @@ use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
 use super::layout::{FrameUniforms, NprUniforms};
 use super::pipeline::{
-    MESH_DEPTH_BIAS, RenderPipelineDesc, TargetFormat, VertexBuffer, buffer_entry,
-    pipeline_layout, primitive, shader_module, uniform_buffer,
+    MESH_DEPTH_BIAS, RenderPipelineDesc, TargetFormat, VertexBuffer, buffer_entry, pipeline_layout,
+    primitive, shader_module, uniform_buffer,
 };
 use super::shaders;
 use super::splat::{FrameTarget, SplatRenderer, SplatStyle, frame_uniforms};

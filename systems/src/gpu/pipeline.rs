@@ -270,8 +270,11 @@ mod tests {
     #[test]
     fn vertex_buffers_are_consistent() {
         for buffer in [VertexBuffer::SAMPLES, VertexBuffer::MESH] {
-            let locations: HashSet<u32> =
-                buffer.attributes.iter().map(|a| a.shader_location).collect();
+            let locations: HashSet<u32> = buffer
+                .attributes
+                .iter()
+                .map(|a| a.shader_location)
+                .collect();
             assert_eq!(locations.len(), buffer.attributes.len());
             for a in buffer.attributes {
                 assert!(a.offset + a.format.size() <= buffer.stride, "{a:?}");
@@ -312,8 +315,15 @@ mod tests {
             entry: "cs",
         };
         assert_eq!(
-            HashSet::from([compute, compute, ComputePipelineDesc { entry: "cs2", ..compute }])
-                .len(),
+            HashSet::from([
+                compute,
+                compute,
+                ComputePipelineDesc {
+                    entry: "cs2",
+                    ..compute
+                }
+            ])
+            .len(),
             2
         );
     }

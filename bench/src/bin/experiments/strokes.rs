@@ -244,9 +244,7 @@ fn notes(seeds: usize, spacing: f64, mean_spacing: f64) -> String {
          anisotropic beats isotropic. The paper's claim (section 1 and Fig. 3): \
          isotropic placement shows considerable overlap and many large holes, \
          anisotropic placement covers better with the same number of points.",
-        seeds,
-        spacing,
-        mean_spacing
+        seeds, spacing, mean_spacing
     )
 }
 
