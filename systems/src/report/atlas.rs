@@ -166,7 +166,7 @@ fn push_tile(
 ) {
     let n = param.triangles.len();
     let tick_step = n.div_ceil(MAX_TICKS_PER_SEGMENT).max(1);
-    let _ = write!(out, "<g id=\"segment-{id}\">\n");
+    let _ = writeln!(out, "<g id=\"segment-{id}\">");
     push_tile_header(out, id, param, origin, tick_step);
     if n > 0 {
         let layout = TileLayout::new(param, origin);
