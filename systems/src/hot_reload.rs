@@ -216,99 +216,26 @@ pub fn watch_scene(scene: &Path) -> Result<(SceneWatcher, Receiver<SceneUpdate>)
     let scene_dir = scene.parent().unwrap_or(Path::new("/")).to_path_buf();
     watch_dir(&mut watcher, &mut watched, &scene_dir)?;
     let first = SceneConfig::load(&scene);
-    let mut deps = dependencies(&first);
+    let deps = dependencies(&first);
     for d in &deps {
         if let Some(dir) = d.parent() {
             // A missing folder is not fatal: the file may appear later in a new scene.
             let _ = watch_dir(&mut watcher, &mut watched, dir);
         }
     }
+    let watch = WatchLoop {
+        scene,
+        deps,
+        watcher,
+        watched,
+        raw: raw_rx,
+        stop: stop_rx,
+        out: out_tx,
+        loader: Loader::default(),
+    };
     let thread = std::thread::Builder::new()
         .name("strata-scene-watcher".to_owned())
-        .spawn(move || {
-            let mut loader = Loader::default();
-            // Not on the build pool: a load waiting behind a long build would hold back
-            // the change that cancels that build.
-            let scene_update = |loader: &mut Loader, parsed, changed| SceneUpdate {
-                scene: loader.load(parsed, changed),
-            };
-            if out_tx
-                .send(scene_update(&mut loader, first, Vec::new()))
-                .is_err()
-            {
-                return;
-            }
-            let relevant = |event: &notify::Event, deps: &[PathBuf]| -> Vec<PathBuf> {
-                let kind_ok = matches!(
-                    event.kind,
-                    EventKind::Access(AccessKind::Close(AccessMode::Write))
-                        | EventKind::Modify(ModifyKind::Name(_))
-                        | EventKind::Create(_)
-                );
-                if !kind_ok {
-                    return Vec::new();
-                }
-                event
-                    .paths
-                    .iter()
-                    .filter(|p| **p == scene || deps.contains(p))
-                    .cloned()
-                    .collect()
-            };
-            loop {
-                let mut changed: Vec<PathBuf> = Vec::new();
-                // Wait for the first relevant event.
-                select! {
-                    recv(stop_rx) -> _ => return,
-                    recv(raw_rx) -> event => match event {
-                        Ok(Ok(e)) => changed.extend(relevant(&e, &deps)),
-                        Ok(Err(_)) => {}
-                        Err(_) => return,
-                    },
-                }
-                if changed.is_empty() {
-                    continue;
-                }
-                // Debounce: until DEBOUNCE passes without a relevant event.
-                let mut deadline = Instant::now() + DEBOUNCE;
-                loop {
-                    let left = deadline.saturating_duration_since(Instant::now());
-                    match raw_rx.recv_timeout(left) {
-                        Ok(Ok(e)) => {
-                            let more = relevant(&e, &deps);
-                            if !more.is_empty() {
-                                changed.extend(more);
-                                deadline = Instant::now() + DEBOUNCE;
-                            }
-                        }
-                        Ok(Err(_)) => {}
-                        Err(RecvTimeoutError::Timeout) => break,
-                        Err(RecvTimeoutError::Disconnected) => return,
-                    }
-                    if stop_rx.try_recv() != Err(crossbeam_channel::TryRecvError::Empty) {
-                        return;
-                    }
-                }
-                changed.sort();
-                changed.dedup();
-                let parsed = SceneConfig::load(&scene);
-                let new_deps = dependencies(&parsed);
-                if !new_deps.is_empty() {
-                    for d in &new_deps {
-                        if let Some(dir) = d.parent() {
-                            let _ = watch_dir(&mut watcher, &mut watched, dir);
-                        }
-                    }
-                    deps = new_deps;
-                }
-                if out_tx
-                    .send(scene_update(&mut loader, parsed, changed))
-                    .is_err()
-                {
-                    return; // the engine is gone
-                }
-            }
-        })
+        .spawn(move || watch.run(first))
         .map_err(|e| WatchError::Path(scene_dir, e))?;
     Ok((
         SceneWatcher {
@@ -317,6 +244,130 @@ pub fn watch_scene(scene: &Path) -> Result<(SceneWatcher, Receiver<SceneUpdate>)
         },
         out_rx,
     ))
+}
+
+/// The watcher thread: what it watches, the raw events and the stop signal it
+/// listens to, and where it sends the scenes it loads.
+struct WatchLoop {
+    /// The scene file (absolute).
+    scene: PathBuf,
+    /// The files the last parsed scene names.
+    deps: Vec<PathBuf>,
+    watcher: notify::RecommendedWatcher,
+    /// The folders watched.
+    watched: HashSet<PathBuf>,
+    raw: Receiver<notify::Result<notify::Event>>,
+    stop: Receiver<()>,
+    out: Sender<SceneUpdate>,
+    loader: Loader,
+}
+
+impl WatchLoop {
+    /// Sends the `first` scene, then one loaded scene per burst of relevant changes,
+    /// until stopped or the receiver is gone.
+    fn run(mut self, first: Result<SceneConfig, ConfigError>) {
+        if !self.send(first, Vec::new()) {
+            return;
+        }
+        while let Some(changed) = self.next_changes() {
+            let parsed = SceneConfig::load(&self.scene);
+            self.follow(dependencies(&parsed));
+            if !self.send(parsed, changed) {
+                return; // the engine is gone
+            }
+        }
+    }
+
+    /// Loads `parsed` (on this thread, not on the build pool: a load waiting behind a
+    /// long build would hold back the change that cancels that build) and sends it;
+    /// false when the receiver is gone.
+    fn send(&mut self, parsed: Result<SceneConfig, ConfigError>, changed: Vec<PathBuf>) -> bool {
+        let update = SceneUpdate {
+            scene: self.loader.load(parsed, changed),
+        };
+        self.out.send(update).is_ok()
+    }
+
+    /// Waits for a relevant event, then until [`DEBOUNCE`] passes without one: the
+    /// files changed, sorted and without repeats. `None` when stopped or when the
+    /// events' sender is gone.
+    fn next_changes(&self) -> Option<Vec<PathBuf>> {
+        loop {
+            let mut changed: Vec<PathBuf> = Vec::new();
+            select! {
+                recv(self.stop) -> _ => return None,
+                recv(self.raw) -> event => match event {
+                    Ok(Ok(e)) => changed.extend(self.relevant(&e)),
+                    Ok(Err(_)) => {}
+                    Err(_) => return None,
+                },
+            }
+            if changed.is_empty() {
+                continue;
+            }
+            self.debounce(&mut changed)?;
+            changed.sort();
+            changed.dedup();
+            return Some(changed);
+        }
+    }
+
+    /// Adds the relevant changes to `changed` until [`DEBOUNCE`] passes without one;
+    /// `None` when stopped or when the events' sender is gone.
+    fn debounce(&self, changed: &mut Vec<PathBuf>) -> Option<()> {
+        let mut deadline = Instant::now() + DEBOUNCE;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.raw.recv_timeout(left) {
+                Ok(Ok(e)) => {
+                    let more = self.relevant(&e);
+                    if !more.is_empty() {
+                        changed.extend(more);
+                        deadline = Instant::now() + DEBOUNCE;
+                    }
+                }
+                Ok(Err(_)) => {}
+                Err(RecvTimeoutError::Timeout) => return Some(()),
+                Err(RecvTimeoutError::Disconnected) => return None,
+            }
+            if self.stop.try_recv() != Err(crossbeam_channel::TryRecvError::Empty) {
+                return None;
+            }
+        }
+    }
+
+    /// The scene file and its dependencies that `event` wrote, renamed or created.
+    fn relevant(&self, event: &notify::Event) -> Vec<PathBuf> {
+        let kind_ok = matches!(
+            event.kind,
+            EventKind::Access(AccessKind::Close(AccessMode::Write))
+                | EventKind::Modify(ModifyKind::Name(_))
+                | EventKind::Create(_)
+        );
+        if !kind_ok {
+            return Vec::new();
+        }
+        event
+            .paths
+            .iter()
+            .filter(|p| **p == self.scene || self.deps.contains(p))
+            .cloned()
+            .collect()
+    }
+
+    /// Watches the folders of a newly parsed scene's files and follows them from now
+    /// on; a scene that named none (or failed to parse) keeps the last dependencies.
+    fn follow(&mut self, new_deps: Vec<PathBuf>) {
+        if new_deps.is_empty() {
+            return;
+        }
+        for d in &new_deps {
+            if let Some(dir) = d.parent() {
+                let _ = watch_dir(&mut self.watcher, &mut self.watched, dir);
+            }
+        }
+        self.deps = new_deps;
+    }
 }
 
 /// Watches `dir` (non-recursively) unless it is watched already.

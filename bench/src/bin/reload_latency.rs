@@ -16,6 +16,7 @@
 //! bench/README.md, "Edits off the frame").
 
 use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -53,43 +54,18 @@ struct Reload {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(5)?;
-    let src = strata_bench::shared_mesh_dir()?.join("stanford-bunny.obj");
     let dir = tempfile::tempdir()?;
-    // The bunny as PLY, so that the field file's vertex order is the mesh's.
-    let mesh = strata_engine::io::load(&src)?;
-    let ply = dir.path().join("bunny.ply");
-    strata_engine::io::write_mesh_ply(&ply, &mesh, None)?;
-    let mesh = Arc::new(strata_engine::io::load(&ply)?);
-    let field_path = dir.path().join("bunny.field");
-    std::fs::write(
-        &field_path,
-        format_field_file(&strata_bench::cap_field(&mesh, f64::INFINITY, DVec3::Z)?),
-    )?;
-    let scene = dir.path().join("bunny.ron");
-    let scene_text = |seed: u64| {
-        format!(
-            "(mesh: File(\"bunny.ply\"), field: File(path: \"bunny.field\"), sampling: (count: {COUNT}, seed: 1), segment: (seed: {seed}))"
-        )
-    };
-    std::fs::write(&scene, scene_text(0))?;
+    let Bunny {
+        mesh,
+        field_path,
+        scene,
+    } = write_bunny(dir.path())?;
     let mut engine = StreamingEngine::watch(&scene)?;
     engine
         .world
         .resource_mut::<EngineSettings>()
         .sample_every_update = true;
-    let t = Instant::now();
-    while engine.samples().len() != COUNT as usize || !engine.is_idle() {
-        if t.elapsed() > Duration::from_secs(300) {
-            return Err(format!("first build: {:?}", engine.take_errors()).into());
-        }
-        engine.wait(Duration::from_millis(50));
-        engine.update();
-    }
-    println!(
-        "bunny: {} faces, {COUNT} samples per frame; first build and samples {:.0} ms",
-        mesh.face_count(),
-        ms(t.elapsed())
-    );
+    first_build(&mut engine, &mesh)?;
 
     // Field saves on a ~10% cap, alternating two directions: region rebuilds.
     let cap = strata_bench::cap_height(&mesh, 0.1);
@@ -113,51 +89,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         eprintln!("error: {e}");
     }
 
-    let summary = |name: &str, runs: &[Reload]| {
-        let max_frame = runs
-            .iter()
-            .flat_map(|r| r.beyond_sampling.iter().copied())
-            .max()
-            .unwrap_or_default();
-        let mut first: Vec<Duration> = runs.iter().map(|r| r.first_new_frame).collect();
-        let mut build: Vec<Duration> = runs.iter().map(|r| r.build).collect();
-        let mut load: Vec<Duration> = runs.iter().map(|r| r.load).collect();
-        // The frame that applies the change starts the build; the build's result is
-        // drawn by the frame after it ends: build + 2 frames after that first frame
-        // started.
-        let bound_met = runs
-            .iter()
-            .all(|r| r.after_apply <= r.build + r.two_frames.max(2 * FRAME));
-        let mut slack: Vec<Duration> = runs
-            .iter()
-            .map(|r| r.after_apply.saturating_sub(r.build))
-            .collect();
-        let worst = slack.iter().copied().max().unwrap_or_default();
-        let frames: usize = runs.iter().map(|r| r.beyond_sampling.len()).sum();
-        println!(
-            "| {name} | {frames} | {:.1} | {:.0} | {:.0} | {:.0} | {:.0} | {} |",
-            ms(max_frame),
-            ms(median(&mut first)),
-            ms(median(&mut load)),
-            ms(median(&mut build)),
-            ms(median(&mut slack)),
-            if bound_met {
-                "yes".to_owned()
-            } else {
-                format!("no (worst {:.0} ms)", ms(worst))
-            }
-        );
-        json!({
-            "frames": frames,
-            "max_frame_ms_during_reload": ms(max_frame),
-            "first_new_frame_ms": ms(median(&mut first)),
-            "load_ms": ms(median(&mut load)),
-            "build_ms": ms(median(&mut build)),
-            "apply_to_new_frame_minus_build_ms": ms(median(&mut slack)),
-            "apply_to_new_frame_minus_build_max_ms": ms(worst),
-            "within_build_plus_2_frames": bound_met,
-        })
-    };
     println!(
         "\n| change | frames | max frame beyond sampling (ms) | save to first new frame, median (ms) | load (watcher), median (ms) | build, median (ms) | applied to new frame minus build, median (ms) | every run within build + 2 frames (as they ran) |"
     );
@@ -205,6 +136,111 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::write(&out, serde_json::to_string_pretty(&report)? + "\n")?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// The bunny's scene in a temporary folder: its mesh, the field file and the scene.
+struct Bunny {
+    mesh: Arc<TriMesh>,
+    field_path: PathBuf,
+    scene: PathBuf,
+}
+
+/// Writes the bunny as PLY (so that the field file's vertex order is the mesh's), a
+/// field file and a scene with segmentation seed 0 into `dir`.
+fn write_bunny(dir: &Path) -> Result<Bunny, Box<dyn std::error::Error>> {
+    let src = strata_bench::shared_mesh_dir()?.join("stanford-bunny.obj");
+    let mesh = strata_engine::io::load(&src)?;
+    let ply = dir.join("bunny.ply");
+    strata_engine::io::write_mesh_ply(&ply, &mesh, None)?;
+    let mesh = Arc::new(strata_engine::io::load(&ply)?);
+    let field_path = dir.join("bunny.field");
+    std::fs::write(
+        &field_path,
+        format_field_file(&strata_bench::cap_field(&mesh, f64::INFINITY, DVec3::Z)?),
+    )?;
+    let scene = dir.join("bunny.ron");
+    std::fs::write(&scene, scene_text(0))?;
+    Ok(Bunny {
+        mesh,
+        field_path,
+        scene,
+    })
+}
+
+/// The bunny's scene file with segmentation seed `seed`.
+fn scene_text(seed: u64) -> String {
+    format!(
+        "(mesh: File(\"bunny.ply\"), field: File(path: \"bunny.field\"), sampling: (count: {COUNT}, seed: 1), segment: (seed: {seed}))"
+    )
+}
+
+/// Updates `engine` until its first build is done and a frame drew its samples (at
+/// most 300 s), and prints how long that took.
+fn first_build(
+    engine: &mut StreamingEngine,
+    mesh: &TriMesh,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let t = Instant::now();
+    while engine.samples().len() != COUNT as usize || !engine.is_idle() {
+        if t.elapsed() > Duration::from_secs(300) {
+            return Err(format!("first build: {:?}", engine.take_errors()).into());
+        }
+        engine.wait(Duration::from_millis(50));
+        engine.update();
+    }
+    println!(
+        "bunny: {} faces, {COUNT} samples per frame; first build and samples {:.0} ms",
+        mesh.face_count(),
+        ms(t.elapsed())
+    );
+    Ok(())
+}
+
+/// Prints the table row of one scenario's `runs` and returns its JSON entry.
+fn summary(name: &str, runs: &[Reload]) -> serde_json::Value {
+    let max_frame = runs
+        .iter()
+        .flat_map(|r| r.beyond_sampling.iter().copied())
+        .max()
+        .unwrap_or_default();
+    let mut first: Vec<Duration> = runs.iter().map(|r| r.first_new_frame).collect();
+    let mut build: Vec<Duration> = runs.iter().map(|r| r.build).collect();
+    let mut load: Vec<Duration> = runs.iter().map(|r| r.load).collect();
+    // The frame that applies the change starts the build; the build's result is
+    // drawn by the frame after it ends: build + 2 frames after that first frame
+    // started.
+    let bound_met = runs
+        .iter()
+        .all(|r| r.after_apply <= r.build + r.two_frames.max(2 * FRAME));
+    let mut slack: Vec<Duration> = runs
+        .iter()
+        .map(|r| r.after_apply.saturating_sub(r.build))
+        .collect();
+    let worst = slack.iter().copied().max().unwrap_or_default();
+    let frames: usize = runs.iter().map(|r| r.beyond_sampling.len()).sum();
+    println!(
+        "| {name} | {frames} | {:.1} | {:.0} | {:.0} | {:.0} | {:.0} | {} |",
+        ms(max_frame),
+        ms(median(&mut first)),
+        ms(median(&mut load)),
+        ms(median(&mut build)),
+        ms(median(&mut slack)),
+        if bound_met {
+            "yes".to_owned()
+        } else {
+            format!("no (worst {:.0} ms)", ms(worst))
+        }
+    );
+    json!({
+        "frames": frames,
+        "max_frame_ms_during_reload": ms(max_frame),
+        "first_new_frame_ms": ms(median(&mut first)),
+        "load_ms": ms(median(&mut load)),
+        "build_ms": ms(median(&mut build)),
+        "apply_to_new_frame_minus_build_ms": ms(median(&mut slack)),
+        "apply_to_new_frame_minus_build_max_ms": ms(worst),
+        "within_build_plus_2_frames": bound_met,
+    })
 }
 
 /// Saves with `save`, then runs paced frames until the first frame that draws the new

@@ -6,23 +6,20 @@
 //! Cost: the write itself through a [`BufWriter`], one `fsync` and one rename.
 //!
 //! [`write_atomically`] creates a new temporary file in the target's folder (renames
-//! are atomic only within one file system), named `.<name>.<pid>.<nanos>.<try>.tmp`
-//! and opened with `create_new`: the process id and the clock keep writers in different
-//! processes apart, and a name that exists already (two writers in one process at the
-//! same instant) is retried with the next `<try>`, so two writes never share a
-//! temporary file and no process-global state is needed. The content is flushed and
-//! synced to disk before the rename, so that a crash right after it cannot leave an
-//! empty or partial target. The temporary file is removed on every error, and on a
-//! panic in the closure.
+//! are atomic only within one file system) with `tempfile`, named
+//! `.<name>.<random>.tmp` and opened exclusively: a name that exists already (another
+//! writer, in this process or another, picked the same random part) is retried with
+//! new random characters, so two writes never share a temporary file and no
+//! process-global state is needed. The content is flushed and synced to disk
+//! (`sync_all`) before the temporary file is persisted (renamed) over the target, so
+//! that a crash right after it cannot leave an empty or partial target. The temporary
+//! file is removed on every error, and on a panic in the closure.
 
 use std::fs::File;
 use std::io::{self, BufWriter};
-use std::path::{Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
+use std::path::Path;
 
-/// How many temporary names are tried before giving up (each collision needs another
-/// writer that picked the same pid, instant and try number).
-const MAX_TRIES: u32 = 64;
+use tempfile::{NamedTempFile, TempPath};
 
 /// Characters of the target's file name kept in the temporary name (the rest of a
 /// very long name is left out, so that the temporary name stays a valid name).
@@ -30,12 +27,12 @@ const NAME_CHARS: usize = 64;
 
 /// Writes a file atomically: runs `write` on a buffered temporary file in `path`'s
 /// folder, syncs it and renames it over `path`, so that a reader sees the old file or
-/// the whole new one. The temporary file is `.<name>.<pid>.<nanos>.<try>.tmp`, created
-/// with `create_new` (a name taken by another writer is retried with the next `<try>`),
-/// so concurrent writes never share one. On any error (of `write`, of creating,
-/// flushing, syncing or renaming) or a panic in `write`, the temporary file is removed
-/// and `path` keeps its old content (or stays absent); the error is returned, file-system
-/// errors as `E::from(io::Error)`.
+/// the whole new one. The temporary file is `.<name>.<random>.tmp`, created
+/// exclusively (a name taken by another writer is retried with other random
+/// characters), so concurrent writes never share one. On any error (of `write`, of
+/// creating, flushing, syncing or renaming) or a panic in `write`, the temporary file
+/// is removed and `path` keeps its old content (or stays absent); the error is
+/// returned, file-system errors as `E::from(io::Error)`.
 ///
 /// ```
 /// use std::io::Write;
@@ -57,49 +54,25 @@ pub fn write_atomically<T, E: From<io::Error>>(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<T, E>,
 ) -> Result<T, E> {
-    let (file, temporary) = create_temporary(path)?;
+    // The path is removed when dropped: on every return before the rename, and on a
+    // panic in `write`.
+    let (file, temporary) = create_temporary(path)?.into_parts();
     let mut w = BufWriter::new(file);
     let value = write(&mut w)?;
     let file = w.into_inner().map_err(io::IntoInnerError::into_error)?;
     file.sync_all()?;
     drop(file);
-    std::fs::rename(&temporary.path, path)?;
-    temporary.keep();
+    persist(temporary, path)?;
     Ok(value)
 }
 
-/// A temporary file that is removed when dropped, unless kept (renamed away).
-struct Temporary {
-    path: PathBuf,
-    armed: bool,
-}
-
-impl Temporary {
-    /// The file was renamed over its target: nothing to remove.
-    fn keep(mut self) {
-        self.armed = false;
-    }
-}
-
-impl Drop for Temporary {
-    fn drop(&mut self) {
-        if self.armed {
-            // Best effort: the error being returned is the one that matters.
-            let _ = std::fs::remove_file(&self.path);
-        }
-    }
+/// Renames `temporary` over `path`; on failure the temporary file is removed.
+fn persist(temporary: TempPath, path: &Path) -> io::Result<()> {
+    temporary.persist(path).map_err(|e| e.error)
 }
 
 /// Creates a new temporary file beside `path` (see the module docs for the name).
-fn create_temporary(path: &Path) -> io::Result<(File, Temporary)> {
-    let nanos = SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.as_nanos());
-    create_temporary_at(path, nanos)
-}
-
-/// [`create_temporary`] at the clock reading `nanos`.
-fn create_temporary_at(path: &Path, nanos: u128) -> io::Result<(File, Temporary)> {
+fn create_temporary(path: &Path) -> io::Result<NamedTempFile> {
     let name = path.file_name().ok_or_else(|| {
         io::Error::new(
             io::ErrorKind::InvalidInput,
@@ -108,23 +81,10 @@ fn create_temporary_at(path: &Path, nanos: u128) -> io::Result<(File, Temporary)
     })?;
     let name: String = name.to_string_lossy().chars().take(NAME_CHARS).collect();
     let folder = path.parent().unwrap_or(Path::new(""));
-    let pid = std::process::id();
-    let mut last = None;
-    for attempt in 0..MAX_TRIES {
-        let candidate = folder.join(format!(".{name}.{pid}.{nanos}.{attempt}.tmp"));
-        match File::create_new(&candidate) {
-            Ok(file) => {
-                let temporary = Temporary {
-                    path: candidate,
-                    armed: true,
-                };
-                return Ok((file, temporary));
-            }
-            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last = Some(e),
-            Err(e) => return Err(e),
-        }
-    }
-    Err(last.unwrap_or_else(|| io::Error::from(io::ErrorKind::AlreadyExists)))
+    tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".tmp")
+        .tempfile_in(folder)
 }
 
 #[cfg(test)]
@@ -249,14 +209,20 @@ mod tests {
     }
 
     #[test]
-    fn a_taken_temporary_name_is_retried() {
+    fn temporaries_beside_one_target_get_their_own_names() {
         let dir = tempfile::tempdir().expect("tempdir");
         let path = dir.path().join("t.txt");
-        let (_first, a) = create_temporary_at(&path, 42).expect("first");
-        let (_second, b) = create_temporary_at(&path, 42).expect("second");
-        let pid = std::process::id();
-        assert_eq!(a.path, dir.path().join(format!(".t.txt.{pid}.42.0.tmp")));
-        assert_eq!(b.path, dir.path().join(format!(".t.txt.{pid}.42.1.tmp")));
+        let a = create_temporary(&path).expect("first");
+        let b = create_temporary(&path).expect("second");
+        assert_ne!(a.path(), b.path());
+        for t in [&a, &b] {
+            assert_eq!(t.path().parent(), Some(dir.path()));
+            let name = t.path().file_name().expect("name").to_string_lossy();
+            assert!(
+                name.starts_with(".t.txt.") && name.ends_with(".tmp"),
+                "{name}"
+            );
+        }
         drop((a, b));
         assert!(names(dir.path()).is_empty());
         // A very long name is shortened in the temporary name.

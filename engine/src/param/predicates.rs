@@ -1,17 +1,12 @@
 //! Exact 2D orientation predicate and the closed-segment intersection test built on it.
 //!
-//! [`orient2d`] is Shewchuk's adaptive predicate reduced to two stages: a floating-point
-//! evaluation with a forward error bound (his `ccwerrboundA`), which decides almost all
-//! calls, and, when the bound does not separate the result from zero, an exact
-//! evaluation of `a x b + b x c + c x a` as a sum of six exact products (each split
-//! into two doubles with a fused multiply-add) accumulated into a non-overlapping
-//! floating-point expansion, whose sign is that of its largest component. Exact for all
-//! finite inputs whose products neither overflow nor underflow (|coordinates| between
-//! about 1e-145 and 1e145, or zero). Cost: a few flops; the exact stage about 150.
-//!
-//! We write it here rather than depend on the `robust` crate because the engine's
-//! dependency list is fixed by the project (see DESIGN.md) and this is the only
-//! predicate the parameterization needs.
+//! [`orient2d`] is the sign of the `robust` crate's port of Shewchuk's adaptive
+//! predicate: a floating-point evaluation with a forward error bound decides almost all
+//! calls, and the rare close calls are refined in exact expansion arithmetic. Exact for
+//! all finite inputs whose products neither overflow nor underflow (|coordinates|
+//! between about 1e-145 and 1e145, or zero). Only the sign is used here (no caller
+//! reads the determinant's magnitude), so any exact predicate gives the same results.
+//! Cost: a few flops; a close call a few hundred.
 //!
 //! Reference: J. R. Shewchuk, "Adaptive precision floating-point arithmetic and fast
 //! robust geometric predicates", Discrete & Computational Geometry 18, 1997.
@@ -19,12 +14,6 @@
 use std::cmp::Ordering;
 
 use glam::DVec2;
-
-/// Half an ulp of 1: the unit round-off of f64.
-const EPSILON: f64 = f64::EPSILON * 0.5;
-
-/// Shewchuk's `ccwerrboundA = (3 + 16 eps) eps`.
-const CCW_ERRBOUND_A: f64 = (3.0 + 16.0 * EPSILON) * EPSILON;
 
 /// The exact orientation of the triangle `(a, b, c)`: `Greater` if counter-clockwise
 /// (positive signed area), `Less` if clockwise, `Equal` if the points are collinear.
@@ -41,94 +30,13 @@ const CCW_ERRBOUND_A: f64 = (3.0 + 16.0 * EPSILON) * EPSILON;
 /// assert_eq!(orient2d(a, b, DVec2::new(24.0, 24.0)), Ordering::Equal);
 /// ```
 pub fn orient2d(a: DVec2, b: DVec2, c: DVec2) -> Ordering {
-    let left = (a.x - c.x) * (b.y - c.y);
-    let right = (a.y - c.y) * (b.x - c.x);
-    let det = left - right;
-    let bound = CCW_ERRBOUND_A * (left.abs() + right.abs());
-    if det > bound {
-        Ordering::Greater
-    } else if -det > bound {
-        Ordering::Less
-    } else {
-        orient2d_exact(a, b, c)
-    }
-}
-
-/// `(a * b` rounded, its rounding error`)`: exact unless the product over- or
-/// underflows.
-fn two_product(a: f64, b: f64) -> (f64, f64) {
-    let p = a * b;
-    (p, a.mul_add(b, -p))
-}
-
-/// Knuth's two-sum: `(a + b` rounded, its rounding error`)`, exact.
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bv = s - a;
-    let av = s - bv;
-    (s, (a - av) + (b - bv))
-}
-
-/// A non-overlapping expansion (components in increasing magnitude, no zeros).
-struct Expansion {
-    parts: [f64; 16],
-    len: usize,
-}
-
-impl Expansion {
-    /// Adds `b` exactly (Shewchuk's GROW-EXPANSION with zero elimination).
-    fn grow(&mut self, b: f64) {
-        let mut q = b;
-        let mut out = 0;
-        for i in 0..self.len {
-            let (s, h) = two_sum(q, self.parts[i]);
-            if h != 0.0 {
-                self.parts[out] = h;
-                out += 1;
-            }
-            q = s;
-        }
-        if q != 0.0 {
-            self.parts[out] = q;
-            out += 1;
-        }
-        self.len = out;
-    }
-
-    /// The sign of the represented value: that of its largest component.
-    fn sign(&self) -> Ordering {
-        match self.len {
-            0 => Ordering::Equal,
-            n => self.parts[n - 1]
-                .partial_cmp(&0.0)
-                .unwrap_or(Ordering::Equal),
-        }
-    }
-}
-
-/// The exact sign of `a x b + b x c + c x a`.
-fn orient2d_exact(a: DVec2, b: DVec2, c: DVec2) -> Ordering {
     if !(a.is_finite() && b.is_finite() && c.is_finite()) {
         return Ordering::Equal;
     }
-    let mut sum = Expansion {
-        parts: [0.0; 16],
-        len: 0,
-    };
-    // Twelve terms at most: the expansion never exceeds 12 components.
-    for (x, y, sign) in [
-        (a.x, b.y, 1.0),
-        (a.y, b.x, -1.0),
-        (b.x, c.y, 1.0),
-        (b.y, c.x, -1.0),
-        (c.x, a.y, 1.0),
-        (c.y, a.x, -1.0),
-    ] {
-        let (p, e) = two_product(x, y);
-        sum.grow(sign * p);
-        sum.grow(sign * e);
-    }
-    sum.sign()
+    let coord = |p: DVec2| robust::Coord { x: p.x, y: p.y };
+    robust::orient2d(coord(a), coord(b), coord(c))
+        .partial_cmp(&0.0)
+        .unwrap_or(Ordering::Equal)
 }
 
 /// Whether point `q`, known to be collinear with `a` and `b`, lies on the closed

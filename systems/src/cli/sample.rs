@@ -1,7 +1,7 @@
 //! `strata sample`: preprocess a scene, draw its samples once, print the timings and
 //! optionally write the samples (PLY or CSV).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -65,16 +65,38 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
     }
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[args.out.as_deref()])?;
-    let out_kind = match &args.out {
-        Some(path) => Some(output_kind(path)?),
+    let out = match &args.out {
+        Some(path) => Some((path.as_path(), output_kind(path)?)),
         None => None,
     };
-    // Every check of the request before the preprocessing.
+    let count = check_request(args, &config, out)?;
+    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
+    for w in scene.mesh.warnings() {
+        eprintln!("warning: {}: mesh: {w}", args.config.display());
+    }
+    let seed = args.seed.unwrap_or(config.sampling.seed);
+    let mut draw = Draw::new(&scene.sampler, args.order, seed, count);
+    draw.all(out)?;
+    draw.bar.finish_and_clear();
+    print_timings(&scene, args.order, count, seed, draw.took);
+    if let Some(path) = &args.out {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// Every check of the request before the preprocessing: the sample count, and the
+/// space the output file needs (unless `--ignore-space-check`). Returns the count.
+fn check_request(
+    args: &SampleArgs,
+    config: &SceneConfig,
+    out: Option<(&Path, SampleFormat)>,
+) -> anyhow::Result<u64> {
     let count = args.count.unwrap_or(config.sampling.count);
     let config_name = args.config.display().to_string();
     super::check_budget(&config_name, crate::budget::check_count(count), None)?;
     // Drawn a block at a time, so memory does not limit the count; a file's size does.
-    if let (Some(path), Some(format)) = (&args.out, out_kind)
+    if let Some((path, format)) = out
         && !args.ignore_space_check
     {
         let per_sample = match format {
@@ -88,38 +110,12 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
             Some("--ignore-space-check"),
         )?;
     }
-    let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
-    for w in scene.mesh.warnings() {
-        eprintln!("warning: {}: mesh: {w}", args.config.display());
-    }
-    let seed = args.seed.unwrap_or(config.sampling.seed);
-    let mut draw = Draw::new(&scene.sampler, args.order, seed, count);
-    match (&args.out, out_kind) {
-        (Some(path), Some(format)) => {
-            strata_engine::io::write_samples_in_blocks(
-                path,
-                format,
-                count,
-                BLOCK,
-                |start, block| {
-                    draw.fill(start, block);
-                    Ok(())
-                },
-            )
-            .with_context(|| format!("writing {}", path.display()))?;
-        }
-        _ => {
-            let mut block = vec![Sample::default(); BLOCK.min(count as usize)];
-            let mut start = 0;
-            while start < count {
-                let len = block.len().min((count - start) as usize);
-                draw.fill(start, &mut block[..len]);
-                start += len as u64;
-            }
-        }
-    }
-    draw.bar.finish_and_clear();
-    let sample_time = draw.took;
+    Ok(count)
+}
+
+/// Prints the count, order, cells and the sampling and preprocessing times (and the
+/// surface pipeline's counts, when the scene went through it).
+fn print_timings(scene: &Scene, order: Order, count: u64, seed: u64, sample_time: Duration) {
     let preprocess: f64 = scene.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
     let cells: usize = scene
         .sampler
@@ -129,7 +125,7 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
         .sum();
     println!(
         "sampled {count} points (seed {seed}, {} order) on {} faces, {cells} cells: sampling {:.3} ms, preprocessing {:.3} ms ({})",
-        match args.order {
+        match order {
             Order::Stratified => "stratified",
             Order::Progressive => "progressive",
         },
@@ -154,10 +150,6 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
             s.isotropic_segments
         );
     }
-    if let Some(path) = &args.out {
-        println!("wrote {}", path.display());
-    }
-    Ok(())
 }
 
 /// Draws one request a block at a time, timing the drawing alone and showing progress
@@ -188,6 +180,37 @@ impl<'a> Draw<'a> {
             took: Duration::ZERO,
             bar,
         }
+    }
+
+    /// Draws the whole request, a block at a time, into `out` (a file and its format)
+    /// or, without one, into a reused block only (for the timings).
+    fn all(&mut self, out: Option<(&Path, SampleFormat)>) -> anyhow::Result<()> {
+        let count = self.count;
+        match out {
+            Some((path, format)) => {
+                strata_engine::io::write_samples_in_blocks(
+                    path,
+                    format,
+                    count,
+                    BLOCK,
+                    |start, block| {
+                        self.fill(start, block);
+                        Ok(())
+                    },
+                )
+                .with_context(|| format!("writing {}", path.display()))?;
+            }
+            None => {
+                let mut block = vec![Sample::default(); BLOCK.min(count as usize)];
+                let mut start = 0;
+                while start < count {
+                    let len = block.len().min((count - start) as usize);
+                    self.fill(start, &mut block[..len]);
+                    start += len as u64;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Fills `block` with the samples `start..start + block.len()` of the request.

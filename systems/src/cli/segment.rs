@@ -4,9 +4,12 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use anyhow::Context;
-use strata_engine::surface::{SegmentationKind, parameterize_with_splitting, segment_surface};
+use strata_engine::surface::{
+    SegmentationKind, SurfaceOptions, parameterize_with_splitting, segment_surface,
+};
 
 use super::write_file;
 use crate::config::SceneConfig;
@@ -34,18 +37,7 @@ pub struct SegmentArgs {
 
 /// Runs `strata segment`.
 pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
-    if let Some(out) = &args.out {
-        let ply = out
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-        if !ply {
-            anyhow::bail!(
-                "{}: --out writes a binary PLY mesh; name it .ply",
-                out.display()
-            );
-        }
-    }
+    check_out_is_ply(args)?;
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(
         &args.config,
@@ -82,21 +74,9 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     let mut stages = Vec::new();
     let surface = segment_surface(&mesh, Arc::new(field), &options, &progress, &mut stages)
         .with_context(|| format!("{name}: segmentation"))?;
-    match surface.kind {
-        SegmentationKind::IsotropicCharts => println!(
-            "the field is isotropic everywhere (anisotropy under {}): normal-cone charts of half-angle {:.1} degrees",
-            options.isotropy_threshold,
-            options.chart_angle.to_degrees()
-        ),
-        SegmentationKind::FieldAligned { smoothed_vertices } if smoothed_vertices > 0 => println!(
-            "{smoothed_vertices} of {} vertices are isotropic (anisotropy under {}): they take a smooth direction",
-            mesh.vertex_count(),
-            options.isotropy_threshold
-        ),
-        SegmentationKind::FieldAligned { .. } => {}
-    }
+    print_segmentation_kind(surface.kind, &options, mesh.vertex_count());
     let (field, seg) = (surface.field, surface.segmentation);
-    let seg_time: std::time::Duration = stages.iter().map(|(_, d)| *d).sum();
+    let seg_time: Duration = stages.iter().map(|(_, d)| *d).sum();
     let (split, param_time) = crate::scene::stage(&progress, "parameterization", || {
         parameterize_with_splitting(&mesh, &field, &seg, &options)
     });
@@ -110,47 +90,12 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         param_time.as_secs_f64(),
         &isotropic,
     );
-    let plus = report
-        .singularities
-        .iter()
-        .filter(|s| s.index > 0.0)
-        .count();
-    let minus = report.singularities.len() - plus;
-    let index_sum: f64 = report.singularities.iter().map(|s| s.index).sum();
-    println!(
-        "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
-        report.faces,
-        report.euler_characteristic,
-        report.segments_before_split,
-        report.singularities.len(),
-        index_sum + 0.0, // an empty sum is -0
-        report.cut_edges,
-        seg_time.as_secs_f64(),
-        load_time.as_secs_f64(),
-    );
-    let valid = report.segments.iter().filter(|s| s.valid).count();
-    let fallback = report
-        .segments
-        .iter()
-        .filter(|s| s.isotropic_fallback)
-        .count();
-    println!(
-        "parameterization: {} segments after {} splits and {} merges ({} isotropic charts, {} field-aligned), {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
-        report.segment_count,
-        report.splits,
-        split.merges,
-        report.charts,
-        report.segment_count - report.charts,
-        param_time.as_secs_f64()
-    );
-    let not_discs = report
-        .segments
-        .iter()
-        .filter(|s| s.euler_characteristic != 1 || s.boundary_loops != 1)
-        .count();
-    if not_discs > 0 {
-        eprintln!("warning: {name}: {not_discs} segments are not topological discs");
-    }
+    let times = Times {
+        load: load_time,
+        segmentation: seg_time,
+        parameterization: param_time,
+    };
+    print_summary(&name, &report, split.merges, times);
     if let Some(path) = &args.atlas {
         crate::report::atlas::write_atlas_svg(path, &mesh, &field, &params)
             .with_context(|| format!("writing {}", path.display()))?;
@@ -168,4 +113,92 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// `--out` writes a binary PLY: refuses another extension before any work.
+fn check_out_is_ply(args: &SegmentArgs) -> anyhow::Result<()> {
+    if let Some(out) = &args.out {
+        let ply = out
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+        if !ply {
+            anyhow::bail!(
+                "{}: --out writes a binary PLY mesh; name it .ply",
+                out.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Says how isotropy shaped the segmentation (charts everywhere, or how many
+/// vertices took a smooth direction); nothing for a fully anisotropic field.
+fn print_segmentation_kind(kind: SegmentationKind, options: &SurfaceOptions, vertices: usize) {
+    match kind {
+        SegmentationKind::IsotropicCharts => println!(
+            "the field is isotropic everywhere (anisotropy under {}): normal-cone charts of half-angle {:.1} degrees",
+            options.isotropy_threshold,
+            options.chart_angle.to_degrees()
+        ),
+        SegmentationKind::FieldAligned { smoothed_vertices } if smoothed_vertices > 0 => println!(
+            "{smoothed_vertices} of {vertices} vertices are isotropic (anisotropy under {}): they take a smooth direction",
+            options.isotropy_threshold
+        ),
+        SegmentationKind::FieldAligned { .. } => {}
+    }
+}
+
+/// The stages' wall times.
+#[derive(Clone, Copy)]
+struct Times {
+    load: Duration,
+    segmentation: Duration,
+    parameterization: Duration,
+}
+
+/// Prints the segmentation's and the parameterization's counts and times, and warns
+/// about segments that are not topological discs.
+fn print_summary(name: &str, report: &SegmentReport, merges: usize, times: Times) {
+    let plus = report
+        .singularities
+        .iter()
+        .filter(|s| s.index > 0.0)
+        .count();
+    let minus = report.singularities.len() - plus;
+    let index_sum: f64 = report.singularities.iter().map(|s| s.index).sum();
+    println!(
+        "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
+        report.faces,
+        report.euler_characteristic,
+        report.segments_before_split,
+        report.singularities.len(),
+        index_sum + 0.0, // an empty sum is -0
+        report.cut_edges,
+        times.segmentation.as_secs_f64(),
+        times.load.as_secs_f64(),
+    );
+    let valid = report.segments.iter().filter(|s| s.valid).count();
+    let fallback = report
+        .segments
+        .iter()
+        .filter(|s| s.isotropic_fallback)
+        .count();
+    println!(
+        "parameterization: {} segments after {} splits and {} merges ({} isotropic charts, {} field-aligned), {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
+        report.segment_count,
+        report.splits,
+        merges,
+        report.charts,
+        report.segment_count - report.charts,
+        times.parameterization.as_secs_f64()
+    );
+    let not_discs = report
+        .segments
+        .iter()
+        .filter(|s| s.euler_characteristic != 1 || s.boundary_loops != 1)
+        .count();
+    if not_discs > 0 {
+        eprintln!("warning: {name}: {not_discs} segments are not topological discs");
+    }
 }

@@ -15,6 +15,9 @@ use wgpu::util::DeviceExt;
 
 use super::buffers::{GpuSampleBuffer, Streamed, StreamedBuffer};
 use super::context::{GpuError, scoped};
+use super::pipeline::{
+    ComputePipelineDesc, buffer_entry, pipeline_layout, shader_module, uniform_buffer,
+};
 use super::shaders;
 
 /// Sites per workgroup of the expansion pass (the shader's `@workgroup_size`).
@@ -94,6 +97,72 @@ fn mesh_words(sampler: &Sampler) -> (Vec<u32>, ExpandParams) {
     (words, offsets)
 }
 
+const PARAMS_BYTES: usize = std::mem::size_of::<ExpandParams>();
+
+/// The plain (`cs_expand`) and ranked (`cs_expand_ranked`) expansion pipelines with
+/// their bind group layouts (group 1: parameters, sites, mesh table, samples; the
+/// ranked pass adds the ranks).
+struct ExpandPasses {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    ranked_pipeline: wgpu::ComputePipeline,
+    ranked_layout: wgpu::BindGroupLayout,
+}
+
+impl ExpandPasses {
+    fn new(device: &wgpu::Device) -> Self {
+        let module = shader_module(device, "strata expand", shaders::EXPAND);
+        let storage = |binding, read_only| {
+            buffer_entry(
+                binding,
+                wgpu::ShaderStages::COMPUTE,
+                wgpu::BufferBindingType::Storage { read_only },
+                None,
+            )
+        };
+        let uniform = buffer_entry(
+            0,
+            wgpu::ShaderStages::COMPUTE,
+            wgpu::BufferBindingType::Uniform,
+            None,
+        );
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("strata expand"),
+            entries: &[
+                uniform,
+                storage(1, true),
+                storage(2, true),
+                storage(3, false),
+            ],
+        });
+        let ranked_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("strata expand ranked"),
+            entries: &[
+                uniform,
+                storage(1, true),
+                storage(2, true),
+                storage(3, false),
+                storage(4, true),
+            ],
+        });
+        // Group 0 is the render pipelines' frame uniforms, which this pass does not use.
+        let compute = |layout: &wgpu::BindGroupLayout, entry| {
+            let pipeline_layout = pipeline_layout(device, "strata expand", &[None, Some(layout)]);
+            ComputePipelineDesc {
+                label: "strata expand",
+                entry,
+            }
+            .create(device, &pipeline_layout, &module)
+        };
+        Self {
+            pipeline: compute(&layout, "cs_expand"),
+            ranked_pipeline: compute(&ranked_layout, "cs_expand_ranked"),
+            layout,
+            ranked_layout,
+        }
+    }
+}
+
 impl SiteExpander {
     /// Builds the pipeline and uploads `sampler`'s mesh, normals, triangles and
     /// face-frame tensors (24 bytes per vertex and 60 per face).
@@ -123,90 +192,19 @@ impl SiteExpander {
             },
         )?;
         scoped(device, "building the sample expansion pass", || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("strata expand"),
-                source: wgpu::ShaderSource::Wgsl(shaders::EXPAND.into()),
-            });
-            let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
-            let uniform = wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
-            // Parameters, sites, mesh table, samples; the ranked pass adds the ranks.
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("strata expand"),
-                entries: &[
-                    uniform,
-                    storage(1, true),
-                    storage(2, true),
-                    storage(3, false),
-                ],
-            });
-            let ranked_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("strata expand ranked"),
-                entries: &[
-                    uniform,
-                    storage(1, true),
-                    storage(2, true),
-                    storage(3, false),
-                    storage(4, true),
-                ],
-            });
-            // Group 0 is the render pipelines' frame uniforms, which this pass does
-            // not use.
-            let compute = |layout: &wgpu::BindGroupLayout, entry: &str| {
-                let pipeline_layout =
-                    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                        label: Some("strata expand"),
-                        bind_group_layouts: &[None, Some(layout)],
-                        immediate_size: 0,
-                    });
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some("strata expand"),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-            };
-            let pipeline = compute(&layout, "cs_expand");
-            let ranked_pipeline = compute(&ranked_layout, "cs_expand_ranked");
-            let uniforms = |label| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: std::mem::size_of::<ExpandParams>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            };
-            let params = uniforms("strata expand params");
-            let ranked_params = uniforms("strata expand ranked params");
+            let passes = ExpandPasses::new(device);
+            let params = uniform_buffer(device, "strata expand params", PARAMS_BYTES);
+            let ranked_params = uniform_buffer(device, "strata expand ranked params", PARAMS_BYTES);
             let mesh = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("strata expand mesh"),
                 contents: bytemuck::cast_slice(&words),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             });
             Self {
-                pipeline,
-                layout,
-                ranked_pipeline,
-                ranked_layout,
+                pipeline: passes.pipeline,
+                layout: passes.layout,
+                ranked_pipeline: passes.ranked_pipeline,
+                ranked_layout: passes.ranked_layout,
                 ranked_params,
                 params,
                 mesh,

@@ -21,6 +21,7 @@ use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
 use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
 use super::expand::SiteExpander;
+use super::pipeline::{ComputePipelineDesc, buffer_entry, pipeline_layout, shader_module};
 use super::shaders;
 use super::splat::{SplatLod, SplatStyle, frame_uniforms};
 
@@ -214,20 +215,8 @@ impl LodFades {
     /// Builds the pass.
     pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
         scoped(device, "building the fade pass", || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("strata lod fades"),
-                source: wgpu::ShaderSource::Wgsl(shaders::SPLAT.into()),
-            });
-            let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
+            let module = shader_module(device, "strata lod fades", shaders::SPLAT);
+            let entry = |binding, ty| buffer_entry(binding, wgpu::ShaderStages::COMPUTE, ty, None);
             let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("strata lod frame"),
                 entries: &[entry(0, wgpu::BufferBindingType::Uniform)],
@@ -239,19 +228,16 @@ impl LodFades {
                     entry(1, wgpu::BufferBindingType::Storage { read_only: false }),
                 ],
             });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("strata lod fades"),
-                bind_group_layouts: &[Some(&frame_layout), Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("strata lod fades"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("cs_lod_fades"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let pipeline_layout = pipeline_layout(
+                device,
+                "strata lod fades",
+                &[Some(&frame_layout), Some(&layout)],
+            );
+            let pipeline = ComputePipelineDesc {
+                label: "strata lod fades",
+                entry: "cs_lod_fades",
+            }
+            .create(device, &pipeline_layout, &module);
             Self {
                 pipeline,
                 frame_layout,

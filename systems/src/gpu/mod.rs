@@ -6,6 +6,8 @@
 //! - [`buffers`]: the growable sample (and sites) buffers with their staging rings.
 //! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
 //! - [`lod`]: GPU-resident progressive pools and the level-of-detail fade pass.
+//! - [`pipeline`]: render and compute pipelines as plain, hashable descriptions, made
+//!   into wgpu pipelines in one place.
 //! - [`splat`]: the splat and mesh pipelines; [`splat::SplatRenderer`].
 //! - [`npr`]: stroke and stipple pictures on paper from the same sample buffer;
 //!   [`npr::NprRenderer`]; [`npr::StyledFrame`] draws either look into a window.
@@ -27,6 +29,7 @@ pub mod headless;
 pub mod layout;
 pub mod lod;
 pub mod npr;
+pub mod pipeline;
 pub mod shaders;
 pub mod splat;
 pub mod stream;

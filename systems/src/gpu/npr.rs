@@ -15,11 +15,13 @@
 
 use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
-use super::layout::FrameUniforms;
-use super::layout::{MESH_ATTRIBUTES, MeshVertex, NprUniforms, SAMPLE_ATTRIBUTES};
+use super::layout::{FrameUniforms, NprUniforms};
+use super::pipeline::{
+    MESH_DEPTH_BIAS, RenderPipelineDesc, TargetFormat, VertexBuffer, buffer_entry, pipeline_layout,
+    primitive, shader_module, uniform_buffer,
+};
 use super::shaders;
-use super::splat::{FrameTarget, SplatRenderer, SplatStyle, TargetFormat, frame_uniforms};
-use strata_engine::sample::Sample;
+use super::splat::{FrameTarget, SplatRenderer, SplatStyle, frame_uniforms};
 
 /// How `strata render` draws the samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -427,32 +429,21 @@ impl NprRenderer {
 }
 
 fn build(device: &wgpu::Device, format: TargetFormat) -> NprRenderer {
-    let uniform = |label, size: usize| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: size as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
-    };
-    let frame = uniform("strata stroke frame uniforms", size_of::<FrameUniforms>());
-    let params = uniform("strata stroke uniforms", size_of::<NprUniforms>());
-    let entry = |binding, size: usize| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: wgpu::BufferSize::new(size as u64),
-        },
-        count: None,
+    let frame_size = size_of::<FrameUniforms>();
+    let params_size = size_of::<NprUniforms>();
+    let frame = uniform_buffer(device, "strata stroke frame uniforms", frame_size);
+    let params = uniform_buffer(device, "strata stroke uniforms", params_size);
+    let entry = |binding, size| {
+        buffer_entry(
+            binding,
+            wgpu::ShaderStages::VERTEX_FRAGMENT,
+            wgpu::BufferBindingType::Uniform,
+            Some(size),
+        )
     };
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("strata strokes"),
-        entries: &[
-            entry(0, size_of::<FrameUniforms>()),
-            entry(1, size_of::<NprUniforms>()),
-        ],
+        entries: &[entry(0, frame_size), entry(1, params_size)],
     });
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("strata strokes"),
@@ -468,116 +459,10 @@ fn build(device: &wgpu::Device, format: TargetFormat) -> NprRenderer {
             },
         ],
     });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("strata strokes"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("npr.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(shaders::NPR.into()),
-    });
-    let sample_layout = wgpu::VertexBufferLayout {
-        array_stride: size_of::<Sample>() as u64,
-        step_mode: wgpu::VertexStepMode::Instance,
-        attributes: &SAMPLE_ATTRIBUTES,
-    };
-    let mesh_layout = wgpu::VertexBufferLayout {
-        array_stride: size_of::<MeshVertex>() as u64,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &MESH_ATTRIBUTES,
-    };
-    // One shape for all four: what differs is the entry points, the vertex buffer, the
-    // topology, the depth test and whether colour is written.
-    struct Spec<'a> {
-        vs: &'a str,
-        fs: &'a str,
-        buffer: Option<wgpu::VertexBufferLayout<'a>>,
-        topology: wgpu::PrimitiveTopology,
-        depth_write: bool,
-        depth_compare: wgpu::CompareFunction,
-        bias: wgpu::DepthBiasState,
-        writes: wgpu::ColorWrites,
-    }
-    let pipeline = |spec: Spec<'_>| {
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(spec.fs),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some(spec.vs),
-                compilation_options: Default::default(),
-                buffers: &[spec.buffer],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: spec.topology,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: format.depth,
-                depth_write_enabled: Some(spec.depth_write),
-                depth_compare: Some(spec.depth_compare),
-                stencil: Default::default(),
-                bias: spec.bias,
-            }),
-            multisample: wgpu::MultisampleState {
-                count: format.samples,
-                mask: !0,
-                alpha_to_coverage_enabled: false,
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some(spec.fs),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: format.color,
-                    blend: Some(DARKEN),
-                    write_mask: spec.writes,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    };
-    let instanced = |vs, fs| Spec {
-        vs,
-        fs,
-        buffer: Some(sample_layout.clone()),
-        topology: wgpu::PrimitiveTopology::TriangleStrip,
-        // Tested against the mesh, never written: no stroke hides another.
-        depth_write: false,
-        depth_compare: wgpu::CompareFunction::Less,
-        bias: Default::default(),
-        writes: wgpu::ColorWrites::ALL,
-    };
-    let paper = pipeline(Spec {
-        vs: "vs_paper",
-        fs: "fs_paper",
-        buffer: None,
-        topology: wgpu::PrimitiveTopology::TriangleList,
-        depth_write: false,
-        depth_compare: wgpu::CompareFunction::Always,
-        bias: Default::default(),
-        writes: wgpu::ColorWrites::ALL,
-    });
-    let depth = pipeline(Spec {
-        vs: "vs_depth",
-        fs: "fs_depth",
-        buffer: Some(mesh_layout),
-        topology: wgpu::PrimitiveTopology::TriangleList,
-        depth_write: true,
-        depth_compare: wgpu::CompareFunction::Less,
-        // As the splat renderer's mesh: pushed back so that strokes on a face win.
-        bias: wgpu::DepthBiasState {
-            constant: 4,
-            slope_scale: 2.0,
-            clamp: 0.0,
-        },
-        writes: wgpu::ColorWrites::empty(),
-    });
-    let strokes = pipeline(instanced("vs_stroke", "fs_stroke"));
-    let stipple = pipeline(instanced("vs_stipple", "fs_stipple"));
+    let pipeline_layout = pipeline_layout(device, "strata strokes", &[Some(&layout)]);
+    let module = shader_module(device, "npr.wgsl", shaders::NPR);
+    let [paper, depth, strokes, stipple] =
+        pipelines(format).map(|d| d.create(device, &pipeline_layout, &module));
     NprRenderer {
         format,
         frame,
@@ -588,6 +473,57 @@ fn build(device: &wgpu::Device, format: TargetFormat) -> NprRenderer {
         strokes,
         stipple,
     }
+}
+
+/// The paper, depth-only mesh, stroke and stipple pipelines (`npr.wgsl`): all blend
+/// with [`DARKEN`]; they differ in entry points, vertex buffer, topology, depth test
+/// and whether colour is written.
+fn pipelines(format: TargetFormat) -> [RenderPipelineDesc; 4] {
+    let desc = |vs, fs, buffer: Option<VertexBuffer>, topology, depth_stencil, writes| {
+        RenderPipelineDesc {
+            label: fs,
+            vertex_entry: vs,
+            fragment_entry: fs,
+            vertex_buffers: buffer.into_iter().collect(),
+            targets: vec![format.color_target(Some(DARKEN), writes)],
+            primitive: primitive(topology),
+            depth_stencil,
+            multisample: format.multisample(),
+        }
+    };
+    let instanced = |vs, fs| {
+        desc(
+            vs,
+            fs,
+            Some(VertexBuffer::SAMPLES),
+            wgpu::PrimitiveTopology::TriangleStrip,
+            // Tested against the mesh, never written: no stroke hides another.
+            format.depth_test(false, wgpu::CompareFunction::Less, Default::default()),
+            wgpu::ColorWrites::ALL,
+        )
+    };
+    let list = wgpu::PrimitiveTopology::TriangleList;
+    [
+        desc(
+            "vs_paper",
+            "fs_paper",
+            None,
+            list,
+            format.depth_test(false, wgpu::CompareFunction::Always, Default::default()),
+            wgpu::ColorWrites::ALL,
+        ),
+        // As the splat renderer's mesh: pushed back so that strokes on a face win.
+        desc(
+            "vs_depth",
+            "fs_depth",
+            Some(VertexBuffer::MESH),
+            list,
+            format.depth_test(true, wgpu::CompareFunction::Less, MESH_DEPTH_BIAS),
+            wgpu::ColorWrites::empty(),
+        ),
+        instanced("vs_stroke", "fs_stroke"),
+        instanced("vs_stipple", "fs_stipple"),
+    ]
 }
 
 #[cfg(test)]

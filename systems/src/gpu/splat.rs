@@ -23,21 +23,13 @@ use strata_engine::sample::{Sample, Sampler};
 use super::buffers::GpuSampleBuffer;
 use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
-use super::layout::{
-    ColorMode, Footprint, FrameUniforms, MESH_ATTRIBUTES, MeshMode, MeshVertex, SAMPLE_ATTRIBUTES,
+use super::layout::{ColorMode, Footprint, FrameUniforms, MeshMode, MeshVertex};
+pub use super::pipeline::TargetFormat;
+use super::pipeline::{
+    MESH_DEPTH_BIAS, RenderPipelineDesc, VertexBuffer, buffer_entry, pipeline_layout, primitive,
+    shader_module, uniform_buffer,
 };
 use super::shaders;
-
-/// The formats of the targets a renderer draws into.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TargetFormat {
-    /// Colour format (an `*Srgb` format: shaders output linear colour).
-    pub color: wgpu::TextureFormat,
-    /// Depth format.
-    pub depth: wgpu::TextureFormat,
-    /// Samples per pixel (1 or 4).
-    pub samples: u32,
-}
 
 /// How a frame looks.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -444,28 +436,17 @@ struct Pipelines {
 }
 
 fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
-    let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("strata frame uniforms"),
-        size: std::mem::size_of::<FrameUniforms>() as u64,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
+    let size = size_of::<FrameUniforms>();
+    let uniforms = uniform_buffer(device, "strata frame uniforms", size);
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("strata frame"),
+        entries: &[buffer_entry(
+            0,
+            wgpu::ShaderStages::VERTEX_FRAGMENT,
+            wgpu::BufferBindingType::Uniform,
+            Some(size),
+        )],
     });
-    let layout =
-        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("strata frame"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(
-                        std::mem::size_of::<FrameUniforms>() as u64
-                    ),
-                },
-                count: None,
-            }],
-        });
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("strata frame"),
         layout: &layout,
@@ -474,119 +455,12 @@ fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
             resource: uniforms.as_entire_binding(),
         }],
     });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("strata"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let splat_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("splat.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(shaders::SPLAT.into()),
-    });
-    let mesh_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("mesh.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(shaders::MESH.into()),
-    });
-    let sample_layout = wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<Sample>() as u64,
-        step_mode: wgpu::VertexStepMode::Instance,
-        attributes: &SAMPLE_ATTRIBUTES,
-    };
-    let mesh_layout = wgpu::VertexBufferLayout {
-        array_stride: std::mem::size_of::<MeshVertex>() as u64,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &MESH_ATTRIBUTES,
-    };
-    let multisample = wgpu::MultisampleState {
-        count: format.samples,
-        mask: !0,
-        alpha_to_coverage_enabled: false,
-    };
-    let splat = |vs: &str, fs: &str, blend: Option<wgpu::BlendState>, depth_write: bool| {
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(fs),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &splat_module,
-                entry_point: Some(vs),
-                compilation_options: Default::default(),
-                buffers: &[Some(sample_layout.clone())],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleStrip,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: format.depth,
-                depth_write_enabled: Some(depth_write),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &splat_module,
-                entry_point: Some(fs),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: format.color,
-                    blend,
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    };
-    let disc = splat("vs_splat", "fs_disc", None, true);
-    let glyph = splat("vs_glyph", "fs_glyph", None, true);
-    let gaussian = splat(
-        "vs_splat",
-        "fs_gaussian",
-        Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
-        false,
-    );
-    let mesh_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("strata mesh"),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &mesh_module,
-            entry_point: Some("vs_mesh"),
-            compilation_options: Default::default(),
-            buffers: &[Some(mesh_layout)],
-        },
-        primitive: wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: format.depth,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            // Pushed back a little so that splats lying on a face win the depth test.
-            bias: wgpu::DepthBiasState {
-                constant: 4,
-                slope_scale: 2.0,
-                clamp: 0.0,
-            },
-        }),
-        multisample,
-        fragment: Some(wgpu::FragmentState {
-            module: &mesh_module,
-            entry_point: Some("fs_mesh"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format: format.color,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+    let pipeline_layout = pipeline_layout(device, "strata", &[Some(&layout)]);
+    let splat_module = shader_module(device, "splat.wgsl", shaders::SPLAT);
+    let mesh_module = shader_module(device, "mesh.wgsl", shaders::MESH);
+    let [disc, glyph, gaussian] =
+        splat_pipelines(format).map(|d| d.create(device, &pipeline_layout, &splat_module));
+    let mesh_pipeline = mesh_pipeline(format).create(device, &pipeline_layout, &mesh_module);
     Pipelines {
         uniforms,
         bind_group,
@@ -594,6 +468,49 @@ fn build_pipelines(device: &wgpu::Device, format: TargetFormat) -> Pipelines {
         gaussian,
         glyph,
         mesh_pipeline,
+    }
+}
+
+/// The disc, glyph and Gaussian pipelines (`splat.wgsl`): instanced quads, the
+/// Gaussian blended and not writing depth.
+fn splat_pipelines(format: TargetFormat) -> [RenderPipelineDesc; 3] {
+    let splat = |vs, fs, blend, depth_write| RenderPipelineDesc {
+        label: fs,
+        vertex_entry: vs,
+        fragment_entry: fs,
+        vertex_buffers: vec![VertexBuffer::SAMPLES],
+        targets: vec![format.color_target(blend, wgpu::ColorWrites::ALL)],
+        primitive: primitive(wgpu::PrimitiveTopology::TriangleStrip),
+        depth_stencil: format.depth_test(
+            depth_write,
+            wgpu::CompareFunction::Less,
+            Default::default(),
+        ),
+        multisample: format.multisample(),
+    };
+    [
+        splat("vs_splat", "fs_disc", None, true),
+        splat("vs_glyph", "fs_glyph", None, true),
+        splat(
+            "vs_splat",
+            "fs_gaussian",
+            Some(wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING),
+            false,
+        ),
+    ]
+}
+
+/// The mesh under the splats (`mesh.wgsl`), its depth pushed back.
+fn mesh_pipeline(format: TargetFormat) -> RenderPipelineDesc {
+    RenderPipelineDesc {
+        label: "strata mesh",
+        vertex_entry: "vs_mesh",
+        fragment_entry: "fs_mesh",
+        vertex_buffers: vec![VertexBuffer::MESH],
+        targets: vec![format.color_target(None, wgpu::ColorWrites::ALL)],
+        primitive: primitive(wgpu::PrimitiveTopology::TriangleList),
+        depth_stencil: format.depth_test(true, wgpu::CompareFunction::Less, MESH_DEPTH_BIAS),
+        multisample: format.multisample(),
     }
 }
 

@@ -141,7 +141,35 @@ pub fn write_analysis(
         }
     };
     let n = input.sets[0].len();
-    // Differential domain analysis: every input.
+    write_dda(input, options, out, &mut plot_to)?;
+    if let Some(frame) = planar_frame(input) {
+        write_planar(input, frame, out, &mut plot_to)?;
+        if options.alignment {
+            alignment_map(out, input, &mut plot_to)?;
+        }
+    } else if options.alignment {
+        bail!("--alignment needs a flat scene (the map is drawn in the plane)");
+    }
+    write_json(
+        &out.join("summary.json"),
+        &serde_json::json!({"input": source, "samples": n, "realizations": input.sets.len()}),
+    )?;
+    Ok(AnalysisSummary {
+        realizations: input.sets.len(),
+        samples: n,
+        plots: written,
+        plot_errors,
+    })
+}
+
+/// Differential domain analysis of every input: `dda.json` and its three plots.
+fn write_dda(
+    input: &AnalysisInput,
+    options: &AnalysisOptions,
+    out: &Path,
+    plot_to: &mut dyn FnMut(&str, &DrawFn),
+) -> anyhow::Result<()> {
+    let n = input.sets[0].len();
     let dda_options = DdaOptions {
         epsilon: options.epsilon,
         ..Default::default()
@@ -201,134 +229,146 @@ pub fn write_analysis(
             2.0,
         )
     });
+    Ok(())
+}
 
-    // Planar measures.
-    if let Some(frame) = planar_frame(input) {
-        let unit: Vec<Vec<DVec2>> = input.sets.iter().map(|s| frame.map(s)).collect();
-        let families = [
-            (ShapeFamily::Rectangles, "rectangles"),
-            (ShapeFamily::OriginTriangles, "triangles"),
-            (ShapeFamily::QuarterDiscs, "quarter_discs"),
-        ];
-        let mut disc = serde_json::Map::new();
-        for (family, name) in families {
-            let d = Discrepancy::new(family);
-            let sup = unit.iter().map(|p| d.sup(p)).sum::<f64>() / unit.len() as f64;
-            let l2 = unit.iter().map(|p| d.l2(p)).sum::<f64>() / unit.len() as f64;
-            let mut entry = serde_json::json!({"n": n, "sup": sup, "l2": l2});
-            if let Some(sampled) = &input.scene {
-                let (scene, seed) = (&sampled.scene, sampled.first_seed);
-                let ns: Vec<usize> = (6..=13)
-                    .flat_map(|l| [1usize << l, (1 << l) + (1 << (l - 1))])
-                    .filter(|&k| k <= n.clamp(64, 8192))
-                    .collect();
-                let seeds: Vec<u64> = (0..input.sets.len() as u64).map(|k| seed + k).collect();
-                if ns.len() >= 2 {
-                    let curve = DiscrepancyCurve::measure(
-                        &d,
-                        |k, s| frame.map(&scene.sampler.sample(k, s)),
-                        &ns,
-                        &seeds,
-                    )?;
-                    entry["curve"] = serde_json::json!({"n": curve.ns, "sup": curve.sup,
-                        "l2": curve.l2, "sup_slope": curve.sup_slope(), "l2_slope": curve.l2_slope()});
-                    plot_to(&format!("discrepancy_{name}.png"), &|p| {
-                        plot::line_chart(
-                            p,
-                            &Axes {
-                                title: format!("discrepancy, {}", name.replace('_', " ")),
-                                x_label: "log10 N".into(),
-                                y_label: "log10 discrepancy".into(),
-                                log_x: true,
-                                log_y: true,
-                                ..Default::default()
-                            },
-                            &[
-                                Series::line(
-                                    format!("sup (slope {:.3})", curve.sup_slope()),
-                                    curve.ns_f64(),
-                                    curve.sup.clone(),
-                                )
-                                .with_markers(),
-                                Series::line(
-                                    format!("L2 (slope {:.3})", curve.l2_slope()),
-                                    curve.ns_f64(),
-                                    curve.l2.clone(),
-                                )
-                                .with_markers(),
-                            ],
-                        )
-                    });
-                }
-            }
-            disc.insert(name.to_string(), entry);
-        }
-        let spec = periodogram(&unit, 2.5).context("periodogram")?;
-        let r = spec.radial();
-        write_json(
-            &out.join("planar.json"),
-            &serde_json::json!({
-                "domain_lo": [frame.lo.x, frame.lo.y], "domain_size": [frame.size.x, frame.size.y],
-                "discrepancy": disc,
-                "spectrum": {"frequency": r.frequency, "rapsd": r.rapsd, "anisotropy_db": r.anisotropy_db,
-                    "low_frequency_energy": r.mean_below(0.5), "peak": r.peak().1,
-                    "peak_frequency": r.peak().0, "noise_floor_db": spec.noise_floor_db()},
-            }),
-        )?;
-        plot_to("rapsd.png", &|p| {
-            plot::line_chart(
-                p,
-                &Axes {
-                    title: format!("RAPSD, {n} points x {}", unit.len()),
-                    x_label: "frequency / sqrt(N)".into(),
-                    y_label: "power".into(),
-                    y_range: Some((0.0, 2.2)),
-                    reference: vec![(1.0, "white noise".into())],
-                    ..Default::default()
-                },
-                &[Series::line("RAPSD", r.frequency.clone(), r.rapsd.clone())],
-            )
-        });
-        plot_to("anisotropy.png", &|p| {
-            plot::line_chart(
-                p,
-                &Axes {
-                    title: "anisotropy".into(),
-                    x_label: "frequency / sqrt(N)".into(),
-                    y_label: "dB".into(),
-                    reference: vec![(spec.noise_floor_db(), "noise floor".into())],
-                    ..Default::default()
-                },
-                &[Series::line(
-                    "anisotropy",
-                    r.frequency.clone(),
-                    r.anisotropy_db.clone(),
-                )],
-            )
-        });
-        let k = spec.half_size as f64 / (n as f64).sqrt();
-        plot_to("periodogram.png", &|p| {
-            plot::spectrum_image(p, "mean periodogram", &spec.power, spec.side(), k, 2.0)
-        });
-        plot_to("points.png", &|p| {
-            plot::points(p, "samples (unit-square frame)", &unit[0], DVec2::ONE)
-        });
-        if options.alignment {
-            alignment_map(out, input, &mut plot_to)?;
-        }
-    } else if options.alignment {
-        bail!("--alignment needs a flat scene (the map is drawn in the plane)");
+/// The planar measures of a flat input mapped by `frame` to the unit square:
+/// `planar.json` (discrepancies and spectrum) and its plots.
+fn write_planar(
+    input: &AnalysisInput,
+    frame: Frame,
+    out: &Path,
+    plot_to: &mut dyn FnMut(&str, &DrawFn),
+) -> anyhow::Result<()> {
+    let n = input.sets[0].len();
+    let unit: Vec<Vec<DVec2>> = input.sets.iter().map(|s| frame.map(s)).collect();
+    let families = [
+        (ShapeFamily::Rectangles, "rectangles"),
+        (ShapeFamily::OriginTriangles, "triangles"),
+        (ShapeFamily::QuarterDiscs, "quarter_discs"),
+    ];
+    let mut disc = serde_json::Map::new();
+    for (family, name) in families {
+        let entry = discrepancy_entry(input, frame, &unit, family, name, plot_to)?;
+        disc.insert(name.to_string(), entry);
     }
+    let spec = periodogram(&unit, 2.5).context("periodogram")?;
+    let r = spec.radial();
     write_json(
-        &out.join("summary.json"),
-        &serde_json::json!({"input": source, "samples": n, "realizations": input.sets.len()}),
+        &out.join("planar.json"),
+        &serde_json::json!({
+            "domain_lo": [frame.lo.x, frame.lo.y], "domain_size": [frame.size.x, frame.size.y],
+            "discrepancy": disc,
+            "spectrum": {"frequency": r.frequency, "rapsd": r.rapsd, "anisotropy_db": r.anisotropy_db,
+                "low_frequency_energy": r.mean_below(0.5), "peak": r.peak().1,
+                "peak_frequency": r.peak().0, "noise_floor_db": spec.noise_floor_db()},
+        }),
     )?;
-    Ok(AnalysisSummary {
-        realizations: input.sets.len(),
-        samples: n,
-        plots: written,
-        plot_errors,
-    })
+    plot_to("rapsd.png", &|p| {
+        plot::line_chart(
+            p,
+            &Axes {
+                title: format!("RAPSD, {n} points x {}", unit.len()),
+                x_label: "frequency / sqrt(N)".into(),
+                y_label: "power".into(),
+                y_range: Some((0.0, 2.2)),
+                reference: vec![(1.0, "white noise".into())],
+                ..Default::default()
+            },
+            &[Series::line("RAPSD", r.frequency.clone(), r.rapsd.clone())],
+        )
+    });
+    plot_to("anisotropy.png", &|p| {
+        plot::line_chart(
+            p,
+            &Axes {
+                title: "anisotropy".into(),
+                x_label: "frequency / sqrt(N)".into(),
+                y_label: "dB".into(),
+                reference: vec![(spec.noise_floor_db(), "noise floor".into())],
+                ..Default::default()
+            },
+            &[Series::line(
+                "anisotropy",
+                r.frequency.clone(),
+                r.anisotropy_db.clone(),
+            )],
+        )
+    });
+    let k = spec.half_size as f64 / (n as f64).sqrt();
+    plot_to("periodogram.png", &|p| {
+        plot::spectrum_image(p, "mean periodogram", &spec.power, spec.side(), k, 2.0)
+    });
+    plot_to("points.png", &|p| {
+        plot::points(p, "samples (unit-square frame)", &unit[0], DVec2::ONE)
+    });
+    Ok(())
+}
+
+/// The discrepancy of the unit-square realizations `unit` over one shape `family`
+/// (mean sup and L2), and for a scene its curve over more counts with the curve's
+/// plot `discrepancy_<name>.png`.
+fn discrepancy_entry(
+    input: &AnalysisInput,
+    frame: Frame,
+    unit: &[Vec<DVec2>],
+    family: ShapeFamily,
+    name: &str,
+    plot_to: &mut dyn FnMut(&str, &DrawFn),
+) -> anyhow::Result<serde_json::Value> {
+    let n = input.sets[0].len();
+    let d = Discrepancy::new(family);
+    let sup = unit.iter().map(|p| d.sup(p)).sum::<f64>() / unit.len() as f64;
+    let l2 = unit.iter().map(|p| d.l2(p)).sum::<f64>() / unit.len() as f64;
+    let mut entry = serde_json::json!({"n": n, "sup": sup, "l2": l2});
+    let Some(sampled) = &input.scene else {
+        return Ok(entry);
+    };
+    let (scene, seed) = (&sampled.scene, sampled.first_seed);
+    let ns: Vec<usize> = (6..=13)
+        .flat_map(|l| [1usize << l, (1 << l) + (1 << (l - 1))])
+        .filter(|&k| k <= n.clamp(64, 8192))
+        .collect();
+    let seeds: Vec<u64> = (0..input.sets.len() as u64).map(|k| seed + k).collect();
+    if ns.len() < 2 {
+        return Ok(entry);
+    }
+    let curve = DiscrepancyCurve::measure(
+        &d,
+        |k, s| frame.map(&scene.sampler.sample(k, s)),
+        &ns,
+        &seeds,
+    )?;
+    entry["curve"] = serde_json::json!({"n": curve.ns, "sup": curve.sup,
+        "l2": curve.l2, "sup_slope": curve.sup_slope(), "l2_slope": curve.l2_slope()});
+    plot_to(&format!("discrepancy_{name}.png"), &|p| {
+        plot::line_chart(
+            p,
+            &Axes {
+                title: format!("discrepancy, {}", name.replace('_', " ")),
+                x_label: "log10 N".into(),
+                y_label: "log10 discrepancy".into(),
+                log_x: true,
+                log_y: true,
+                ..Default::default()
+            },
+            &[
+                Series::line(
+                    format!("sup (slope {:.3})", curve.sup_slope()),
+                    curve.ns_f64(),
+                    curve.sup.clone(),
+                )
+                .with_markers(),
+                Series::line(
+                    format!("L2 (slope {:.3})", curve.l2_slope()),
+                    curve.ns_f64(),
+                    curve.l2.clone(),
+                )
+                .with_markers(),
+            ],
+        )
+    });
+    Ok(entry)
 }
 
 /// The affine frame of a flat input: `q = (p - lo) / size` per axis.

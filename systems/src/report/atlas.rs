@@ -164,11 +164,30 @@ fn push_tile(
     param: &SegmentParam,
     origin: DVec2,
 ) {
-    let report = &param.report;
     let n = param.triangles.len();
     let tick_step = n.div_ceil(MAX_TICKS_PER_SEGMENT).max(1);
+    let _ = writeln!(out, "<g id=\"segment-{id}\">");
+    push_tile_header(out, id, param, origin, tick_step);
+    if n > 0 {
+        let layout = TileLayout::new(param, origin);
+        push_tile_paths(out, id, param, &layout.coords);
+        push_ticks(out, mesh, field, param, &layout, tick_step);
+    }
+    out.push_str("</g>\n");
+}
 
-    let _ = write!(out, "<g id=\"segment-{id}\">\n<rect class=\"tile");
+/// A tile's frame and its three lines of text: the segment's name, size and validity,
+/// its angles and anisotropy, and its flips, overlap, fallback and tick thinning.
+fn push_tile_header(
+    out: &mut String,
+    id: usize,
+    param: &SegmentParam,
+    origin: DVec2,
+    tick_step: usize,
+) {
+    let report = &param.report;
+    let n = param.triangles.len();
+    out.push_str("<rect class=\"tile");
     if !report.valid {
         out.push_str(" invalid");
     }
@@ -211,33 +230,55 @@ fn push_tile(
         let _ = write!(out, " \u{b7} ticks 1/{tick_step}");
     }
     out.push_str("</text>\n");
+}
 
-    if n == 0 {
-        out.push_str("</g>\n");
-        return;
+/// Where a segment's parameterization is drawn in its tile: the unit-square layout,
+/// centred in the drawing area, v up.
+struct TileLayout {
+    /// The vertices in the unit square.
+    unit: Vec<DVec2>,
+    /// The vertices in pixels.
+    px: Vec<DVec2>,
+    /// The vertices as SVG coordinates (`x y`).
+    coords: Vec<String>,
+    /// Side of the drawing area in pixels.
+    inner: f64,
+}
+
+impl TileLayout {
+    fn new(param: &SegmentParam, origin: DVec2) -> Self {
+        let (unit, _, _) = param.to_unit_square();
+        let extent = unit
+            .iter()
+            .fold(DVec2::ZERO, |hi, p| hi.max(*p))
+            .min(DVec2::ONE);
+        let pad = (DVec2::ONE - extent) * 0.5;
+        let inner = TILE_PX - 2.0 * MARGIN_PX;
+        let corner = origin + DVec2::new(MARGIN_PX, HEADER_PX + MARGIN_PX);
+        let to_px = |p: DVec2| corner + DVec2::new(p.x + pad.x, 1.0 - (p.y + pad.y)) * inner;
+        let px: Vec<DVec2> = unit.iter().map(|p| to_px(*p)).collect();
+        let coords: Vec<String> = px
+            .iter()
+            .map(|p| {
+                let mut s = String::with_capacity(16);
+                push_num(&mut s, p.x);
+                s.push(' ');
+                push_num(&mut s, p.y);
+                s
+            })
+            .collect();
+        Self {
+            unit,
+            px,
+            coords,
+            inner,
+        }
     }
+}
 
-    // Unit-square layout, centred in the drawing area, v up.
-    let (unit, _, _) = param.to_unit_square();
-    let extent = unit
-        .iter()
-        .fold(DVec2::ZERO, |hi, p| hi.max(*p))
-        .min(DVec2::ONE);
-    let pad = (DVec2::ONE - extent) * 0.5;
-    let inner = TILE_PX - 2.0 * MARGIN_PX;
-    let corner = origin + DVec2::new(MARGIN_PX, HEADER_PX + MARGIN_PX);
-    let to_px = |p: DVec2| corner + DVec2::new(p.x + pad.x, 1.0 - (p.y + pad.y)) * inner;
-    let px: Vec<DVec2> = unit.iter().map(|p| to_px(*p)).collect();
-    let coords: Vec<String> = px
-        .iter()
-        .map(|p| {
-            let mut s = String::with_capacity(16);
-            push_num(&mut s, p.x);
-            s.push(' ');
-            push_num(&mut s, p.y);
-            s
-        })
-        .collect();
+/// A tile's triangles (filled in the segment's colour), its flipped triangles and its
+/// boundary, as SVG paths over the vertices' `coords`.
+fn push_tile_paths(out: &mut String, id: usize, param: &SegmentParam, coords: &[String]) {
     let push_triangle = |out: &mut String, t: &[u32; 3]| {
         out.push('M');
         out.push_str(&coords[t[0] as usize]);
@@ -248,7 +289,7 @@ fn push_tile(
         out.push('Z');
     };
 
-    let fill = segment_fill(id, report.valid);
+    let fill = segment_fill(id, param.report.valid);
     let _ = write!(out, "<path class=\"tri\" fill=\"{fill}\" d=\"");
     for t in &param.triangles {
         push_triangle(out, t);
@@ -280,21 +321,34 @@ fn push_tile(
         out.push_str(&coords[b as usize]);
     }
     out.push_str("\"/>\n");
+}
 
+/// The field's major direction as a tick at the centroid of every `tick_step`-th
+/// triangle of a tile.
+fn push_ticks(
+    out: &mut String,
+    mesh: &TriMesh,
+    field: &TensorField,
+    param: &SegmentParam,
+    layout: &TileLayout,
+    tick_step: usize,
+) {
+    let n = param.triangles.len();
     // One tick length per tile: 0.8 x the mean spacing of the drawn ticks over the
     // layout's area, so small segments get visible ticks and big ones no hairball.
     let area_unit: f64 = param
         .triangles
         .iter()
         .map(|t| {
-            let q = t.map(|v| unit[v as usize]);
+            let q = t.map(|v| layout.unit[v as usize]);
             0.5 * (q[1] - q[0]).perp_dot(q[2] - q[0]).abs()
         })
         .sum();
     let ticks = n.div_ceil(tick_step);
     let fraction =
         (0.8 * (area_unit / ticks as f64).sqrt()).clamp(TICK_FRACTION.0, TICK_FRACTION.1);
-    let half = 0.5 * fraction * inner;
+    let half = 0.5 * fraction * layout.inner;
+    let px = &layout.px;
     out.push_str("<g class=\"ticks\">\n");
     for i in (0..n).step_by(tick_step) {
         let Some(dir) = mapped_major(mesh, field, param, i) else {
@@ -316,7 +370,7 @@ fn push_tile(
         push_num(out, c.y + h.y);
         out.push_str("\"/>\n");
     }
-    out.push_str("</g>\n</g>\n");
+    out.push_str("</g>\n");
 }
 
 /// Unit direction, in `uv` (v up), of the image of face `param.faces[i]`'s major

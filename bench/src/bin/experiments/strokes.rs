@@ -114,38 +114,12 @@ pub fn section_7_1(ctx: &mut Ctx) -> Result<Section, BoxError> {
             width: length / RATIO,
             variation: VARIATION,
         };
-        let mut measured = Vec::new();
-        for per_seed_sets in &sets {
-            let per_seed = per_seed_sets
-                .iter()
-                .zip(&seeds)
-                .map(|(xy, &seed)| {
-                    let s = strokes::strokes_from_samples(xy, &vec![direction; N], &style, seed)?;
-                    strokes::coverage(&s, RASTER)
-                })
-                .collect::<Result<Vec<Coverage>, _>>()?;
-            let med = |f: fn(&Coverage) -> f64| median(&per_seed.iter().map(f).collect::<Vec<_>>());
-            measured.push(Measured {
-                covered: med(|c| c.covered_fraction),
-                overlap: med(|c| c.mean_overlap),
-                hole: med(|c| c.largest_hole) / mean_spacing,
-                per_seed,
-            });
-        }
+        let measured = sets
+            .iter()
+            .map(|per_seed_sets| measure(per_seed_sets, &seeds, direction, &style, mean_spacing))
+            .collect::<Result<Vec<Measured>, BoxError>>()?;
         rows.extend(rows_of(k, &measured));
-        json.push(serde_json::json!({
-            "area_factor": k, "stroke_length": length, "stroke_width": length / RATIO,
-            "placements": PLACEMENTS.iter().zip(&measured).map(|(name, m)| serde_json::json!({
-                "placement": name,
-                "median_covered_fraction": m.covered,
-                "median_mean_overlap": m.overlap,
-                "median_largest_hole_over_spacing": m.hole,
-                "covered_fraction": m.per_seed.iter().map(|c| c.covered_fraction).collect::<Vec<_>>(),
-                "mean_overlap": m.per_seed.iter().map(|c| c.mean_overlap).collect::<Vec<_>>(),
-                "largest_hole_over_spacing":
-                    m.per_seed.iter().map(|c| c.largest_hole / mean_spacing).collect::<Vec<_>>(),
-            })).collect::<Vec<_>>(),
-        }));
+        json.push(factor_json(k, length, &measured, mean_spacing));
     }
     ctx.json(
         "strokes_7_1.json",
@@ -153,6 +127,68 @@ pub fn section_7_1(ctx: &mut Ctx) -> Result<Section, BoxError> {
             "seeds": seeds, "mean_spacing": mean_spacing, "stroke_direction": direction,
             "factors": json}),
     )?;
+    let figures = coverage_figures(ctx, &sets, seeds[0], direction, spacing)?;
+    Ok(Section {
+        title: "7.1 Brush strokes (Fig. 3)".into(),
+        notes: notes(seeds.len(), spacing, mean_spacing),
+        rows,
+        figures,
+    })
+}
+
+/// One placement's strokes of `style` along `direction` on each seed's set, their
+/// coverage, and its medians over the seeds.
+fn measure(
+    per_seed_sets: &[Vec<[f64; 2]>],
+    seeds: &[u64],
+    direction: [f64; 2],
+    style: &StrokeStyle,
+    mean_spacing: f64,
+) -> Result<Measured, BoxError> {
+    let per_seed = per_seed_sets
+        .iter()
+        .zip(seeds)
+        .map(|(xy, &seed)| {
+            let s = strokes::strokes_from_samples(xy, &vec![direction; N], style, seed)?;
+            strokes::coverage(&s, RASTER)
+        })
+        .collect::<Result<Vec<Coverage>, _>>()?;
+    let med = |f: fn(&Coverage) -> f64| median(&per_seed.iter().map(f).collect::<Vec<_>>());
+    Ok(Measured {
+        covered: med(|c| c.covered_fraction),
+        overlap: med(|c| c.mean_overlap),
+        hole: med(|c| c.largest_hole) / mean_spacing,
+        per_seed,
+    })
+}
+
+/// The JSON entry of area factor `k` (strokes `length` long): every placement's
+/// medians and per-seed values.
+fn factor_json(k: f64, length: f64, measured: &[Measured], mean_spacing: f64) -> serde_json::Value {
+    serde_json::json!({
+        "area_factor": k, "stroke_length": length, "stroke_width": length / RATIO,
+        "placements": PLACEMENTS.iter().zip(measured).map(|(name, m)| serde_json::json!({
+            "placement": name,
+            "median_covered_fraction": m.covered,
+            "median_mean_overlap": m.overlap,
+            "median_largest_hole_over_spacing": m.hole,
+            "covered_fraction": m.per_seed.iter().map(|c| c.covered_fraction).collect::<Vec<_>>(),
+            "mean_overlap": m.per_seed.iter().map(|c| c.mean_overlap).collect::<Vec<_>>(),
+            "largest_hole_over_spacing":
+                m.per_seed.iter().map(|c| c.largest_hole / mean_spacing).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The isotropic and anisotropic placements' strokes at area factor 1 for `seed`, as
+/// images of strokes per pixel.
+fn coverage_figures(
+    ctx: &mut Ctx,
+    sets: &Sets,
+    seed: u64,
+    direction: [f64; 2],
+    spacing: f64,
+) -> Result<Vec<(String, String)>, BoxError> {
     let mut figures = Vec::new();
     for (p, name) in [(0, "isotropic"), (1, "anisotropic")] {
         let style = StrokeStyle {
@@ -160,7 +196,7 @@ pub fn section_7_1(ctx: &mut Ctx) -> Result<Section, BoxError> {
             width: spacing / RATIO,
             variation: VARIATION,
         };
-        let s = strokes::strokes_from_samples(&sets[p][0], &vec![direction; N], &style, seeds[0])?;
+        let s = strokes::strokes_from_samples(&sets[p][0], &vec![direction; N], &style, seed)?;
         let raster = strokes::rasterise(&s, IMAGE)?;
         let values: Vec<f64> = raster.counts.iter().map(|&c| f64::from(c)).collect();
         figures.push(ctx.figure(
@@ -181,37 +217,35 @@ pub fn section_7_1(ctx: &mut Ctx) -> Result<Section, BoxError> {
             },
         ));
     }
-    Ok(Section {
-        title: "7.1 Brush strokes (Fig. 3)".into(),
-        notes: format!(
-            "Unit square, uniform field along x with spacing ratio 8:1 (density 1), N = {N} \
-             samples per set, {} seeds. Each sample is drawn as an 8:1 stroke \
-             (`analysis::strokes`) along the axis of the field's larger spacing (y here: \
-             strata's major eigenvector is the direction of densest spacing), centred on \
-             the sample; every placement gets the same strokes (sample k of seed s has \
-             the same size whatever the placement), so only placement differs. Stroke \
-             length = sqrt(k) x the larger expected spacing of the 8:1 field ({:.4} = \
-             sqrt(8 / N)), width = length / 8, each scaled by a factor uniform in [0.75, \
-             1.25]. The area factor k is the total nominal stroke area over the square's: \
-             at k = 1 a perfect tiling covers the square exactly once, at k = 2 twice. \
-             Placements: strata's sampler isotropic and 8:1, Bridson's Poisson disk \
-             (isotropic, `analysis::poisson_disk`) and sample elimination under the 8:1 \
-             field (`mesh_baseline::mesh_poisson_disk`). Measured on a {RASTER} x {RASTER} \
-             raster of pixel centres: covered fraction (pixels under at least one stroke), \
-             mean overlap (strokes per covered pixel) and the largest hole, the largest \
-             distance from an uncovered pixel to the nearest covered one (the square's \
-             border does not count as covered), over the mean spacing sqrt(area / N) = \
-             {:.4}. Numbers are medians over the seeds; \"seeds\" counts the seeds where \
-             anisotropic beats isotropic. The paper's claim (section 1 and Fig. 3): \
-             isotropic placement shows considerable overlap and many large holes, \
-             anisotropic placement covers better with the same number of points.",
-            seeds.len(),
-            spacing,
-            mean_spacing
-        ),
-        rows,
-        figures,
-    })
+    Ok(figures)
+}
+
+/// The section's notes: the set-up and what is measured.
+fn notes(seeds: usize, spacing: f64, mean_spacing: f64) -> String {
+    format!(
+        "Unit square, uniform field along x with spacing ratio 8:1 (density 1), N = {N} \
+         samples per set, {} seeds. Each sample is drawn as an 8:1 stroke \
+         (`analysis::strokes`) along the axis of the field's larger spacing (y here: \
+         strata's major eigenvector is the direction of densest spacing), centred on \
+         the sample; every placement gets the same strokes (sample k of seed s has \
+         the same size whatever the placement), so only placement differs. Stroke \
+         length = sqrt(k) x the larger expected spacing of the 8:1 field ({:.4} = \
+         sqrt(8 / N)), width = length / 8, each scaled by a factor uniform in [0.75, \
+         1.25]. The area factor k is the total nominal stroke area over the square's: \
+         at k = 1 a perfect tiling covers the square exactly once, at k = 2 twice. \
+         Placements: strata's sampler isotropic and 8:1, Bridson's Poisson disk \
+         (isotropic, `analysis::poisson_disk`) and sample elimination under the 8:1 \
+         field (`mesh_baseline::mesh_poisson_disk`). Measured on a {RASTER} x {RASTER} \
+         raster of pixel centres: covered fraction (pixels under at least one stroke), \
+         mean overlap (strokes per covered pixel) and the largest hole, the largest \
+         distance from an uncovered pixel to the nearest covered one (the square's \
+         border does not count as covered), over the mean spacing sqrt(area / N) = \
+         {:.4}. Numbers are medians over the seeds; \"seeds\" counts the seeds where \
+         anisotropic beats isotropic. The paper's claim (section 1 and Fig. 3): \
+         isotropic placement shows considerable overlap and many large holes, \
+         anisotropic placement covers better with the same number of points.",
+        seeds, spacing, mean_spacing
+    )
 }
 
 /// The rows of one area factor: one per placement, then the paper's three claims.
