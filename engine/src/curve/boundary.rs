@@ -12,9 +12,8 @@
 
 use glam::DVec2;
 
-use super::clip::{Poly, clip_triangle};
+use super::clip::{Poly, barycentric, clip_triangle};
 use super::key::CellKey;
-use super::locate::barycentric;
 use super::pieces::{LeafScratch, PieceSet};
 use super::segment_curve::{DomainPoint, SegmentCurve};
 
