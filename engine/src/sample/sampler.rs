@@ -7,26 +7,17 @@ use rayon::prelude::*;
 use super::chains::link_chains;
 use super::faces::{FaceTensors, face_point};
 use super::stratified::{Allocation, stratified_value_keyed};
+// `SegmentSampling` lives below both this module and `chains.rs`; `sample/mod.rs`
+// re-exports it from here.
+pub use super::types::SegmentSampling;
 use super::types::{Sample, SampleSite};
-use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
+use crate::curve::{DomainPoint, LeafScratch};
 use crate::field::TensorField;
 use crate::mesh::TriMesh;
 
 /// Samples are produced in fixed chunks of this many outputs, each chunk on one rayon
 /// task; the chunking, not the thread count, decides the work split.
 pub(super) const CHUNK: usize = 4096;
-
-/// One segment ready for sampling: its cells and the mesh face of each domain triangle.
-#[derive(Clone, Debug)]
-pub struct SegmentSampling {
-    /// Segment id written into the samples.
-    pub segment: u32,
-    /// Mesh face of each triangle of the curve's domain.
-    pub faces: Vec<u32>,
-    /// The segment's adaptive Hilbert cells, shared (an engine that keeps them per
-    /// segment, like the ECS layer, hands the sampler a reference instead of a copy).
-    pub curve: Arc<SegmentCurve>,
-}
 
 /// Errors building a [`Sampler`].
 #[derive(Debug, thiserror::Error)]
