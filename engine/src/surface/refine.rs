@@ -42,6 +42,7 @@ use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
 use super::merge::{MergeLimit, PieceSet, merge_pieces};
+use super::piece::{angle_ok, lowest_face};
 use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
@@ -83,11 +84,6 @@ pub fn parameterize_with_splitting(
         .filter(|p| p.report.isotropic_fallback)
         .count();
     Ok((accepted, report))
-}
-
-/// The lowest mesh face of a parameterized segment: the key that orders segments.
-pub fn lowest_face(p: &SegmentParam) -> u32 {
-    p.faces.iter().copied().min().unwrap_or(u32::MAX)
 }
 
 /// What splitting needs besides the segment: the cut edges as a per-edge mask, the
@@ -439,16 +435,6 @@ fn combine(
 /// against 0.168 s (medians of five alternated runs), and of the smooth one at 278k
 /// faces 0.698 s against 0.727 s (three).
 pub const SPECULATE_FACES: usize = 20_000;
-
-/// The optional stricter angle test (the mean is part of `report.valid` already).
-pub(super) fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
-    match options.angle_criterion {
-        AngleCriterion::Mean => true,
-        AngleCriterion::Max => {
-            p.report.isotropic_fallback || p.report.max_angle_deg < options.param.gamma.to_degrees()
-        }
-    }
-}
 
 /// A split is accepted when every part is a disc (the parameterization needs one) and
 /// the smallest part holds at least this share of the faces. Without the balance
