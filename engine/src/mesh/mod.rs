@@ -17,7 +17,6 @@ pub mod shapes;
 mod subdivide;
 pub(crate) mod topology;
 
-pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};
 pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label, touching_groups};
 pub use subdivide::loop_subdivide;
