@@ -11,6 +11,8 @@ use super::stratified::{Allocation, stratified_value_keyed};
 // re-exports it from here.
 pub use super::types::SegmentSampling;
 use super::types::{Sample, SampleSite};
+#[cfg(target_arch = "x86_64")]
+use crate::cpu::Level;
 use crate::curve::{DomainPoint, LeafScratch};
 use crate::field::TensorField;
 use crate::mesh::TriMesh;
@@ -367,13 +369,9 @@ impl Sampler {
     #[inline(never)]
     fn fill_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-            && std::arch::is_x86_feature_detected!("bmi1")
-            && std::arch::is_x86_feature_detected!("bmi2")
-            && std::arch::is_x86_feature_detected!("lzcnt")
-        {
-            // SAFETY: the CPU has every feature the function is compiled with.
+        if Level::detected() >= Level::V3 {
+            // SAFETY: the CPU has every feature of `Level::V3`, which is what
+            // `fill_chunk_v3` enables.
             #[allow(unsafe_code)]
             unsafe {
                 self.fill_chunk_v3(req, start, dst);
@@ -383,7 +381,8 @@ impl Sampler {
         self.fill_chunk_body(req, start, dst);
     }
 
-    /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features.
+    /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features
+    /// (exactly `Level::V3`'s, see `crate::cpu`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     fn fill_chunk_v3<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
