@@ -56,8 +56,7 @@ pub(crate) enum Level {
 }
 
 impl Level {
-    /// The features a clone for this level enables, in its `#[target_feature(enable =
-    /// "...")]` order.
+    /// The features a clone for this level enables, in the order of its `enable` list.
     pub(crate) const fn features(self) -> &'static [&'static str] {
         match self {
             Level::Portable => &[],
@@ -122,8 +121,8 @@ mod tests {
         }
     }
 
-    /// Every `#[target_feature(enable = "...")]` of the crate enables exactly one
-    /// level's features, so the run-time check of that level covers all of them.
+    /// Every `target_feature` attribute of the crate enables exactly one level's
+    /// features, so the run-time check of that level covers all of them.
     #[test]
     fn every_clone_enables_exactly_a_level_s_features() {
         let known: Vec<String> = [Level::Avx2, Level::V3]
