@@ -43,7 +43,7 @@ use rayon::prelude::*;
 
 use super::merge::{MergeLimit, PieceSet, merge_pieces};
 use super::piece::{angle_ok, lowest_face};
-use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
+use super::{SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
 use crate::param::{FaceTensors, SegmentParam, parameterize_all, parameterize_with};
@@ -763,31 +763,5 @@ mod tests {
             pending.extend(parts);
         }
         assert_eq!(singles, mesh.face_count());
-    }
-
-    #[test]
-    fn the_max_criterion_rejects_what_the_mean_accepts() {
-        let mesh = shapes::plane(1.0, 4).expect("plane");
-        let field = TensorField::from_frames(
-            &mesh,
-            &vec![DVec3::X; mesh.vertex_count()],
-            &vec![[2.0, 0.5]; mesh.vertex_count()],
-        )
-        .expect("field");
-        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
-        let cut = vec![false; mesh.edge_count()];
-        let mut options = SurfaceOptions::default();
-        let results = parameterize_all(&mesh, &field, &[faces], &cut, &options.param);
-        let mut p = results
-            .into_iter()
-            .next()
-            .expect("one result")
-            .expect("the plane parameterizes");
-        p.report.max_angle_deg = options.param.gamma.to_degrees() + 1.0;
-        assert!(angle_ok(&p, &options), "the mean criterion ignores the max");
-        options.angle_criterion = AngleCriterion::Max;
-        assert!(!angle_ok(&p, &options));
-        p.report.isotropic_fallback = true;
-        assert!(angle_ok(&p, &options), "fallback pieces have no direction");
     }
 }
