@@ -432,9 +432,9 @@ struct Reference {
     at: String,
 }
 
-/// What one module's code says: its `use` bindings and glob imports, the names of the
-/// items it defines, and its children declared as files.
-#[derive(Default)]
+/// What one module's code says: its `use` bindings and glob imports, and the names of
+/// the items it defines.
+#[derive(Clone, Default)]
 struct ModuleFacts {
     /// `name -> path as written`, from `use` declarations (aliases included).
     bindings: Vec<(String, Vec<String>)>,
@@ -729,12 +729,7 @@ fn read_crates(files: &[(String, String)], with_tests: bool) -> Vec<(String, Cra
             let f = &facts[file];
             let prefixed = |p: &ModPath| base.iter().chain(p).cloned().collect::<ModPath>();
             for (m, shown, mf) in &f.modules {
-                let facts = ModuleFacts {
-                    bindings: mf.bindings.clone(),
-                    globs: mf.globs.clone(),
-                    defined: mf.defined.clone(),
-                };
-                krate.modules.push((prefixed(m), shown.clone(), facts));
+                krate.modules.push((prefixed(m), shown.clone(), mf.clone()));
             }
             for r in &f.references {
                 krate.references.push(Reference {
