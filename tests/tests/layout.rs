@@ -338,8 +338,7 @@ fn lex(source: &str) -> Vec<(Tok, usize)> {
             }
             let word: String = c[start..i].iter().collect();
             // `b"..."` and `br"..."` are strings: drop the prefix, lex the rest.
-            if !(word == "b" && c.get(i) == Some(&'"')) && !(word == "b" && c.get(i) == Some(&'\''))
-            {
+            if !(word == "b" && matches!(c.get(i), Some('"' | '\''))) {
                 out.push((Tok::Ident(word), line));
             }
         } else if ch == ':' && next == Some(':') {
