@@ -1,7 +1,7 @@
 //! Triangle meshes with adjacency, built once and then read by every later stage.
 //!
-//! Input: vertex positions and polygons (from arrays, [`load`] for OBJ/PLY files, or a
-//! built-in [`shapes`] generator). Output: a validated [`TriMesh`] whose adjacency
+//! Input: vertex positions and polygons (from arrays, [`io::load`](crate::io::load) for
+//! OBJ/PLY files, or a built-in [`shapes`] generator). Output: a validated [`TriMesh`] whose adjacency
 //! (edges, edge-to-face, face neighbours, vertex one-rings, boundary loops, connected
 //! components), face areas and area-weighted vertex normals are computed once in
 //! O(F log F). Repairs (merged duplicate vertices, removed degenerate faces) and
