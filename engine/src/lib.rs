@@ -21,6 +21,7 @@
 //! | [`rng`] | counter-based random numbers (thread-count independent) |
 
 pub mod analysis;
+mod cpu;
 pub mod curve;
 mod fast_map;
 pub mod field;

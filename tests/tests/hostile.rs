@@ -282,7 +282,7 @@ fn short_faces_and_cut_files_load_with_a_warning_that_names_the_lines() {
     ] {
         let path = dir.path().join("short.obj");
         std::fs::write(&path, text).expect("write");
-        let mesh = strata_engine::mesh::load(Path::new(&path)).expect("loads");
+        let mesh = strata_engine::io::load(Path::new(&path)).expect("loads");
         let warnings: Vec<String> = mesh.warnings().iter().map(|w| w.to_string()).collect();
         let want = format!("skipped {count} faces of one or two corners");
         assert!(

@@ -12,9 +12,8 @@
 
 use glam::DVec2;
 
-use super::clip::{Poly, clip_triangle};
+use super::clip::{Poly, barycentric, clip_triangle};
 use super::key::CellKey;
-use super::locate::barycentric;
 use super::pieces::{LeafScratch, PieceSet};
 use super::segment_curve::{DomainPoint, SegmentCurve};
 
@@ -68,35 +67,7 @@ impl SegmentCurve {
                 return p;
             }
         }
-        // The candidates clipped to the leaf and, once a descent needs it, the leaf's
-        // first cut (between its first two and last two children in curve order), kept
-        // in the scratch for the next sample: consecutive values often fall in the same
-        // boundary leaf.
-        if !scratch.holds(self, leaf) {
-            scratch.root.clear();
-            for &tri in cands {
-                let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
-                scratch.root.add(self, tri, poly);
-            }
-            scratch.root_of = Some((self, leaf));
-            scratch.halves_ready = false;
-        }
-        if levels > 0 && !scratch.halves_ready {
-            // The same cut as the loop's first at depth 0.
-            let (x0, _, _) = state.child(0);
-            let (x1, _, _) = state.child(1);
-            let [below, above] = &mut scratch.halves;
-            if x0 == x1 {
-                scratch
-                    .root
-                    .split::<0>(self, lo.x + 0.5 * size, below, above);
-            } else {
-                scratch
-                    .root
-                    .split::<1>(self, lo.y + 0.5 * size, below, above);
-            }
-            scratch.halves_ready = true;
-        }
+        self.cache_leaf(leaf, key, cands, levels, scratch);
         let root = &scratch.root;
         let halves = &scratch.halves;
         let bufs = &mut scratch.bufs;
@@ -115,14 +86,9 @@ impl SegmentCurve {
             let at = |along_x: bool| if along_x { lo.x } else { lo.y } + half;
             let upper_first = if first_along_x { x0 == 1 } else { y0 == 1 };
             let first = if depth == 0 {
-                let [below, above] = halves;
-                let (m_first, m_second) = if upper_first {
-                    (above.measure, below.measure)
-                } else {
-                    (below.measure, above.measure)
-                };
-                pick(&mut target, m_first, m_second).inspect(|&first| {
-                    from_half = Some(if first == upper_first { above } else { below });
+                pick_half(halves, upper_first, &mut target).map(|(first, half)| {
+                    from_half = Some(half);
+                    first
                 })
             } else {
                 self.split_pick(
@@ -166,13 +132,71 @@ impl SegmentCurve {
                 return self.point_location(&ids[..n], lo + DVec2::new(x, y) * size);
             }
         }
-        // Depth exhausted inside a boundary sub-cell: the piece holding the target,
-        // and the point at the rest of the target in it.
+        // Depth exhausted inside a boundary sub-cell.
         let node = match (at_root, from_half) {
             (true, _) => root,
             (false, Some(half)) => half,
             (false, None) => &bufs[cur],
         };
+        self.place_in_sub_cell(node, target, cands, lo, size)
+    }
+
+    /// Fills `scratch` for leaf `leaf` (of key `key`) unless it holds it already: the
+    /// candidates clipped to the leaf and, once a descent needs it (`levels > 0`), the
+    /// leaf's first cut (between its first two and last two children in curve order).
+    /// Kept for the next sample: consecutive values often fall in the same boundary
+    /// leaf.
+    #[inline(always)]
+    fn cache_leaf<'a>(
+        &'a self,
+        leaf: usize,
+        key: CellKey,
+        cands: &[u32],
+        levels: u32,
+        scratch: &mut LeafScratch<'a>,
+    ) {
+        let (lo, size, state) = (key.origin(), key.size(), key.state());
+        if !scratch.holds(self, leaf) {
+            scratch.root.clear();
+            for &tri in cands {
+                let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
+                scratch.root.add(self, tri, poly);
+            }
+            scratch.root_of = Some((self, leaf));
+            scratch.halves_ready = false;
+        }
+        if levels > 0 && !scratch.halves_ready {
+            // The same cut as the descent's first at depth 0.
+            let (x0, _, _) = state.child(0);
+            let (x1, _, _) = state.child(1);
+            let [below, above] = &mut scratch.halves;
+            if x0 == x1 {
+                scratch
+                    .root
+                    .split::<0>(self, lo.x + 0.5 * size, below, above);
+            } else {
+                scratch
+                    .root
+                    .split::<1>(self, lo.y + 0.5 * size, below, above);
+            }
+            scratch.halves_ready = true;
+        }
+    }
+
+    /// The point at measure `target` in the pieces of `node`, the boundary sub-cell
+    /// `[lo, lo + size]^2` a descent ended in: the piece holding the target and the
+    /// point at the rest of the target in it; failing that (no piece with measure), the
+    /// sub-cell's centre located among the node's triangles, or among `cands` when it
+    /// has none.
+    #[inline(always)]
+    fn place_in_sub_cell(
+        &self,
+        node: &PieceSet,
+        target: f64,
+        cands: &[u32],
+        lo: DVec2,
+        size: f64,
+    ) -> DomainPoint {
         let pieces = node.pieces[..node.len]
             .iter()
             .map(|p| (p.tri, p.poly, p.measure));
@@ -363,6 +387,24 @@ fn rotate3<T>(b: &mut [T; 3], i: usize) -> (&T, &mut T, &mut T) {
         1 => (y, z, x),
         _ => (z, x, y),
     }
+}
+
+/// [`pick`] between the halves of a leaf's first cut (`[below, above]`; `upper_first`
+/// when the upper half comes first in curve order), with the half chosen.
+#[inline(always)]
+fn pick_half<'h>(
+    halves: &'h [PieceSet; 2],
+    upper_first: bool,
+    target: &mut f64,
+) -> Option<(bool, &'h PieceSet)> {
+    let [below, above] = halves;
+    let (m_first, m_second) = if upper_first {
+        (above.measure, below.measure)
+    } else {
+        (below.measure, above.measure)
+    };
+    pick(target, m_first, m_second)
+        .map(|first| (first, if first == upper_first { above } else { below }))
 }
 
 /// Chooses between the first and the second part of a node (in curve order) for the

@@ -1,5 +1,7 @@
 //! Exact triangle-square overlap: Sutherland-Hodgman clipping of a triangle against an
-//! axis-aligned square, and the integral of a linear function over the result.
+//! axis-aligned square, the integral of a linear function over the result, and the
+//! barycentric coordinates of a point in a triangle. The plane geometry below the
+//! curve's types: it uses no other module of `curve/`.
 
 use glam::DVec2;
 
@@ -279,6 +281,18 @@ fn clip_side<const AXIS: usize, const GE: bool>(
         dp = dq;
     }
     Some(out)
+}
+
+/// Barycentric coordinates of `p` in triangle `t`.
+#[inline]
+pub fn barycentric(t: &[DVec2; 3], p: DVec2) -> [f64; 3] {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let d = p - t[0];
+    let inv = 1.0 / e1.perp_dot(e2);
+    let b1 = d.perp_dot(e2) * inv;
+    let b2 = e1.perp_dot(d) * inv;
+    [1.0 - b1 - b2, b1, b2]
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@
 
 use glam::DVec2;
 
+use super::clip::barycentric;
 use super::pieces::{LeafScratch, PIECES};
 use super::segment_curve::{DomainPoint, SegmentCurve};
 
@@ -192,16 +193,4 @@ impl FullLeaf<'_> {
         let gy = (self.gy | y) as f64 + 0.5;
         curve.point_location(self.cands, DVec2::new(gx, gy) * self.inv)
     }
-}
-
-/// Barycentric coordinates of `p` in triangle `t`.
-#[inline]
-pub fn barycentric(t: &[DVec2; 3], p: DVec2) -> [f64; 3] {
-    let e1 = t[1] - t[0];
-    let e2 = t[2] - t[0];
-    let d = p - t[0];
-    let inv = 1.0 / e1.perp_dot(e2);
-    let b1 = d.perp_dot(e2) * inv;
-    let b2 = e1.perp_dot(d) * inv;
-    [1.0 - b1 - b2, b1, b2]
 }

@@ -10,7 +10,7 @@
 //! Files: `key.rs` (the packed [`CellKey`]), `segment_curve.rs` (the [`SegmentCurve`]
 //! type), `refine.rs` (building it from a [`CurveDomain`]), `locate.rs` (measure to
 //! point, full leaves), `boundary.rs` and `pieces.rs` (the boundary-leaf descents and
-//! their [`LeafScratch`]), `clip.rs` (polygon clipping), [`hilbert`] (the curve itself).
+//! their [`LeafScratch`]), `clip.rs` (polygon clipping and barycentric coordinates, below the rest), [`hilbert`] (the curve itself).
 //!
 //! # Inlining contract of the per-sample path
 //!
@@ -41,9 +41,8 @@ mod refine;
 mod segment_curve;
 
 pub use budget::{CellInput, budget_cells, budget_options};
-pub use clip::{Poly, clip_triangle};
+pub use clip::{Poly, barycentric, clip_triangle};
 pub use key::CellKey;
-pub use locate::barycentric;
 pub use pieces::LeafScratch;
 pub use refine::CurveDomain;
 pub use segment_curve::{DomainPoint, SegmentCurve};

@@ -90,7 +90,7 @@ impl SegmentCurve {
             let part = super::clip::clip_triangle(&corners, key.origin(), key.size());
             for &p in part.points() {
                 // On the triangle up to round-off: clamped into it.
-                let b = super::locate::barycentric(&corners, p).map(|x| x.clamp(0.0, 1.0));
+                let b = super::clip::barycentric(&corners, p).map(|x| x.clamp(0.0, 1.0));
                 let sum = b[0] + b[1] + b[2];
                 f(t, b.map(|x| x / sum));
             }

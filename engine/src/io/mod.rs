@@ -110,7 +110,23 @@ pub fn load_ply(path: &Path) -> Result<TriMesh, MeshError> {
 /// an index past the vertices), [`MeshError::InFile`] for a non-finite coordinate
 /// (vertex numbered in file order, from 0) or an empty mesh.
 pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
-    obj::parse(bytes, path)
+    // Large files on every thread; the sequential pass for small ones and to find and
+    // report a problem.
+    let scan = obj_chunks::scan(bytes).unwrap_or_else(|| obj::scan(bytes));
+    if let Some((line, what)) = scan.problem {
+        return Err(MeshError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            what,
+        });
+    }
+    build_mesh(
+        path,
+        scan.positions,
+        scan.corners,
+        &scan.face_ends,
+        scan.skipped,
+    )
 }
 
 /// Parses a PLY file's bytes; `path` only names the source in errors.

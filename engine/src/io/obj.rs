@@ -18,11 +18,7 @@
 //! ignored. Where `tobj` failed on valid input (a vertex colour on some vertices only,
 //! a positive index to a vertex defined after the next `o`/`g`), this reader loads it.
 
-use std::path::Path;
-
 use glam::DVec3;
-
-use crate::mesh::{MeshError, TriMesh};
 
 /// What is wrong with an index that does not parse: an integer too large for any
 /// file, or not an integer at all.
@@ -33,27 +29,6 @@ pub(super) fn bad_index(part: &str) -> &'static str {
     } else {
         "a non-integer index"
     }
-}
-
-/// Parses OBJ `bytes` into a mesh; `path` only names the file in errors.
-pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriMesh, MeshError> {
-    // Large files on every thread; the sequential pass for small ones and to find and
-    // report a problem.
-    let scan = super::obj_chunks::scan(bytes).unwrap_or_else(|| scan(bytes));
-    if let Some((line, what)) = scan.problem {
-        return Err(MeshError::Syntax {
-            path: path.to_path_buf(),
-            line,
-            what,
-        });
-    }
-    super::build_mesh(
-        path,
-        scan.positions,
-        scan.corners,
-        &scan.face_ends,
-        scan.skipped,
-    )
 }
 
 /// What one pass over the text finds.

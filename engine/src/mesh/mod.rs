@@ -1,11 +1,12 @@
 //! Triangle meshes with adjacency, built once and then read by every later stage.
 //!
-//! Input: vertex positions and polygons (from arrays, [`load`] for OBJ/PLY files, or a
-//! built-in [`shapes`] generator). Output: a validated [`TriMesh`] whose adjacency
-//! (edges, edge-to-face, face neighbours, vertex one-rings, boundary loops, connected
-//! components), face areas and area-weighted vertex normals are computed once in
-//! O(F log F). Repairs (merged duplicate vertices, removed degenerate faces) and
-//! findings (non-manifold edges, several components) come back as [`MeshWarning`]s.
+//! Input: vertex positions and polygons (from arrays, [`io::load`](crate::io::load) for
+//! OBJ/PLY files, or a built-in [`shapes`] generator). Output: a validated [`TriMesh`]
+//! whose adjacency (edges, edge-to-face, face neighbours, vertex one-rings, boundary
+//! loops, connected components), face areas and area-weighted vertex normals are
+//! computed once in O(F log F). Repairs (merged duplicate vertices, removed degenerate
+//! faces) and findings (non-manifold edges, several components) come back as
+//! [`MeshWarning`]s.
 //!
 //! Once a `TriMesh` exists it is known-valid: indices are in range, coordinates are
 //! finite, every face has positive area. Later stages do not re-check.
@@ -17,7 +18,6 @@ pub mod shapes;
 mod subdivide;
 pub(crate) mod topology;
 
-pub use crate::io::load;
 pub use error::{MeshError, MeshWarning};
 pub use face_set::{FaceSet, HopDistances, connected_parts, group_by_label, touching_groups};
 pub use subdivide::loop_subdivide;

@@ -1,7 +1,7 @@
 //! Chains of neighbouring segments (paper section 6.2), sampled with one stratified
 //! sequence each when segments are many relative to the samples.
 
-use super::sampler::SegmentSampling;
+use super::types::SegmentSampling;
 use crate::mesh::TriMesh;
 
 /// Links neighbouring segments into chains (section 6.2): a chain starts at the

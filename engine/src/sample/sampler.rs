@@ -7,26 +7,19 @@ use rayon::prelude::*;
 use super::chains::link_chains;
 use super::faces::{FaceTensors, face_point};
 use super::stratified::{Allocation, stratified_value_keyed};
+// `SegmentSampling` lives below both this module and `chains.rs`; `sample/mod.rs`
+// re-exports it from here.
+pub use super::types::SegmentSampling;
 use super::types::{Sample, SampleSite};
-use crate::curve::{DomainPoint, LeafScratch, SegmentCurve};
+#[cfg(target_arch = "x86_64")]
+use crate::cpu::Level;
+use crate::curve::{DomainPoint, LeafScratch};
 use crate::field::TensorField;
 use crate::mesh::TriMesh;
 
 /// Samples are produced in fixed chunks of this many outputs, each chunk on one rayon
 /// task; the chunking, not the thread count, decides the work split.
 pub(super) const CHUNK: usize = 4096;
-
-/// One segment ready for sampling: its cells and the mesh face of each domain triangle.
-#[derive(Clone, Debug)]
-pub struct SegmentSampling {
-    /// Segment id written into the samples.
-    pub segment: u32,
-    /// Mesh face of each triangle of the curve's domain.
-    pub faces: Vec<u32>,
-    /// The segment's adaptive Hilbert cells, shared (an engine that keeps them per
-    /// segment, like the ECS layer, hands the sampler a reference instead of a copy).
-    pub curve: Arc<SegmentCurve>,
-}
 
 /// Errors building a [`Sampler`].
 #[derive(Debug, thiserror::Error)]
@@ -376,13 +369,9 @@ impl Sampler {
     #[inline(never)]
     fn fill_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("fma")
-            && std::arch::is_x86_feature_detected!("bmi1")
-            && std::arch::is_x86_feature_detected!("bmi2")
-            && std::arch::is_x86_feature_detected!("lzcnt")
-        {
-            // SAFETY: the CPU has every feature the function is compiled with.
+        if Level::detected() >= Level::V3 {
+            // SAFETY: the CPU has every feature of `Level::V3`, which is what
+            // `fill_chunk_v3` enables.
             #[allow(unsafe_code)]
             unsafe {
                 self.fill_chunk_v3(req, start, dst);
@@ -392,7 +381,8 @@ impl Sampler {
         self.fill_chunk_body(req, start, dst);
     }
 
-    /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features.
+    /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features
+    /// (exactly `Level::V3`'s, see `crate::cpu`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
     fn fill_chunk_v3<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {

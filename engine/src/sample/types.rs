@@ -1,4 +1,22 @@
-//! The GPU-ready sample record.
+//! The sampler's plain records: the GPU-ready [`Sample`] and [`SampleSite`] it writes,
+//! and the [`SegmentSampling`] it is built from (below both the sampler and the chains
+//! it links, which read it).
+
+use std::sync::Arc;
+
+use crate::curve::SegmentCurve;
+
+/// One segment ready for sampling: its cells and the mesh face of each domain triangle.
+#[derive(Clone, Debug)]
+pub struct SegmentSampling {
+    /// Segment id written into the samples.
+    pub segment: u32,
+    /// Mesh face of each triangle of the curve's domain.
+    pub faces: Vec<u32>,
+    /// The segment's adaptive Hilbert cells, shared (an engine that keeps them per
+    /// segment, like the ECS layer, hands the sampler a reference instead of a copy).
+    pub curve: Arc<SegmentCurve>,
+}
 
 /// One surface sample, laid out for direct GPU upload (`#[repr(C)]`, 64 bytes, 16-byte
 /// aligned groups). Its WGSL twin is `Sample` in `shaders/common.wgsl`.

@@ -203,18 +203,11 @@ fn run(
 ) -> Result<BuildOutcome, SurfaceError> {
     inputs.options.validate()?;
     let (mesh, options) = (&*inputs.mesh, &inputs.options);
-    // Previous builds on this mesh (by content) may lend segments.
-    let same_mesh = previous.filter(|p| {
-        Arc::ptr_eq(&p.inputs.mesh, &inputs.mesh)
-            || (p.inputs.mesh.positions() == mesh.positions()
-                && p.inputs.mesh.triangles() == mesh.triangles())
-    });
-    let same_settings =
-        same_mesh.filter(|p| without_cells(&p.inputs.options) == without_cells(options));
-    let same_field = same_settings.filter(|p| {
-        Arc::ptr_eq(&p.inputs.field, &inputs.field)
-            || p.inputs.field.tensors() == inputs.field.tensors()
-    });
+    let Lenders {
+        same_mesh,
+        same_settings,
+        same_field,
+    } = Lenders::of(previous, &inputs);
     let mut runs = Vec::new();
     let (working_field, kind, plan) = match same_field {
         Some(p) => (
@@ -226,21 +219,7 @@ fn run(
                 note: String::new(),
             },
         ),
-        None => {
-            control.enter(BuildStage::Segmentation, 1)?;
-            let t = Instant::now();
-            let (working, kind) = prepare_field(mesh, inputs.field.clone(), options)?;
-            control.check()?;
-            let plan = segment_changes(mesh, &working, kind, options, same_mesh, same_settings)?;
-            control.advance();
-            runs.push(BuildRun {
-                stage: BuildStage::Segmentation,
-                items: plan.new.len(),
-                took: t.elapsed(),
-                note: plan.note.clone(),
-            });
-            (working, kind, plan)
-        }
+        None => segment(&inputs, same_mesh, same_settings, control, &mut runs)?,
     };
     let previous_segments: &[BuiltSegment] = same_mesh.map_or(&[], |p| &p.segments);
     let fresh = parameterize(
@@ -313,6 +292,66 @@ fn run(
         sampler,
         runs,
     })
+}
+
+/// The previous build, where it can lend to this one: each a narrower match than the
+/// one before.
+struct Lenders<'a> {
+    /// Built on a mesh of the same positions and triangles: its segments may be kept.
+    same_mesh: Option<&'a SurfaceState>,
+    /// ... and with the same settings apart from the cells': its segmentation may be
+    /// updated in a region.
+    same_settings: Option<&'a SurfaceState>,
+    /// ... and with the same field: its segmentation stands as it is.
+    same_field: Option<&'a SurfaceState>,
+}
+
+impl<'a> Lenders<'a> {
+    /// What `previous` can lend to a build of `inputs`.
+    fn of(previous: Option<&'a SurfaceState>, inputs: &BuildInputs) -> Self {
+        let mesh = &*inputs.mesh;
+        let same_mesh = previous.filter(|p| {
+            Arc::ptr_eq(&p.inputs.mesh, &inputs.mesh)
+                || (p.inputs.mesh.positions() == mesh.positions()
+                    && p.inputs.mesh.triangles() == mesh.triangles())
+        });
+        let same_settings = same_mesh
+            .filter(|p| without_cells(&p.inputs.options) == without_cells(&inputs.options));
+        let same_field = same_settings.filter(|p| {
+            Arc::ptr_eq(&p.inputs.field, &inputs.field)
+                || p.inputs.field.tensors() == inputs.field.tensors()
+        });
+        Lenders {
+            same_mesh,
+            same_settings,
+            same_field,
+        }
+    }
+}
+
+/// The segmentation stage of a build whose field changed: the working field, its kind
+/// of segmentation and the plan of segments kept and new, recorded in `runs`.
+fn segment(
+    inputs: &BuildInputs,
+    same_mesh: Option<&SurfaceState>,
+    same_settings: Option<&SurfaceState>,
+    control: &BuildControl,
+    runs: &mut Vec<BuildRun>,
+) -> Result<(Arc<TensorField>, SegmentationKind, Plan), SurfaceError> {
+    let (mesh, options) = (&*inputs.mesh, &inputs.options);
+    control.enter(BuildStage::Segmentation, 1)?;
+    let t = Instant::now();
+    let (working, kind) = prepare_field(mesh, inputs.field.clone(), options)?;
+    control.check()?;
+    let plan = segment_changes(mesh, &working, kind, options, same_mesh, same_settings)?;
+    control.advance();
+    runs.push(BuildRun {
+        stage: BuildStage::Segmentation,
+        items: plan.new.len(),
+        took: t.elapsed(),
+        note: plan.note.clone(),
+    });
+    Ok((working, kind, plan))
 }
 
 /// The options with the cell settings at their default: what segmentation and

@@ -27,7 +27,7 @@ use crate::fast_map::{FastMap, fast_map};
 use rayon::prelude::*;
 
 use super::SurfaceOptions;
-use super::refine::lowest_face;
+use super::piece::{angle_ok, lowest_face};
 use crate::mesh::{NONE, TriMesh};
 use crate::param::{FaceTensors, SegmentParam, parameterize_with};
 use crate::rng::mix64;
@@ -196,7 +196,7 @@ type PairKey = [(u32, usize); 2];
 /// Whether a union may replace its pair: valid by the field's frame (or, if the union
 /// is nearly isotropic and used the fallback frame, valid by that frame's test).
 fn acceptable(p: &SegmentParam, options: &SurfaceOptions) -> bool {
-    p.report.valid && super::refine::angle_ok(p, options)
+    p.report.valid && angle_ok(p, options)
 }
 
 /// Pairs `(i, j)`, `i < j`, of pieces that share an edge that is not cut, ascending.

@@ -23,6 +23,7 @@ mod cells;
 pub mod incremental;
 mod key;
 pub mod merge;
+mod piece;
 pub mod refine;
 mod segmentation;
 
@@ -41,9 +42,8 @@ pub use assemble::{order_segments, total_measure};
 pub use cells::segment_cells;
 use cells::{build_cells, cell_inputs};
 pub use key::KeyBuilder;
-pub use refine::{
-    SplitContext, lowest_face, parameterize_segment_with_splitting, parameterize_with_splitting,
-};
+pub use piece::lowest_face;
+pub use refine::{SplitContext, parameterize_segment_with_splitting, parameterize_with_splitting};
 pub use segmentation::{
     SegmentationKind, SurfaceSegmentation, prepare_field, segment_prepared, segment_surface,
 };

@@ -42,7 +42,8 @@ use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
 use super::merge::{MergeLimit, PieceSet, merge_pieces};
-use super::{AngleCriterion, SurfaceError, SurfaceOptions, SurfaceReport};
+use super::piece::{angle_ok, lowest_face};
+use super::{SurfaceError, SurfaceOptions, SurfaceReport};
 use crate::field::{FieldError, TensorField, isotropic_copy, outer, principal_axis};
 use crate::mesh::{FaceSet, TriMesh};
 use crate::param::{FaceTensors, SegmentParam, parameterize_all, parameterize_with};
@@ -83,11 +84,6 @@ pub fn parameterize_with_splitting(
         .filter(|p| p.report.isotropic_fallback)
         .count();
     Ok((accepted, report))
-}
-
-/// The lowest mesh face of a parameterized segment: the key that orders segments.
-pub fn lowest_face(p: &SegmentParam) -> u32 {
-    p.faces.iter().copied().min().unwrap_or(u32::MAX)
 }
 
 /// What splitting needs besides the segment: the cut edges as a per-edge mask, the
@@ -440,16 +436,6 @@ fn combine(
 /// faces 0.698 s against 0.727 s (three).
 pub const SPECULATE_FACES: usize = 20_000;
 
-/// The optional stricter angle test (the mean is part of `report.valid` already).
-pub(super) fn angle_ok(p: &SegmentParam, options: &SurfaceOptions) -> bool {
-    match options.angle_criterion {
-        AngleCriterion::Mean => true,
-        AngleCriterion::Max => {
-            p.report.isotropic_fallback || p.report.max_angle_deg < options.param.gamma.to_degrees()
-        }
-    }
-}
-
 /// A split is accepted when every part is a disc (the parameterization needs one) and
 /// the smallest part holds at least this share of the faces. Without the balance
 /// test, seeds at outlier faces (next to a singularity, say) peel off a few faces per
@@ -777,31 +763,5 @@ mod tests {
             pending.extend(parts);
         }
         assert_eq!(singles, mesh.face_count());
-    }
-
-    #[test]
-    fn the_max_criterion_rejects_what_the_mean_accepts() {
-        let mesh = shapes::plane(1.0, 4).expect("plane");
-        let field = TensorField::from_frames(
-            &mesh,
-            &vec![DVec3::X; mesh.vertex_count()],
-            &vec![[2.0, 0.5]; mesh.vertex_count()],
-        )
-        .expect("field");
-        let faces: Vec<u32> = (0..mesh.face_count() as u32).collect();
-        let cut = vec![false; mesh.edge_count()];
-        let mut options = SurfaceOptions::default();
-        let results = parameterize_all(&mesh, &field, &[faces], &cut, &options.param);
-        let mut p = results
-            .into_iter()
-            .next()
-            .expect("one result")
-            .expect("the plane parameterizes");
-        p.report.max_angle_deg = options.param.gamma.to_degrees() + 1.0;
-        assert!(angle_ok(&p, &options), "the mean criterion ignores the max");
-        options.angle_criterion = AngleCriterion::Max;
-        assert!(!angle_ok(&p, &options));
-        p.report.isotropic_fallback = true;
-        assert!(angle_ok(&p, &options), "fallback pieces have no direction");
     }
 }
