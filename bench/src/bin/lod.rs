@@ -325,7 +325,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     println!(
         "\nPoint budget: the mean multiplier of a new view (`ShownEstimate::mean_multiplier`, {} probes) takes {:.0} us, median of {frames}.",
-        strata_engine::sample::lod_budget::PROBES,
+        strata_engine::sample::lod::PROBES,
         median(estimates),
     );
 

@@ -28,10 +28,10 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use super::Sampler;
-use super::lod::ViewLod;
-use super::lod_bounds::{Frustum, RegionBound, bin_bound};
-use super::lod_pool::{Bin, LodPool, need_of};
+use crate::sample::Sampler;
+use super::view::ViewLod;
+use super::bounds::{Frustum, RegionBound, bin_bound};
+use super::pool::{Bin, LodPool, need_of};
 
 /// A bin splits when its need asks for at least this many ranks in it (its need times
 /// its share of the measure).
@@ -232,7 +232,7 @@ mod tests {
 
     use super::*;
     use crate::sample::faces::position_normal;
-    use crate::sample::lod_pool::tests::{check_held, held_visible, moved};
+    use crate::sample::lod::pool::tests::{check_held, held_visible, moved};
     use crate::sample::{PoolChange, SampleSite};
     use crate::surface::tests::torus_sampler;
 

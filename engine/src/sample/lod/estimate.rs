@@ -46,10 +46,11 @@ use std::ops::Range;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::faces::{Geometry, position_normal};
-use super::lod::{LodError, ViewLod, check_deformation};
-use super::progressive::RankCover;
-use super::{LodPool, SampleSite, Sampler};
+use crate::sample::faces::{Geometry, position_normal};
+use super::view::{LodError, ViewLod, check_deformation};
+use crate::sample::progressive::RankCover;
+use super::LodPool;
+use crate::sample::{SampleSite, Sampler};
 use crate::curve::LeafScratch;
 use crate::mesh::TriMesh;
 

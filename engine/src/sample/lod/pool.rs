@@ -46,12 +46,12 @@ use std::ops::Range;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::lod::{LodError, ViewLod, check_deformation, fade};
-use super::lod_bounds::{BoundSet, Frustum, RegionBound, bin_bound};
-use super::lod_budget::ShownEstimate;
-use super::lod_split::SPLIT_ROOM;
-use super::progressive::RankCover;
-use super::{SampleSite, Sampler};
+use super::view::{LodError, ViewLod, check_deformation, fade};
+use super::bounds::{BoundSet, Frustum, RegionBound, bin_bound};
+use super::estimate::ShownEstimate;
+use super::bins::SPLIT_ROOM;
+use crate::sample::progressive::RankCover;
+use crate::sample::{SampleSite, Sampler};
 use crate::curve::LeafScratch;
 use crate::mesh::TriMesh;
 
@@ -980,7 +980,7 @@ pub(crate) mod tests {
         let mean = pool.shown_estimate().mean_multiplier(&v);
         pool.set_geometry(&s, &stretched).expect("same topology");
         // The point budget's probes moved with the surface.
-        let mut probes = crate::sample::lod_budget::ShownEstimate::new(&s, pool.seed());
+        let mut probes = crate::sample::lod::ShownEstimate::new(&s, pool.seed());
         probes.set_geometry(&s, &stretched).expect("same topology");
         let stretched_mean = pool.shown_estimate().mean_multiplier(&v);
         assert_eq!(stretched_mean, probes.mean_multiplier(&v));
