@@ -24,7 +24,7 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 use strata_bench::lod_camera::{LodCamera, lod_scene};
-use strata_engine::sample::{LodPool, Sample, SampleSite, Sampler};
+use strata_engine::sample::{Budget, LodPool, Sample, SampleSite, Sampler};
 use strata_systems::config::SceneConfig;
 use strata_systems::scene::Scene;
 
@@ -46,7 +46,6 @@ impl Fnv {
             self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
         }
     }
-
 }
 
 fn scene_fingerprints(only: Option<&str>) -> Result<(), Box<dyn std::error::Error>> {
@@ -94,7 +93,12 @@ fn hash_samples(samples: &[Sample]) -> u64 {
 }
 
 /// The pool's ranks and sites, and the fades of `view` at `base`.
-fn hash_pool(pool: &LodPool, s: &Sampler, view: &strata_engine::sample::lod::ViewLod, base: f64) -> u64 {
+fn hash_pool(
+    pool: &LodPool,
+    s: &Sampler,
+    view: &strata_engine::sample::lod::ViewLod,
+    base: f64,
+) -> u64 {
     let mut h = Fnv::new();
     for r in pool.ranks() {
         h.bytes(&r.to_le_bytes());
@@ -145,8 +149,7 @@ fn lod_fingerprints() -> Result<(), Box<dyn std::error::Error>> {
         let mut last = None;
         for t in 0..FRAMES {
             let (v, b) = frame(t);
-            let b = pool.frame_base(s, &v, b, budget);
-            pool.update(s, &v, b);
+            let b = pool.update(s, &v, Budget::new(b, budget))?.base;
             last = Some((v, b));
         }
         let (v, b) = last.ok_or("no frames")?;

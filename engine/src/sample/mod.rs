@@ -16,7 +16,7 @@ mod sampler;
 mod stratified;
 mod types;
 
-pub use lod::{BINS, CLOSE_ROOM, DRAW_AHEAD, LodPool, PoolChange};
+pub use lod::{BINS, Budget, CLOSE_ROOM, DRAW_AHEAD, FrameUpdate, LodPool, PoolChange};
 pub use sampler::{SampleError, Sampler, SegmentSampling};
 pub use stratified::{allocate, stratified_value};
 pub use types::{Sample, SampleSite};
