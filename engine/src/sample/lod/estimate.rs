@@ -134,6 +134,62 @@ struct ProbeList {
     runs: Vec<(u8, u32)>,
 }
 
+impl ProbeList {
+    /// One doubling of a refinement over this chunk's bins `bins`: the multipliers of
+    /// their ranks in `from..to`, summed in rank order per bin, read from the sites
+    /// `cached` of the last refinement where it holds them, else listed in the bin's
+    /// dyadic cover (`cover` of `sampler`) and placed (kept in `fresh` for the next).
+    fn double<'a, 'c>(
+        &mut self,
+        bins: &[u32],
+        (from, to): (u32, u32),
+        cached: &SiteCache,
+        (sampler, cover): (&'a Sampler, &(impl Fn(usize) -> &'c RankCover + Sync)),
+        evaluate: &impl Fn(&SampleSite) -> f64,
+        scratch: &mut LeafScratch<'a>,
+    ) {
+        let (mut s, mut seen, mut count, mut drawn) = (0.0, 0, 0, 0);
+        for (i, &b) in bins.iter().enumerate() {
+            // Every rank of the bin in [PROBES, `reach`) is in the cache, in order; the
+            // others in [from, to) are placed. Either way the multipliers are summed in
+            // rank order.
+            let (slot, reach) = match cached.slots[b as usize].clone() {
+                Some(slot) => (slot, cached.end),
+                None => (0..0, 0),
+            };
+            let kept = &cached.entries[slot.start as usize..slot.end as usize];
+            let lo = kept.partition_point(|e| e.0 < from);
+            let hi = kept.partition_point(|e| e.0 < to);
+            for (_, site) in &kept[lo..hi] {
+                let m = evaluate(site);
+                s += m;
+                seen += usize::from(m > 0.0);
+            }
+            count += hi - lo;
+            let start = from.max(reach);
+            if start >= to {
+                continue;
+            }
+            let cover = cover(b as usize);
+            self.ranks.clear();
+            sampler.progressive_ranks_in_cover(cover, start, to, usize::MAX, &mut self.ranks);
+            self.sites.resize(self.ranks.len(), SampleSite::default());
+            sampler.progressive_cover_sites_with(cover, &self.ranks, &mut self.sites, scratch);
+            for (&rank, site) in self.ranks.iter().zip(&self.sites) {
+                let m = evaluate(site);
+                s += m;
+                seen += usize::from(m > 0.0);
+                self.fresh.push((rank, *site));
+            }
+            count += self.ranks.len();
+            drawn += self.ranks.len();
+            self.runs.push((i as u8, self.fresh.len() as u32));
+        }
+        (self.sum, self.in_view) = (s, seen);
+        (self.evaluated, self.placed) = (count, drawn);
+    }
+}
+
 /// The sites of the last refinement, per bin, so that the next one (a camera that moved
 /// a little: about the same bins and ranks) reads them instead of placing them again,
 /// at a small part of the cost. Sites do not move with the view or the geometry; only
@@ -328,56 +384,14 @@ impl ShownEstimate {
                 .par_iter_mut()
                 .zip(live.par_chunks(REFINE_CHUNK))
                 .for_each_init(LeafScratch::default, |scratch, (list, bins)| {
-                    let (mut s, mut seen, mut count, mut drawn) = (0.0, 0, 0, 0);
-                    for (i, &b) in bins.iter().enumerate() {
-                        // Every rank of the bin in [PROBES, `reach`) is in the cache, in
-                        // order; the others in [from, to) are placed. Either way the
-                        // multipliers are summed in rank order.
-                        let (slot, reach) = match cached.slots[b as usize].clone() {
-                            Some(slot) => (slot, cached.end),
-                            None => (0..0, 0),
-                        };
-                        let kept = &cached.entries[slot.start as usize..slot.end as usize];
-                        let lo = kept.partition_point(|e| e.0 < from);
-                        let hi = kept.partition_point(|e| e.0 < to);
-                        for (_, site) in &kept[lo..hi] {
-                            let m = evaluate(site);
-                            s += m;
-                            seen += usize::from(m > 0.0);
-                        }
-                        count += hi - lo;
-                        let start = from.max(reach);
-                        if start >= to {
-                            continue;
-                        }
-                        let cover = cover(b as usize);
-                        list.ranks.clear();
-                        sampler.progressive_ranks_in_cover(
-                            cover,
-                            start,
-                            to,
-                            usize::MAX,
-                            &mut list.ranks,
-                        );
-                        list.sites.resize(list.ranks.len(), SampleSite::default());
-                        sampler.progressive_cover_sites_with(
-                            cover,
-                            &list.ranks,
-                            &mut list.sites,
-                            scratch,
-                        );
-                        for (&rank, site) in list.ranks.iter().zip(&list.sites) {
-                            let m = evaluate(site);
-                            s += m;
-                            seen += usize::from(m > 0.0);
-                            list.fresh.push((rank, *site));
-                        }
-                        count += list.ranks.len();
-                        drawn += list.ranks.len();
-                        list.runs.push((i as u8, list.fresh.len() as u32));
-                    }
-                    (list.sum, list.in_view) = (s, seen);
-                    (list.evaluated, list.placed) = (count, drawn);
+                    list.double(
+                        bins,
+                        (from, to),
+                        cached,
+                        (sampler, &cover),
+                        &evaluate,
+                        scratch,
+                    );
                 });
             for list in &self.lists[..chunks] {
                 sum += list.sum;

@@ -512,8 +512,8 @@ impl LodPool {
 pub(super) mod tests {
     use super::*;
     use crate::field::FieldSpec;
-    use crate::sample::lod::DRAW_AHEAD;
     use crate::mesh::TriMesh;
+    use crate::sample::lod::DRAW_AHEAD;
     use crate::surface::tests::torus_sampler;
     use crate::surface::{Preprocessed, SurfaceOptions};
     use std::sync::Arc;
