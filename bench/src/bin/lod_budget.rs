@@ -21,6 +21,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
+use strata_engine::mesh::TriMesh;
 use strata_engine::sample::lod::{Budget, LodError, MeanMultiplier, ViewLod};
 use strata_engine::sample::{LodPool, Sampler};
 
@@ -135,6 +136,16 @@ impl Summary {
     }
 }
 
+/// The vertex nearest the `lod` bench's first eye, and its normal: the surface point
+/// the camera approaches.
+fn approached(mesh: &TriMesh, camera: &LodCamera) -> Option<(DVec3, DVec3)> {
+    let (vertex, &target) = mesh.positions().iter().enumerate().min_by(|a, b| {
+        a.1.distance(camera.start)
+            .total_cmp(&b.1.distance(camera.start))
+    })?;
+    Some((target, mesh.vertex_normals()[vertex]))
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let budget = strata_bench::repeats_arg(100_000)? as f64;
     let cold = std::env::var_os("LOD_BUDGET_COLD").is_some();
@@ -146,17 +157,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mesh = &scene.mesh;
     let camera = LodCamera::around(mesh.positions());
     let radius = (camera.start - camera.centre).length() / 2.5;
-    // The surface point nearest the `lod` bench's first eye, and its normal.
-    let (vertex, &target) = mesh
-        .positions()
-        .iter()
-        .enumerate()
-        .min_by(|a, b| {
-            a.1.distance(camera.start)
-                .total_cmp(&b.1.distance(camera.start))
-        })
-        .ok_or("an empty mesh")?;
-    let normal = mesh.vertex_normals()[vertex];
+    let (target, normal) = approached(mesh, &camera).ok_or("an empty mesh")?;
     println!(
         "scene `{file}`: {} faces, budget {budget} samples shown, the camera 3% nearer per frame.\n",
         mesh.face_count()

@@ -449,7 +449,7 @@ impl ShownEstimate {
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::sample::lod::fade;
     use crate::surface::tests::torus_sampler;

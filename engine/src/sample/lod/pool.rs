@@ -509,7 +509,7 @@ impl LodPool {
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::field::FieldSpec;
     use crate::mesh::TriMesh;
