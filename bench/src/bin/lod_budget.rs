@@ -213,7 +213,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         sum.worst = sum.worst.max((ratio - 1.0).abs());
         sum.worst_alone = sum.worst_alone.max((ratio_alone - 1.0).abs());
-        if sum.frames % 8 == 0 {
+        if sum.frames.is_multiple_of(8) {
             let mut fresh = empty.clone();
             fresh.update(s, &v, Budget::Base(base))?;
             println!(

@@ -233,12 +233,11 @@ impl Entries {
         let room = self.budget - (self.ranks.len() - self.prefix as usize);
         self.todo.clear();
         let mut expected = 0.0;
-        let shares = bins.shares();
-        for b in 0..bins.len() {
+        for (b, &share) in bins.shares().iter().enumerate() {
             let (need, reach) = (bins.need(b), bins.reach(b));
             if need > reach {
                 let target = self.ahead_of(bins, b, need);
-                expected += f64::from(target - reach) * shares[b] + COVER_SLACK;
+                expected += f64::from(target - reach) * share + COVER_SLACK;
                 self.todo.push(b as u32);
             }
         }

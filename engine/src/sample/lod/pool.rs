@@ -347,7 +347,7 @@ impl LodPool {
     }
 
     /// The number of bins: about [`BINS`](super::BINS) roots, and the children of the bins split
-    /// for close views ([`split`](super::split)), which only grow in number until the
+    /// for close views ([`SPLIT_WAYS`](super::SPLIT_WAYS) each), which only grow in number until the
     /// pool is rebuilt.
     pub fn bins(&self) -> usize {
         self.bins.len()
@@ -385,7 +385,7 @@ impl LodPool {
     /// point budget of `shown` samples, at least [`CLOSE_ROOM`] times `shown x max`,
     /// since a close view's bins reach past what it shows: 0.012 bounding radii
     /// above the bunny, a budget of 10^5 needs 2.8 times as many entries with the
-    /// bins split for the view ([`split`](super::split)), 9.5 times without
+    /// bins split for the view ([`with_splitting`](Self::with_splitting)), 9.5 times without
     /// (the `lod_budget` bench). The room is used only as views ask: the pool reserves
     /// memory for its prefix and grows geometrically beyond.
     pub fn room_for(base: u32, shown: Option<u32>, max: f64) -> usize {
@@ -395,7 +395,7 @@ impl LodPool {
     }
 
     /// The base count under which `view` shows about `shown` samples (a point budget;
-    /// [`estimate`](super::estimate)), on the pool's current geometry, at most 2^32 (the
+    /// [`ShownEstimate`]), on the pool's current geometry, at most 2^32 (the
     /// sequence's length): `None` when the estimate sees nothing in view. What
     /// [`update`](Self::update) thresholds with under [`Budget::Shown`] (there rounded
     /// to `f32`). Cost: [`mean_multiplier`](Self::mean_multiplier)'s.
@@ -418,7 +418,7 @@ impl LodPool {
     }
 
     /// The point budget's estimate of `view`'s mean multiplier over the sequence's
-    /// measure ([`estimate`](super::estimate)), on the pool's current geometry. Cost: a
+    /// measure ([`ShownEstimate`]), on the pool's current geometry. Cost: a
     /// multiplier per [`PROBES`](super::PROBES); when fewer than [`IN_VIEW`] of them
     /// are in view, the bins' bounds (which the next [`update`](Self::update) for the
     /// view reuses) and the refinement's ranks, at most
