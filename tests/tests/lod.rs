@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use glam::{DVec3, Vec3};
 use strata_engine::mesh::TriMesh;
-use strata_engine::sample::{LodPool, PoolChange};
+use strata_engine::sample::{Budget, LodPool, PoolChange};
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::{
     GpuLodPool, GpuSampleBuffer, LodFades, OrbitCamera, SiteExpander, SplatLod, SplatStyle,
@@ -72,7 +72,10 @@ fn the_gpu_cull_gives_the_cpu_visible_set() {
     for (distance, yaw) in [(5.0, 0.3), (3.5, 0.35), (2.6, 0.4)] {
         let cam = camera(distance, yaw);
         let view = lod().view(&cam, SIZE);
-        let change = pool.update(s, &view, BASE);
+        let change = pool
+            .update(s, &view, Budget::Base(BASE))
+            .expect("the pool's sampler")
+            .change;
         let held = gpu_pool.len();
         let bytes = gpu_pool
             .sync(
@@ -123,7 +126,10 @@ fn the_gpu_cull_gives_the_cpu_visible_set() {
     }
     // A view that needs nothing new: nothing is sent.
     let view = lod().view(&camera(2.6, 0.4), SIZE);
-    let change = pool.update(s, &view, BASE);
+    let change = pool
+        .update(s, &view, Budget::Base(BASE))
+        .expect("the pool's sampler")
+        .change;
     assert_eq!(change, PoolChange::Unchanged);
     let bytes = gpu_pool
         .sync(
@@ -152,7 +158,10 @@ fn a_deformed_mesh_carries_its_samples() {
     let mut gpu_pool = GpuLodPool::new(&ctx.device, 5000.0).expect("pool");
     let mut samples = GpuSampleBuffer::new(&ctx.device).expect("buffer");
     let view = lod().view(&camera(4.0, 0.0), SIZE);
-    let change = pool.update(s, &view, 5000.0);
+    let change = pool
+        .update(s, &view, Budget::Base(5000.0))
+        .expect("the pool's sampler")
+        .change;
     gpu_pool
         .sync(
             &ctx.device,
@@ -423,12 +432,16 @@ fn ecs_lod_pools_follow_a_placed_mesh() {
     // The same pool as one updated directly with the camera in the mesh's frame...
     let local = view.in_local_frame(&placed).expect("similarity");
     let mut direct = LodPool::new(&sampler, 5, BASE as u32, 1_000_000);
-    direct.update(&sampler, &local, BASE);
+    direct
+        .update(&sampler, &local, Budget::Base(BASE))
+        .expect("the pool's sampler");
     assert!(direct.complete(&local, BASE));
     assert_eq!(ranks, direct.ranks());
     // ... and not the one the untransformed camera asks for (the bug this fixes).
     let mut ignored = LodPool::new(&sampler, 5, BASE as u32, 1_000_000);
-    ignored.update(&sampler, &view, BASE);
+    ignored
+        .update(&sampler, &view, Budget::Base(BASE))
+        .expect("the pool's sampler");
     assert_ne!(ranks, ignored.ranks());
     // A shear: an engine error, and the pool is kept.
     world.get_mut::<MeshTransform>(e).expect("transform").0 = DAffine3::from_mat3(

@@ -24,7 +24,7 @@ use std::path::Path;
 
 use glam::{DQuat, DVec3};
 use strata_bench::lod_camera::{LodCamera, lod_scene};
-use strata_engine::sample::{LodPool, Sample, SampleSite, Sampler};
+use strata_engine::sample::{Budget, LodPool, Sample, SampleSite, Sampler};
 use strata_systems::config::SceneConfig;
 use strata_systems::scene::Scene;
 
@@ -149,8 +149,7 @@ fn lod_fingerprints() -> Result<(), Box<dyn std::error::Error>> {
         let mut last = None;
         for t in 0..FRAMES {
             let (v, b) = frame(t);
-            let b = pool.frame_base(s, &v, b, budget);
-            pool.update(s, &v, b);
+            let b = pool.update(s, &v, Budget::new(b, budget))?.base;
             last = Some((v, b));
         }
         let (v, b) = last.ok_or("no frames")?;

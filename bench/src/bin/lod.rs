@@ -1,4 +1,4 @@
-//! Issue 19's `lod` bench: a camera moves along fixed paths around the bunny (3:1
+//! The `lod` bench: a camera moves along fixed paths around the bunny (3:1
 //! field, seed 3; the default scene when the shared meshes are absent) and a
 //! progressive pool ([`LodPool`]) serves the visible set of every frame:
 //! `cargo run --release -p strata-bench --bin lod [-- frames]`.
@@ -17,7 +17,8 @@
 //! - `dolly in` / `dolly out` / `orbit`, `shown held`: the same paths with the samples shown
 //!   held at 10^6, as a renderer with a point budget holds them: every frame's base
 //!   count is the engine's estimate of the one that shows 10^6 samples under the
-//!   frame's view ([`LodPool::frame_base`]), computed within the timed update.
+//!   frame's view ([`Budget::Shown`] in [`LodPool::update`]), computed within the timed
+//!   update.
 //!
 //! Per path: the visible samples of the first frame and their range over the timed
 //! frames, in millions; the kept share (the samples of
@@ -55,7 +56,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
-use strata_engine::sample::lod::ViewLod;
+use strata_engine::sample::lod::{Budget, FrameUpdate, LodError, ViewLod};
 use strata_engine::sample::{DRAW_AHEAD, LodPool, PoolChange, SampleSite, Sampler};
 
 const SEED: u64 = 3;
@@ -162,6 +163,128 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// The base count under which `first` shows about [`SHOWN`] samples, from a small
+/// pool's: visible samples grow linearly with the base count.
+fn calibrate_base(s: &Sampler, first: &ViewLod, fades: &mut Vec<f32>) -> Result<f64, LodError> {
+    let probe_base = 100_000.0;
+    let mut probe = LodPool::new(s, SEED, probe_base as u32, usize::MAX / 4);
+    probe.update(s, first, Budget::Base(probe_base))?;
+    let shown = visible(&probe, s, first, probe_base, fades).len() as f64;
+    Ok((probe_base * SHOWN / shown).round())
+}
+
+/// Runs `frame` along a path on `pool`: [`WARM_UP`] untimed frames, then `frames`
+/// timed ones, under a point budget of `budget` samples or the path's base counts;
+/// prints the path's row of the table.
+fn run_path(
+    (path, frame, budget): (&str, &Path, Option<u32>),
+    mut pool: LodPool,
+    s: &Sampler,
+    frames: usize,
+    fades: &mut Vec<f32>,
+) -> Result<(), LodError> {
+    // A held path's base count: the engine's point budget for the frame's view.
+    let update =
+        |pool: &mut LodPool, v: &ViewLod, b: f64| pool.update(s, v, Budget::new(b, budget));
+    // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
+    let (mut before, mut last) = (vec![], frame(0));
+    for t in -WARM_UP..=0 {
+        let (v, b) = frame(t);
+        let b = update(&mut pool, &v, b)?.base;
+        if t == 0 {
+            before = visible(&pool, s, &v, b, fades);
+            last = (v, b);
+        }
+    }
+    let shown = before.len();
+    let (mut shares, mut in_view, mut times, mut bytes) = (vec![], vec![], vec![], vec![]);
+    let (mut fresh, mut beyond, mut counts) = (vec![], vec![], vec![]);
+    // Per step, the expected share kept among the samples staying in view, from
+    // the multipliers' change alone (`leaving`).
+    let mut allowed = vec![];
+    let mut moved = false;
+    for t in 1..=frames as i32 {
+        let (v, b) = frame(t);
+        let clock = Instant::now();
+        let FrameUpdate { change, base: b } = update(&mut pool, &v, b)?;
+        times.push(clock.elapsed().as_secs_f64() * 1e3);
+        bytes.push(match change {
+            PoolChange::Unchanged => 0.0,
+            PoolChange::Appended(r) => r.len() as f64 * 20.0,
+            PoolChange::Rebuilt => (pool.len() - pool.prefix() as usize) as f64 * 20.0,
+        });
+        let after = visible(&pool, s, &v, b, fades);
+        let (same, m) = kept(&before, &after);
+        moved |= m;
+        fresh.push((after.len() - same) as f64);
+        beyond.push(new_from(&before, &after, pool.prefix()) as f64);
+        counts.push(after.len() as f64);
+        let (gone, forced) = leaving(&before, s, (&last.0, last.1), (&v, b));
+        let staying = (before.len() - gone).max(1) as f64;
+        shares.push(same as f64 / before.len() as f64);
+        in_view.push(same as f64 / staying);
+        allowed.push(1.0 - forced / staying);
+        (before, last) = (after, (v, b));
+    }
+    let worst = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let range = |v: &[f64]| {
+        let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().copied().fold(0.0, f64::max);
+        format!("{:.3}-{:.3}", lo / 1e6, hi / 1e6)
+    };
+    println!(
+        "| {path} | {shown} | {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
+        range(&counts),
+        100.0 * worst(&shares),
+        100.0 * mean(&shares),
+        100.0 * worst(&in_view),
+        100.0 * mean(&in_view),
+        100.0 * mean(&allowed),
+        if moved { "yes" } else { "no" },
+        median(times.clone()),
+        mean(&times),
+        mean(&fresh) / 1e3,
+        mean(&beyond) / 1e3,
+        mean(&bytes) / 20e3,
+        mean(&bytes) / 1e3,
+        pool.len(),
+    );
+    Ok(())
+}
+
+/// Today's stratified order, `N` to `N + 1%`: the samples that kept their place, and
+/// the sampler's cheapest placement per site, for the floor of an update.
+fn stratified_comparison(s: &Sampler) {
+    let n = 1_000_000usize;
+    let (mut a, mut b) = (
+        vec![SampleSite::default(); n],
+        vec![SampleSite::default(); n + n / 100],
+    );
+    // The stratified order places consecutive values along the curves (warm cells).
+    let mut placing = vec![];
+    for _ in 0..5 {
+        let clock = Instant::now();
+        s.sample_sites_into(SEED, &mut a);
+        placing.push(clock.elapsed().as_secs_f64() * 1e9 / n as f64);
+    }
+    s.sample_sites_into(SEED, &mut b);
+    let key = |x: &SampleSite| (x.face, x.segment, x.bary[0].to_bits(), x.bary[1].to_bits());
+    let mut set: Vec<_> = b.iter().map(key).collect();
+    set.sort_unstable();
+    let same = a
+        .iter()
+        .filter(|x| set.binary_search(&key(x)).is_ok())
+        .count();
+    println!(
+        "\nStratified order, {n} to {} samples: {:.1}% kept their place. Placing its {n} sites takes {:.1} ns of wall time per site (median of 5, {} threads).",
+        n + n / 100,
+        100.0 * same as f64 / n as f64,
+        median(placing),
+        rayon::current_num_threads(),
+    );
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames = strata_bench::repeats_arg(20)?.max(1);
     // The frame loop runs on a worker of rayon's pool, as a renderer driving rayon
@@ -184,14 +307,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } = camera;
     let view = |eye: DVec3| camera.view(eye);
     let first = view(start);
-
-    // Calibrate the base count on a small pool: visible samples grow linearly with it.
-    let probe_base = 100_000.0;
-    let mut probe = LodPool::new(s, SEED, probe_base as u32, usize::MAX / 4);
-    probe.update(s, &first, probe_base);
     let mut fades = Vec::new();
-    let shown = visible(&probe, s, &first, probe_base, &mut fades).len() as f64;
-    let base = (probe_base * SHOWN / shown).round();
+    let base = calibrate_base(s, &first, &mut fades)?;
     println!(
         "scene `{file}`: {} faces, {} segments; base count {base:.0}, reference {reference:.1} px^2 per unit area, {frames} frames per path.\n",
         scene.mesh.face_count(),
@@ -225,7 +342,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     // The `shown held` paths hold the samples shown at the budget, as a renderer with
     // a point budget does: each frame's base count is the engine's estimate of the one
-    // that shows `SHOWN` samples under its view (`LodPool::frame_base`), timed with the
+    // that shows `SHOWN` samples under its view (`Budget::Shown`), timed with the
     // update.
     let paths: [(&str, Path, bool); 7] = [
         (
@@ -240,77 +357,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("dolly out 1%, shown held", dolly(1.01), true),
         ("orbit 1 degree, shown held", orbit(), true),
     ];
-    for (path, frame, held) in paths {
-        let mut pool = prefix.clone();
-        // A held path's base count: the engine's point budget for the frame's view.
+    for (path, frame, held) in &paths {
         let budget = held.then_some(SHOWN as u32);
-        let base_of = |pool: &mut LodPool, v: &ViewLod, b: f64| pool.frame_base(s, v, b, budget);
-        // The camera was already moving: untimed frames -WARM_UP..=0 along the path.
-        let (mut before, mut last) = (vec![], frame(0));
-        for t in -WARM_UP..=0 {
-            let (v, b) = frame(t);
-            let b = base_of(&mut pool, &v, b);
-            pool.update(s, &v, b);
-            if t == 0 {
-                before = visible(&pool, s, &v, b, &mut fades);
-                last = (v, b);
-            }
-        }
-        let shown = before.len();
-        let (mut shares, mut in_view, mut times, mut bytes) = (vec![], vec![], vec![], vec![]);
-        let (mut fresh, mut beyond, mut counts) = (vec![], vec![], vec![]);
-        // Per step, the expected share kept among the samples staying in view, from
-        // the multipliers' change alone (`leaving`).
-        let mut allowed = vec![];
-        let mut moved = false;
-        for t in 1..=frames as i32 {
-            let (v, b) = frame(t);
-            let clock = Instant::now();
-            let b = base_of(&mut pool, &v, b);
-            let change = pool.update(s, &v, b);
-            times.push(clock.elapsed().as_secs_f64() * 1e3);
-            bytes.push(match change {
-                PoolChange::Unchanged => 0.0,
-                PoolChange::Appended(r) => r.len() as f64 * 20.0,
-                PoolChange::Rebuilt => (pool.len() - pool.prefix() as usize) as f64 * 20.0,
-            });
-            let after = visible(&pool, s, &v, b, &mut fades);
-            let (same, m) = kept(&before, &after);
-            moved |= m;
-            fresh.push((after.len() - same) as f64);
-            beyond.push(new_from(&before, &after, pool.prefix()) as f64);
-            counts.push(after.len() as f64);
-            let (gone, forced) = leaving(&before, s, (&last.0, last.1), (&v, b));
-            let staying = (before.len() - gone).max(1) as f64;
-            shares.push(same as f64 / before.len() as f64);
-            in_view.push(same as f64 / staying);
-            allowed.push(1.0 - forced / staying);
-            (before, last) = (after, (v, b));
-        }
-        let worst = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
-        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-        let range = |v: &[f64]| {
-            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = v.iter().copied().fold(0.0, f64::max);
-            format!("{:.3}-{:.3}", lo / 1e6, hi / 1e6)
-        };
-        println!(
-            "| {path} | {shown} | {} | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {:.2}% | {} | {:.3} | {:.3} | {:.1}k | {:.1}k | {:.1}k | {:.1} | {} |",
-            range(&counts),
-            100.0 * worst(&shares),
-            100.0 * mean(&shares),
-            100.0 * worst(&in_view),
-            100.0 * mean(&in_view),
-            100.0 * mean(&allowed),
-            if moved { "yes" } else { "no" },
-            median(times.clone()),
-            mean(&times),
-            mean(&fresh) / 1e3,
-            mean(&beyond) / 1e3,
-            mean(&bytes) / 20e3,
-            mean(&bytes) / 1e3,
-            pool.len(),
-        );
+        run_path((path, frame, budget), prefix.clone(), s, frames, &mut fades)?;
     }
 
     // The point budget's estimate alone, along the dolly in (cold caches between
@@ -325,38 +374,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     println!(
         "\nPoint budget: the mean multiplier of a new view (`ShownEstimate::mean_multiplier`, {} probes) takes {:.0} us, median of {frames}.",
-        strata_engine::sample::lod_budget::PROBES,
+        strata_engine::sample::lod::PROBES,
         median(estimates),
     );
-
-    // Today's stratified order, N to N + 1%.
-    let n = 1_000_000usize;
-    let (mut a, mut b) = (
-        vec![SampleSite::default(); n],
-        vec![SampleSite::default(); n + n / 100],
-    );
-    // The sampler's cheapest placement per site, for the floor of an update: the
-    // stratified order places consecutive values along the curves (warm cells).
-    let mut placing = vec![];
-    for _ in 0..5 {
-        let clock = Instant::now();
-        s.sample_sites_into(SEED, &mut a);
-        placing.push(clock.elapsed().as_secs_f64() * 1e9 / n as f64);
-    }
-    s.sample_sites_into(SEED, &mut b);
-    let key = |x: &SampleSite| (x.face, x.segment, x.bary[0].to_bits(), x.bary[1].to_bits());
-    let mut set: Vec<_> = b.iter().map(key).collect();
-    set.sort_unstable();
-    let same = a
-        .iter()
-        .filter(|x| set.binary_search(&key(x)).is_ok())
-        .count();
-    println!(
-        "\nStratified order, {n} to {} samples: {:.1}% kept their place. Placing its {n} sites takes {:.1} ns of wall time per site (median of 5, {} threads).",
-        n + n / 100,
-        100.0 * same as f64 / n as f64,
-        median(placing),
-        rayon::current_num_threads(),
-    );
+    stratified_comparison(s);
     Ok(())
 }

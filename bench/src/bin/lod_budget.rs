@@ -1,4 +1,4 @@
-//! The point budget on close views (issue 19): a camera moves from 2 bounding radii
+//! The point budget on close views: a camera moves from 2 bounding radii
 //! above the bunny's surface down to 0.01, 3% nearer per frame, looking at the surface
 //! point it approaches, with a budget of `S` samples shown (default 10^5):
 //! `cargo run --release -p strata-bench --bin lod_budget [-- S]`.
@@ -21,8 +21,9 @@ use std::time::Instant;
 
 use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
-use strata_engine::sample::LodPool;
-use strata_engine::sample::lod::ViewLod;
+use strata_engine::mesh::TriMesh;
+use strata_engine::sample::lod::{Budget, LodError, MeanMultiplier, ViewLod};
+use strata_engine::sample::{LodPool, Sampler};
 
 const SEED: u64 = 3;
 
@@ -30,17 +31,119 @@ const SEED: u64 = 3;
 /// time of the update that drew them, in ms.
 fn shown(
     pool: &mut LodPool,
-    s: &strata_engine::sample::Sampler,
+    s: &Sampler,
     v: &ViewLod,
     base: f64,
     fades: &mut Vec<f32>,
-) -> (f64, f64) {
+) -> Result<(f64, f64), LodError> {
     let t = Instant::now();
-    pool.update(s, v, base);
+    pool.update(s, v, Budget::Base(base))?;
     let ms = t.elapsed().as_secs_f64() * 1e3;
     fades.resize(pool.len(), 0.0);
     pool.fades_into(s, v, base, fades);
-    (fades.iter().filter(|&&f| f > 0.0).count() as f64, ms)
+    Ok((fades.iter().filter(|&&f| f > 0.0).count() as f64, ms))
+}
+
+/// The view from `distance` along `normal` above `target`, looking at it, with the
+/// `lod` bench's camera and near and far planes scaled to the mesh's `radius`.
+fn close_view(
+    camera: &LodCamera,
+    (target, normal): (DVec3, DVec3),
+    distance: f64,
+    radius: f64,
+) -> ViewLod {
+    let eye = target + normal * distance;
+    let proj = glam::dcamera::rh::proj::directx::perspective(
+        std::f64::consts::FRAC_PI_4,
+        1280.0 / 720.0,
+        1e-4 * radius,
+        100.0 * radius,
+    );
+    let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
+    ViewLod {
+        clip_from_world: proj * look,
+        ..camera.view(eye)
+    }
+}
+
+/// The engine's estimate of `v` and its time in ms: on `pool`, or with `cold` on a
+/// copy of `empty` (an estimator that has seen no view), checked against `pool`'s.
+fn timed_estimate(
+    pool: &mut LodPool,
+    empty: &LodPool,
+    s: &Sampler,
+    v: &ViewLod,
+    cold: bool,
+) -> Result<(MeanMultiplier, f64), LodError> {
+    if cold {
+        let mut fresh = empty.clone();
+        let t = Instant::now();
+        let estimate = fresh.mean_multiplier(s, v)?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        // The pool's own estimate, untimed: the same numbers.
+        assert_eq!(pool.mean_multiplier(s, v)?.mean, estimate.mean);
+        Ok((estimate, ms))
+    } else {
+        let t = Instant::now();
+        let estimate = pool.mean_multiplier(s, v)?;
+        Ok((estimate, t.elapsed().as_secs_f64() * 1e3))
+    }
+}
+
+/// The run's summary: the worst errors and base steps, and the times.
+#[derive(Default)]
+struct Summary {
+    /// Frames run.
+    frames: usize,
+    /// Shown / budget, largest error: the engine's, the probes' alone.
+    worst: f64,
+    worst_alone: f64,
+    /// Largest base step between frames: the engine's, the probes' alone.
+    step: f64,
+    step_alone: f64,
+    /// Estimate and update times, ms; update times closer than 0.1 radius.
+    times: Vec<f64>,
+    updates: Vec<f64>,
+    close: Vec<f64>,
+    /// Entries the pool drew in the frames closer than 0.1 radius.
+    close_drawn: usize,
+}
+
+impl Summary {
+    /// Prints the summary line; `entries`: the pool's at the end.
+    fn print(mut self, entries: usize) {
+        let (step, step_alone, frame) = (self.step, self.step_alone, self.frames);
+        let (times, updates, close) = (&mut self.times, &mut self.updates, &mut self.close);
+        times.sort_by(f64::total_cmp);
+        updates.sort_by(f64::total_cmp);
+        close.sort_by(f64::total_cmp);
+        println!(
+            "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}; closer than 0.1 radius ({} frames, the pool growing most): median {:.2}, 90th percentile {:.2}, {:.0} entries drawn per frame, {:.0} ns of update per entry drawn. Entries held at the end: {}.",
+            100.0 * self.worst_alone,
+            100.0 * self.worst,
+            times[times.len() / 2],
+            times[times.len() * 9 / 10],
+            times[times.len() - 1],
+            updates[updates.len() / 2],
+            updates[updates.len() * 9 / 10],
+            close.len(),
+            close[close.len() / 2],
+            close[close.len() * 9 / 10],
+            self.close_drawn as f64 / close.len() as f64,
+            close.iter().sum::<f64>() * 1e6 / self.close_drawn as f64,
+            entries,
+        );
+    }
+}
+
+/// The vertex nearest the `lod` bench's first eye, and its normal: the surface point
+/// the camera approaches.
+fn approached(mesh: &TriMesh, camera: &LodCamera) -> Option<(DVec3, DVec3)> {
+    let (vertex, &target) = mesh.positions().iter().enumerate().min_by(|a, b| {
+        a.1.distance(camera.start)
+            .total_cmp(&b.1.distance(camera.start))
+    })?;
+    Some((target, mesh.vertex_normals()[vertex]))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -54,17 +157,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mesh = &scene.mesh;
     let camera = LodCamera::around(mesh.positions());
     let radius = (camera.start - camera.centre).length() / 2.5;
-    // The surface point nearest the `lod` bench's first eye, and its normal.
-    let (vertex, &target) = mesh
-        .positions()
-        .iter()
-        .enumerate()
-        .min_by(|a, b| {
-            a.1.distance(camera.start)
-                .total_cmp(&b.1.distance(camera.start))
-        })
-        .ok_or("an empty mesh")?;
-    let normal = mesh.vertex_normals()[vertex];
+    let (target, normal) = approached(mesh, &camera).ok_or("an empty mesh")?;
     println!(
         "scene `{file}`: {} faces, budget {budget} samples shown, the camera 3% nearer per frame.\n",
         mesh.face_count()
@@ -81,67 +174,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let empty = pool.clone().with_draw_ahead(0.0);
     let mut fades = Vec::new();
     let (mut last, mut last_alone) = (None::<f64>, None::<f64>);
-    let (mut worst, mut worst_alone, mut step, mut step_alone) = (0.0f64, 0.0f64, 1.0f64, 1.0f64);
-    let (mut times, mut updates, mut close) = (Vec::new(), Vec::new(), Vec::new());
-    // Entries the pool drew in the frames closer than 0.1 radius.
-    let mut close_drawn = 0usize;
-    let (mut frame, mut distance) = (0, 2.0 * radius);
+    let mut sum = Summary {
+        step: 1.0,
+        step_alone: 1.0,
+        ..Summary::default()
+    };
+    let mut distance = 2.0 * radius;
     while distance > 0.01 * radius {
-        let eye = target + normal * distance;
-        let proj = glam::dcamera::rh::proj::directx::perspective(
-            std::f64::consts::FRAC_PI_4,
-            1280.0 / 720.0,
-            1e-4 * radius,
-            100.0 * radius,
-        );
-        let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
-        let v = ViewLod {
-            clip_from_world: proj * look,
-            ..camera.view(eye)
-        };
+        let v = close_view(&camera, (target, normal), distance, radius);
         let probed = pool.shown_estimate().probe(&v);
         let base_alone = (probed.mean > 0.0).then(|| (budget / probed.mean).min(4_294_967_296.0));
-        let (estimate, ms) = if cold {
-            let mut fresh = empty.clone();
-            let t = Instant::now();
-            let estimate = fresh.mean_multiplier(s, &v);
-            let ms = t.elapsed().as_secs_f64() * 1e3;
-            // The pool's own estimate, untimed: the same numbers.
-            assert_eq!(pool.mean_multiplier(s, &v).mean, estimate.mean);
-            (estimate, ms)
-        } else {
-            let t = Instant::now();
-            let estimate = pool.mean_multiplier(s, &v);
-            (estimate, t.elapsed().as_secs_f64() * 1e3)
-        };
-        times.push(ms);
+        let (estimate, ms) = timed_estimate(&mut pool, &empty, s, &v, cold)?;
+        sum.times.push(ms);
         let base = pool
-            .base_for_shown(s, &v, budget)
+            .base_for_shown(s, &v, budget)?
             .ok_or("nothing in view")?;
         let held = pool.len();
-        let (count, update) = shown(&mut pool, s, &v, base, &mut fades);
+        let (count, update) = shown(&mut pool, s, &v, base, &mut fades)?;
         let ratio = count / budget;
-        updates.push(update);
+        sum.updates.push(update);
         if distance < 0.1 * radius {
-            close.push(update);
-            close_drawn += pool.len() - held;
+            sum.close.push(update);
+            sum.close_drawn += pool.len() - held;
         }
-        let ratio_alone = base_alone.map_or(f64::INFINITY, |b| {
-            shown(&mut alone, s, &v, b, &mut fades).0 / budget
-        });
+        let ratio_alone = match base_alone {
+            Some(b) => shown(&mut alone, s, &v, b, &mut fades)?.0 / budget,
+            None => f64::INFINITY,
+        };
         let jump = |b: f64, l: Option<f64>| l.map_or(1.0, |l| (b / l).max(l / b));
         let (j, j_alone) = (
             jump(base, last),
             base_alone.map_or(f64::INFINITY, |b| jump(b, last_alone)),
         );
         // Ignore the steps of the first frames: the camera starts there.
-        if frame > 0 {
-            step = step.max(j);
-            step_alone = step_alone.max(j_alone);
+        if sum.frames > 0 {
+            sum.step = sum.step.max(j);
+            sum.step_alone = sum.step_alone.max(j_alone);
         }
-        worst = worst.max((ratio - 1.0).abs());
-        worst_alone = worst_alone.max((ratio_alone - 1.0).abs());
-        if frame % 8 == 0 {
+        sum.worst = sum.worst.max((ratio - 1.0).abs());
+        sum.worst_alone = sum.worst_alone.max((ratio_alone - 1.0).abs());
+        if sum.frames.is_multiple_of(8) {
+            let mut fresh = empty.clone();
+            fresh.update(s, &v, Budget::Base(base))?;
             println!(
                 "| {:.3} | {} | {ratio_alone:.3} | {} | {} | {} | {} | {ms:.2} | {update:.2} | {} | {} | {} | {ratio:.3} | {j_alone:.3} | {j:.3} |",
                 distance / radius,
@@ -150,38 +224,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 estimate.in_view,
                 estimate.evaluated,
                 estimate.placed,
-                {
-                    let mut fresh = empty.clone();
-                    fresh.update(s, &v, base);
-                    fresh.len()
-                },
+                fresh.len(),
                 pool.len(),
                 pool.bins(),
             );
         }
         last = Some(base);
         last_alone = base_alone;
-        frame += 1;
+        sum.frames += 1;
         distance *= 0.97;
     }
-    times.sort_by(f64::total_cmp);
-    updates.sort_by(f64::total_cmp);
-    close.sort_by(f64::total_cmp);
-    println!(
-        "\n{frame} frames. Shown / budget, worst: probes alone {:.1}% off, refined {:.1}% off. Largest base step between frames (a camera 3% nearer moves it by about 1.06): probes alone {step_alone:.3}, refined {step:.3}. Estimate ms: median {:.2}, 90th percentile {:.2}, largest {:.2}; the frame's update after it: median {:.2}, 90th percentile {:.2}; closer than 0.1 radius ({} frames, the pool growing most): median {:.2}, 90th percentile {:.2}, {:.0} entries drawn per frame, {:.0} ns of update per entry drawn. Entries held at the end: {}.",
-        100.0 * worst_alone,
-        100.0 * worst,
-        times[times.len() / 2],
-        times[times.len() * 9 / 10],
-        times[times.len() - 1],
-        updates[updates.len() / 2],
-        updates[updates.len() * 9 / 10],
-        close.len(),
-        close[close.len() / 2],
-        close[close.len() * 9 / 10],
-        close_drawn as f64 / close.len() as f64,
-        close.iter().sum::<f64>() * 1e6 / close_drawn as f64,
-        pool.len(),
-    );
+    sum.print(pool.len());
     Ok(())
 }

@@ -20,6 +20,8 @@
 
 use std::time::{Duration, Instant};
 
+use bevy_ecs::entity::Entity;
+
 use strata_bench::lod_camera::LodCamera;
 use strata_systems::ecs::{EngineSettings, Lod, LodState, MeshSampler, SamplingSettings, Stage};
 use strata_systems::hot_reload::StreamingEngine;
@@ -56,35 +58,34 @@ fn lod_update(state: Option<&LodState>) -> (f64, f64) {
     state.map_or((0.0, 0.0), |s| (s.update.as_secs_f64() * 1e3, s.base))
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let frames = strata_bench::repeats_arg(20)?.max(1);
+/// Sets rayon's global pool as `LOD_ECS_POOL` asks (see the module docs); whether the
+/// main thread is in it.
+fn join_pool(pool: &str) -> Result<bool, Box<dyn std::error::Error>> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let pool = std::env::var("LOD_ECS_POOL").unwrap_or_else(|_| "cores+1".into());
-    let shown: Option<u32> = match std::env::var("LOD_ECS_SHOWN") {
-        Ok(s) => Some(s.parse()?),
-        Err(_) => None,
-    };
-    let inside = match pool.as_str() {
+    match pool {
         "cores+1" => {
             strata_systems::frame_thread::join_rayon_pool()?;
-            true
+            Ok(true)
         }
         "cores" => {
             rayon::ThreadPoolBuilder::new()
                 .use_current_thread()
                 .num_threads(cores)
                 .build_global()?;
-            true
+            Ok(true)
         }
-        "outside" => false,
-        other => return Err(format!("LOD_ECS_POOL={other}: cores+1, cores or outside").into()),
-    };
-    strata_bench::shared_mesh_dir()?;
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../configs/stanford-bunny-anisotropic.ron");
-    let mut engine = StreamingEngine::watch(&scene)?;
-    let started = Instant::now();
-    let mesh = loop {
+        "outside" => Ok(false),
+        other => Err(format!("LOD_ECS_POOL={other}: cores+1, cores or outside").into()),
+    }
+}
+
+/// Updates `engine` until its mesh entity has a sampler (at most 300 s from
+/// `started`); the entity.
+fn built_mesh(
+    engine: &mut StreamingEngine,
+    started: Instant,
+) -> Result<Entity, Box<dyn std::error::Error>> {
+    loop {
         engine.update();
         engine.settle(Duration::from_secs(300));
         let built = engine.mesh_entity().filter(|&e| {
@@ -94,22 +95,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .is_some_and(|s| s.0.is_some())
         });
         if let Some(e) = built {
-            break e;
+            return Ok(e);
         }
         if started.elapsed() > Duration::from_secs(300) {
             return Err("the scene did not build in 300 s".into());
         }
         std::thread::sleep(Duration::from_millis(20));
-    };
-    let positions = engine
-        .world
-        .get::<MeshSampler>(mesh)
-        .and_then(|s| s.0.as_ref())
-        .map(|s| s.mesh().positions().to_vec())
-        .ok_or("no sampler")?;
-    let camera = LodCamera::around(&positions);
+    }
+}
 
-    // The dolly in, through the ECS engine.
+/// The `lod` bench's dolly in on `mesh` through the ECS engine, with a point budget of
+/// `shown`: [`WARM_UP`] untimed frames, then `frames` timed ones; each timed frame's
+/// update time (ms) and base count. Waits for the pool to build (at most 600 s from
+/// `started`) before the first frame.
+fn dolly(
+    engine: &mut StreamingEngine,
+    mesh: Entity,
+    camera: &LodCamera,
+    (shown, frames): (Option<u32>, usize),
+    started: Instant,
+) -> Result<(Vec<f64>, Vec<f64>), Box<dyn std::error::Error>> {
     engine.world.entity_mut(mesh).insert((
         Lod {
             view: camera.dolly(0.99, -WARM_UP),
@@ -124,7 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get::<LodState>(mesh)
         .is_some_and(|s| s.pool.is_none())
     {
-        frame(&mut engine);
+        frame(engine);
         if started.elapsed() > Duration::from_secs(600) {
             return Err("the level-of-detail pool did not build".into());
         }
@@ -134,18 +139,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if let Some(mut l) = engine.world.get_mut::<Lod>(mesh) {
             l.view = camera.dolly(0.99, t);
         }
-        frame(&mut engine);
+        frame(engine);
         let (took, base) = lod_update(engine.world.get::<LodState>(mesh));
         if t > 0 {
             lod.push(took);
             bases.push(base);
         }
     }
-    let mean = lod.iter().sum::<f64>() / lod.len() as f64;
-    let (lod_median, _) = median(lod);
     engine.world.entity_mut(mesh).remove::<(Lod, LodState)>();
+    Ok((lod, bases))
+}
 
-    // 10^6 samples drawn every update.
+/// 10^6 samples drawn every update on `mesh`: the median and 90th percentile of
+/// [`RESAMPLES`] updates' sampling, ms.
+fn resample(engine: &mut StreamingEngine, mesh: Entity) -> (f64, f64) {
     engine
         .world
         .resource_mut::<EngineSettings>()
@@ -153,9 +160,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(mut s) = engine.world.get_mut::<SamplingSettings>(mesh) {
         s.count = 1_000_000;
     }
-    frame(&mut engine);
-    let resample: Vec<f64> = (0..RESAMPLES).map(|_| frame(&mut engine)).collect();
-    let (r_median, r_p90) = median(resample);
+    frame(engine);
+    let resample: Vec<f64> = (0..RESAMPLES).map(|_| frame(engine)).collect();
+    median(resample)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let frames = strata_bench::repeats_arg(20)?.max(1);
+    let pool = std::env::var("LOD_ECS_POOL").unwrap_or_else(|_| "cores+1".into());
+    let shown: Option<u32> = match std::env::var("LOD_ECS_SHOWN") {
+        Ok(s) => Some(s.parse()?),
+        Err(_) => None,
+    };
+    let inside = join_pool(&pool)?;
+    strata_bench::shared_mesh_dir()?;
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/stanford-bunny-anisotropic.ron");
+    let mut engine = StreamingEngine::watch(&scene)?;
+    let started = Instant::now();
+    let mesh = built_mesh(&mut engine, started)?;
+    let positions = engine
+        .world
+        .get::<MeshSampler>(mesh)
+        .and_then(|s| s.0.as_ref())
+        .map(|s| s.mesh().positions().to_vec())
+        .ok_or("no sampler")?;
+    let camera = LodCamera::around(&positions);
+    let (lod, bases) = dolly(&mut engine, mesh, &camera, (shown, frames), started)?;
+    let mean = lod.iter().sum::<f64>() / lod.len() as f64;
+    let (lod_median, _) = median(lod);
+    let (r_median, r_p90) = resample(&mut engine, mesh);
     println!(
         "rayon pool `{pool}` ({} threads, main thread {}):",
         rayon::current_num_threads(),

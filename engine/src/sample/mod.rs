@@ -11,17 +11,12 @@
 mod chains;
 mod faces;
 pub mod lod;
-mod lod_bounds;
-pub mod lod_budget;
-mod lod_pool;
-pub mod lod_split;
 pub mod progressive;
 mod sampler;
 mod stratified;
 mod types;
 
-pub use lod_budget::CLOSE_ROOM;
-pub use lod_pool::{BINS, DRAW_AHEAD, LodPool, PoolChange};
+pub use lod::{BINS, Budget, CLOSE_ROOM, DRAW_AHEAD, FrameUpdate, LodPool, PoolChange};
 pub use sampler::{SampleError, Sampler, SegmentSampling};
 pub use stratified::{allocate, stratified_value};
 pub use types::{Sample, SampleSite};

@@ -1,7 +1,8 @@
 //! The `strata` command-line tool: the clap [`Cli`], [`run`], and one file per
 //! command holding its arguments and their handling (`sample`, `segment`, `field`,
 //! `bench`, `watch`, `render`, `view`, `analyze`; `look` holds the camera and look
-//! options that `render` and `view` share, `style` their `--style` and `--brush`).
+//! options that `render` and `view` share, `lod` their level-of-detail options,
+//! `style` their `--style` and `--brush`).
 //! What a command does beyond reading its arguments and printing its results lives in
 //! the library: [`crate::scene`], [`crate::report`], [`crate::hot_reload`],
 //! [`crate::gpu`] and [`crate::viewer`].
@@ -9,6 +10,7 @@
 mod analyze;
 mod bench;
 mod field;
+mod lod;
 mod look;
 mod render;
 mod sample;
@@ -26,6 +28,7 @@ use clap::{Parser, Subcommand};
 pub use analyze::AnalyzeArgs;
 pub use bench::{BenchArgs, BenchReport};
 pub use field::FieldArgs;
+pub use lod::LodArgs;
 pub use look::LookArgs;
 pub use render::RenderArgs;
 pub use sample::SampleArgs;

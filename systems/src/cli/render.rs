@@ -9,14 +9,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 
-use super::{LookArgs, StyleArgs};
+use super::{LodArgs, LookArgs, StyleArgs};
 use crate::config::SceneConfig;
 use strata_engine::mesh::TriMesh;
-use strata_engine::sample::{LodPool, PoolChange};
+use strata_engine::sample::{LodPool, PoolChange, Sample};
 
 use crate::gpu::{
     GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer, NprStyle,
-    SplatLod, SplatRenderer,
+    OrbitCamera, SplatLod, SplatRenderer,
 };
 use crate::scene::Scene;
 
@@ -40,19 +40,9 @@ pub struct RenderArgs {
     /// Camera, colours and sample count.
     #[command(flatten)]
     pub look: LookArgs,
-    /// Level of detail: the count is the samples over the whole surface where a unit
-    /// of surface covers as many pixels as one facing the camera at its target's
-    /// distance; nearer surface gets more, farther less, hidden none.
-    #[arg(long)]
-    pub lod: bool,
-    /// With `--lod`: the largest multiplier of the count's density.
-    #[arg(long, default_value_t = 4.0, requires = "lod")]
-    pub lod_max: f32,
-    /// With `--lod`: a point budget: about this many samples are shown in every frame
-    /// at any camera distance (each frame's base count is chosen for it); the count is
-    /// then the pool's prefix, drawn up front.
-    #[arg(long, requires = "lod")]
-    pub lod_shown: Option<u32>,
+    /// `--lod`, `--lod-max` and `--lod-shown`.
+    #[command(flatten)]
+    pub lod: LodArgs,
     /// With `--lod`: frames to draw; with more than one, `--out` gets a frame number
     /// (`out.png` becomes `out_0000.png`, `out_0001.png`, ...).
     #[arg(long, default_value_t = 1, requires = "lod")]
@@ -89,7 +79,7 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if !matches!(args.msaa, 1 | 4) {
         anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
     }
-    let npr = args.paint.npr_kind_for(args.lod)?;
+    let npr = args.paint.npr_kind_for(args.lod.lod)?;
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.
@@ -105,7 +95,7 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
             "{count} samples do not fit in one GPU buffer on this adapter (at most {max})"
         );
     }
-    if args.lod {
+    if args.lod.lod {
         return run_lod(args, &ctx, &target, &scene, count, seed);
     }
     let samples = scene.sampler.sample(count, seed);
@@ -186,30 +176,13 @@ fn run_lod(
     count: usize,
     seed: u64,
 ) -> anyhow::Result<()> {
-    if !(args.lod_max > 0.0 && args.lod_max.is_finite()) {
-        anyhow::bail!("--lod-max must be a positive number, not {}", args.lod_max);
-    }
-    if !(args.dolly > 0.0 && args.dolly.is_finite() && args.orbit.is_finite()) {
-        anyhow::bail!("--dolly must be a positive number and --orbit a number");
-    }
-    if args.frames == 0 {
-        anyhow::bail!("--frames must be at least 1");
-    }
-    if args.lod_shown == Some(0) {
-        anyhow::bail!("--lod-shown must be at least 1");
-    }
+    check_lod_args(args)?;
     let size = (args.width, args.height);
     let base = u32::try_from(count).context("--count: at most 2^32 - 1 with --lod")?;
     let mut camera = args
         .look
         .camera(scene, args.width as f32 / args.height as f32);
-    let lod = SplatLod::for_camera(&camera, args.height, base as f32, args.lod_max);
-    // Room for the ranks beyond the count that near surface asks for, or a point budget.
-    let budget = LodPool::room_for(base, args.lod_shown, f64::from(args.lod_max));
-    let mut lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
-    if let Some(shown) = args.lod_shown {
-        lod_scene = lod_scene.with_shown(shown);
-    }
+    let mut lod_scene = lod_scene(args, ctx, scene, &camera, base, seed)?;
     let mut renderer = SplatRenderer::new(&ctx.device, target.format())?;
     let segments = (args.look.mesh != MeshMode::None)
         .then(|| crate::gpu::splat::face_segments(&scene.sampler));
@@ -217,22 +190,9 @@ fn run_lod(
         renderer.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(segments))?;
     }
     let fades = LodFades::new(&ctx.device)?;
-    if !args.twist.is_finite() {
-        anyhow::bail!("--twist must be a number of degrees");
-    }
-    // The colour map's range from the first ranks, with the spacings of the count.
-    let probe: Vec<_> = (lod_scene
-        .pool()
-        .sites()
-        .iter()
-        .zip(lod_scene.pool().ranks()))
-    .take(4096)
-    .filter_map(|(s, &k)| {
-        let b = s.barycentric().map(f64::from);
-        scene.sampler.record(s.face, b, s.segment, k, count)
-    })
-    .collect();
-    let look = args.look.style(&probe);
+    let look = args
+        .look
+        .style(&first_records(lod_scene.pool(), scene, count));
     let mut shown_before: Option<Vec<bool>> = None;
     for frame in 0..args.frames {
         if args.twist != 0.0 {
@@ -277,18 +237,7 @@ fn run_lod(
         image
             .write_png(&path)
             .with_context(|| format!("writing {}", path.display()))?;
-        // Entries keep their rank and site unless the pool was rebuilt.
-        let kept = match (&shown_before, &step.change) {
-            (Some(before), PoolChange::Appended(_) | PoolChange::Unchanged) => {
-                let was = before.iter().filter(|&&v| v).count();
-                let still = before.iter().zip(&shown).filter(|&(&a, &b)| a && b).count();
-                format!(
-                    ", {:.2}% of the last frame's kept",
-                    100.0 * still as f64 / was.max(1) as f64
-                )
-            }
-            _ => String::new(),
-        };
+        let kept = kept_note(shown_before.as_deref(), &shown, &step.change);
         println!(
             "frame {frame}: {visible} of {} pool samples shown (base count {:.0}), {:.1} KB sent, pool update {:.2} ms{kept}; wrote {}",
             step.entries,
@@ -303,12 +252,77 @@ fn run_lod(
     }
     println!(
         "level of detail: base {base} samples (seed {seed}), multiplier up to {} at {}x{} on {}",
-        args.lod_max,
+        args.lod.lod_max,
         args.width,
         args.height,
         ctx.adapter_summary()
     );
     Ok(())
+}
+
+/// Checks the options of `strata render --lod`.
+fn check_lod_args(args: &RenderArgs) -> anyhow::Result<()> {
+    args.lod.validate()?;
+    if !(args.dolly > 0.0 && args.dolly.is_finite() && args.orbit.is_finite()) {
+        anyhow::bail!("--dolly must be a positive number and --orbit a number");
+    }
+    if args.frames == 0 {
+        anyhow::bail!("--frames must be at least 1");
+    }
+    if !args.twist.is_finite() {
+        anyhow::bail!("--twist must be a number of degrees");
+    }
+    Ok(())
+}
+
+/// The level-of-detail scene of `scene`'s sampler for `seed` with base count `base`,
+/// its multiplier set for `camera`, and room for the ranks beyond the count that near
+/// surface asks for, or a point budget.
+fn lod_scene(
+    args: &RenderArgs,
+    ctx: &GpuContext,
+    scene: &Scene,
+    camera: &OrbitCamera,
+    base: u32,
+    seed: u64,
+) -> anyhow::Result<LodScene> {
+    let (max, shown) = (args.lod.lod_max, args.lod.lod_shown);
+    let lod = SplatLod::for_camera(camera, args.height, base as f32, max);
+    let budget = LodPool::room_for(base, shown, f64::from(max));
+    let lod_scene = LodScene::new(&ctx.device, &scene.sampler, seed, lod, budget)?;
+    Ok(match shown {
+        Some(shown) => lod_scene.with_shown(shown),
+        None => lod_scene,
+    })
+}
+
+/// The records of `pool`'s first entries (4096 at most), with the spacings of `count`
+/// samples: what the colour map's range is taken from.
+fn first_records(pool: &LodPool, scene: &Scene, count: usize) -> Vec<Sample> {
+    (pool.sites().iter().zip(pool.ranks()))
+        .take(4096)
+        .filter_map(|(s, &k)| {
+            let b = s.barycentric().map(f64::from);
+            scene.sampler.record(s.face, b, s.segment, k, count)
+        })
+        .collect()
+}
+
+/// How many of the last frame's shown samples (`before`) a frame that made `change`
+/// still shows (`shown`), as a note for its line; nothing for the first frame or a
+/// rebuilt pool (entries keep their rank and site unless the pool was rebuilt).
+fn kept_note(before: Option<&[bool]>, shown: &[bool], change: &PoolChange) -> String {
+    match (before, change) {
+        (Some(before), PoolChange::Appended(_) | PoolChange::Unchanged) => {
+            let was = before.iter().filter(|&&v| v).count();
+            let still = before.iter().zip(shown).filter(|&(&a, &b)| a && b).count();
+            format!(
+                ", {:.2}% of the last frame's kept",
+                100.0 * still as f64 / was.max(1) as f64
+            )
+        }
+        _ => String::new(),
+    }
 }
 
 /// `mesh` twisted about the vertical axis through its bounding box's centre by

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use super::{LookArgs, StyleArgs};
+use super::{LodArgs, LookArgs, StyleArgs};
 use crate::gpu::StyleChoice;
 use crate::viewer::{self, ViewerOptions};
 
@@ -25,19 +25,9 @@ pub struct ViewArgs {
     /// Camera, colours and sample count.
     #[command(flatten)]
     pub look: LookArgs,
-    /// Level of detail: the count is the base count of progressive samples that follow
-    /// the camera (as `strata render --lod`); zooming in adds samples near the camera
-    /// and moves none.
-    #[arg(long)]
-    pub lod: bool,
-    /// With `--lod`: the largest multiplier of the count's density.
-    #[arg(long, default_value_t = 4.0, requires = "lod")]
-    pub lod_max: f32,
-    /// With `--lod`: a point budget: about this many samples are shown at any camera
-    /// distance (the base count of each frame is chosen for it); the count is then the
-    /// pool's prefix, drawn up front.
-    #[arg(long, requires = "lod")]
-    pub lod_shown: Option<u32>,
+    /// `--lod`, `--lod-max` and `--lod-shown`, as `strata render`'s.
+    #[command(flatten)]
+    pub lod: LodArgs,
     /// `--style` and `--brush`, as `strata render`'s (the keys `P` and `B` change them).
     #[command(flatten)]
     pub paint: StyleArgs,
@@ -46,13 +36,9 @@ pub struct ViewArgs {
 /// Runs `strata view` until the window closes.
 pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
     args.look.validate()?;
-    let paint = StyleChoice::new(args.paint.npr_kind_for(args.lod)?);
-    if !(args.lod_max > 0.0 && args.lod_max.is_finite()) {
-        anyhow::bail!("--lod-max must be a positive number, not {}", args.lod_max);
-    }
-    if args.lod_shown == Some(0) {
-        anyhow::bail!("--lod-shown must be at least 1");
-    }
+    let lod = &args.lod;
+    lod.validate()?;
+    let paint = StyleChoice::new(args.paint.npr_kind_for(lod.lod)?);
     let options = ViewerOptions {
         scene: args.config.clone(),
         size: (args.width, args.height),
@@ -67,8 +53,8 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
         zoom: args.look.zoom,
         style: args.look.style(&[]),
         paint,
-        lod_max: args.lod.then_some(args.lod_max),
-        lod_shown: args.lod_shown.filter(|_| args.lod),
+        lod_max: lod.lod.then_some(lod.lod_max),
+        lod_shown: lod.lod_shown.filter(|_| lod.lod),
     };
     let outcome = viewer::run(&options)?;
     if args.frames.is_some() {

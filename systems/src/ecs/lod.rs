@@ -1,4 +1,4 @@
-//! View-dependent level of detail in the ECS engine (issue 19): a mesh entity with a
+//! View-dependent level of detail in the ECS engine: a mesh entity with a
 //! [`Lod`] component keeps a progressive pool ([`LodPool`]) of its sampler's sequence
 //! in [`LodState`], and [`update_lod_pools`] brings it up to the `Lod`'s camera every
 //! update: only the ranks the view adds are drawn. The visible set (ranks under the
@@ -31,7 +31,7 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use crossbeam_channel::Receiver;
-use strata_engine::sample::lod::ViewLod;
+use strata_engine::sample::lod::{Budget, FrameUpdate, ViewLod};
 use strata_engine::sample::{LodPool, PoolChange, Sampler};
 
 use super::components::{MeshSampler, MeshTransform, SamplingSettings};
@@ -52,7 +52,7 @@ pub struct Lod {
     pub budget: usize,
     /// A point budget: when set, every update thresholds with the base count under
     /// which the camera shows about this many samples
-    /// ([`LodPool::frame_base`]; within 3% on the bunny, near or far), instead of `base`
+    /// ([`Budget::Shown`]; within 3% on the bunny, near or far), instead of `base`
     /// (which stays the pool's prefix, and the base count of a view of nothing). The
     /// base count used is [`LodState::base`]: a renderer draws with it.
     pub shown: Option<u32>,
@@ -77,7 +77,8 @@ pub struct LodState {
     /// `(base, budget, seed)` the pool was built with.
     built_for: Option<(u32, usize, u64)>,
     /// The sampler the pool was drawn from: the pool's ranks are its sequence's, so the
-    /// pool is extended with it until a pool of a newer sampler replaces both.
+    /// pool is extended with it (the pool checks it: [`LodPool::drawn_from`]) until a
+    /// pool of a newer sampler replaces both.
     drawn_from: Option<Sampler>,
     /// A pool building off the frame, and what it is built for.
     building: Option<PendingPool>,
@@ -134,8 +135,15 @@ pub fn update_lod_pools(
         let (Some(pool), Some(s)) = (state.pool.as_mut(), state.drawn_from.as_ref()) else {
             continue; // the first pool is still building
         };
-        let base = pool.frame_base(s, &view, f64::from(lod.base), lod.shown);
-        let change = pool.update(s, &view, base);
+        let budget = Budget::new(f64::from(lod.base), lod.shown);
+        // The pool refuses any sampler but its own: a mismatch is reported, never drawn.
+        let FrameUpdate { change, base } = match pool.update(s, &view, budget) {
+            Ok(frame) => frame,
+            Err(e) => {
+                errors.0.push(EngineError::Lod(e));
+                continue;
+            }
+        };
         state.base = base;
         state.update = t.elapsed();
         if change != PoolChange::Unchanged {

@@ -15,7 +15,7 @@
 //! [`LodPool::fades_into`] and for counting what a frame shows.
 
 use strata_engine::mesh::TriMesh;
-use strata_engine::sample::{LodPool, PoolChange, SampleSite, Sampler};
+use strata_engine::sample::{Budget, FrameUpdate, LodPool, PoolChange, SampleSite, Sampler};
 
 use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
 use super::camera::OrbitCamera;
@@ -374,8 +374,8 @@ impl LodScene {
 
     /// The same scene with a point budget: every [`frame`](Self::frame) thresholds
     /// with the base count under which its camera shows about `shown` samples
-    /// ([`LodPool::frame_base`]); the base count given to [`new`](Self::new) stays the pool's prefix
-    /// and the base count of a view of nothing.
+    /// ([`Budget::Shown`]); the base count given to [`new`](Self::new) stays the pool's
+    /// prefix and the base count of a view of nothing.
     pub fn with_shown(mut self, shown: u32) -> Self {
         self.shown = Some(shown);
         self
@@ -418,11 +418,15 @@ impl LodScene {
     ) -> Result<LodFrame, GpuError> {
         let view = self.lod.view(camera, size);
         let clock = std::time::Instant::now();
-        let base = self
-            .pool
-            .frame_base(sampler, &view, f64::from(self.lod.expanded), self.shown);
+        let budget = Budget::new(f64::from(self.lod.expanded), self.shown);
+        let FrameUpdate { change, base } =
+            self.pool
+                .update(sampler, &view, budget)
+                .map_err(|e| GpuError::Mismatch {
+                    what: "the sampler of a level-of-detail frame",
+                    detail: e.to_string(),
+                })?;
         self.lod.base = base as f32;
-        let change = self.pool.update(sampler, &view, base);
         let update = clock.elapsed();
         let uploaded =
             self.gpu

@@ -1,8 +1,8 @@
-//! A point budget for level of detail (issue 19): the base count under which a view
+//! A point budget for level of detail: the base count under which a view
 //! shows about a given number of samples.
 //!
 //! With base count `N`, rank `k` is visible when `k < N lod(p_k)`
-//! ([`lod`](super::lod)). The sequence spreads every run of ranks over the surface by
+//! ([`view`](super::view)). The sequence spreads every run of ranks over the surface by
 //! one measure `rho` (the curves' measure, stratified at every prefix), so the visible
 //! count is, up to that stratification's error, `N E_rho[lod]`: linear in `N`. The
 //! base count that shows `S` samples is then `S / E_rho[lod]`.
@@ -20,7 +20,7 @@
 //!   surface, and the base count jumping by up to 1.5 times between frames of a smooth
 //!   dolly as probes cross the frame's edge (the `lod_budget` bench). While fewer than
 //!   [`IN_VIEW`] of the ranks averaged are in view, `M` doubles: the new ranks `M..2M`
-//!   are enumerated only in the bins of a pool ([`LodPool`]) whose bound of the
+//!   are enumerated only in the bins of a pool ([`LodPool`](super::LodPool)) whose bound of the
 //!   multiplier is above 0 (elsewhere every multiplier is 0), placed, and their
 //!   multipliers added.
 //!   The ranks evaluated are about `IN_VIEW` times the measure of those bins over the
@@ -46,12 +46,12 @@ use std::ops::Range;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::faces::{Geometry, position_normal};
-use super::lod::{LodError, ViewLod, check_deformation};
-use super::progressive::RankCover;
-use super::{LodPool, SampleSite, Sampler};
+use super::view::{LodError, ViewLod, check_deformation};
 use crate::curve::LeafScratch;
 use crate::mesh::TriMesh;
+use crate::sample::faces::{Geometry, position_normal};
+use crate::sample::progressive::RankCover;
+use crate::sample::{SampleSite, Sampler};
 
 /// Probes of the mean multiplier: the first this many ranks of the sequence. On the
 /// bunny's `lod` bench paths, 4096 estimate the shown count within 1% (1024: within
@@ -75,7 +75,7 @@ pub const REFINE_LIMIT: usize = 1 << 15;
 const REFINE_CHUNK: usize = 16;
 
 /// With a point budget, the pool's room for ranks beyond its prefix is this many times
-/// the budget's `shown x max` (see [`LodPool::room_for`]).
+/// the budget's `shown x max` (see [`LodPool::room_for`](super::LodPool::room_for)).
 pub const CLOSE_ROOM: f64 = 4.0;
 
 /// A view's estimate of the mean multiplier `E_rho[lod]` (see the module docs).
@@ -132,6 +132,62 @@ struct ProbeList {
     fresh: Vec<(u32, SampleSite)>,
     /// Runs of `fresh`: (the bin's position in the chunk, end).
     runs: Vec<(u8, u32)>,
+}
+
+impl ProbeList {
+    /// One doubling of a refinement over this chunk's bins `bins`: the multipliers of
+    /// their ranks in `from..to`, summed in rank order per bin, read from the sites
+    /// `cached` of the last refinement where it holds them, else listed in the bin's
+    /// dyadic cover (`cover` of `sampler`) and placed (kept in `fresh` for the next).
+    fn double<'a, 'c>(
+        &mut self,
+        bins: &[u32],
+        (from, to): (u32, u32),
+        cached: &SiteCache,
+        (sampler, cover): (&'a Sampler, &(impl Fn(usize) -> &'c RankCover + Sync)),
+        evaluate: &impl Fn(&SampleSite) -> f64,
+        scratch: &mut LeafScratch<'a>,
+    ) {
+        let (mut s, mut seen, mut count, mut drawn) = (0.0, 0, 0, 0);
+        for (i, &b) in bins.iter().enumerate() {
+            // Every rank of the bin in [PROBES, `reach`) is in the cache, in order; the
+            // others in [from, to) are placed. Either way the multipliers are summed in
+            // rank order.
+            let (slot, reach) = match cached.slots[b as usize].clone() {
+                Some(slot) => (slot, cached.end),
+                None => (0..0, 0),
+            };
+            let kept = &cached.entries[slot.start as usize..slot.end as usize];
+            let lo = kept.partition_point(|e| e.0 < from);
+            let hi = kept.partition_point(|e| e.0 < to);
+            for (_, site) in &kept[lo..hi] {
+                let m = evaluate(site);
+                s += m;
+                seen += usize::from(m > 0.0);
+            }
+            count += hi - lo;
+            let start = from.max(reach);
+            if start >= to {
+                continue;
+            }
+            let cover = cover(b as usize);
+            self.ranks.clear();
+            sampler.progressive_ranks_in_cover(cover, start, to, usize::MAX, &mut self.ranks);
+            self.sites.resize(self.ranks.len(), SampleSite::default());
+            sampler.progressive_cover_sites_with(cover, &self.ranks, &mut self.sites, scratch);
+            for (&rank, site) in self.ranks.iter().zip(&self.sites) {
+                let m = evaluate(site);
+                s += m;
+                seen += usize::from(m > 0.0);
+                self.fresh.push((rank, *site));
+            }
+            count += self.ranks.len();
+            drawn += self.ranks.len();
+            self.runs.push((i as u8, self.fresh.len() as u32));
+        }
+        (self.sum, self.in_view) = (s, seen);
+        (self.evaluated, self.placed) = (count, drawn);
+    }
 }
 
 /// The sites of the last refinement, per bin, so that the next one (a camera that moved
@@ -328,56 +384,14 @@ impl ShownEstimate {
                 .par_iter_mut()
                 .zip(live.par_chunks(REFINE_CHUNK))
                 .for_each_init(LeafScratch::default, |scratch, (list, bins)| {
-                    let (mut s, mut seen, mut count, mut drawn) = (0.0, 0, 0, 0);
-                    for (i, &b) in bins.iter().enumerate() {
-                        // Every rank of the bin in [PROBES, `reach`) is in the cache, in
-                        // order; the others in [from, to) are placed. Either way the
-                        // multipliers are summed in rank order.
-                        let (slot, reach) = match cached.slots[b as usize].clone() {
-                            Some(slot) => (slot, cached.end),
-                            None => (0..0, 0),
-                        };
-                        let kept = &cached.entries[slot.start as usize..slot.end as usize];
-                        let lo = kept.partition_point(|e| e.0 < from);
-                        let hi = kept.partition_point(|e| e.0 < to);
-                        for (_, site) in &kept[lo..hi] {
-                            let m = evaluate(site);
-                            s += m;
-                            seen += usize::from(m > 0.0);
-                        }
-                        count += hi - lo;
-                        let start = from.max(reach);
-                        if start >= to {
-                            continue;
-                        }
-                        let cover = cover(b as usize);
-                        list.ranks.clear();
-                        sampler.progressive_ranks_in_cover(
-                            cover,
-                            start,
-                            to,
-                            usize::MAX,
-                            &mut list.ranks,
-                        );
-                        list.sites.resize(list.ranks.len(), SampleSite::default());
-                        sampler.progressive_cover_sites_with(
-                            cover,
-                            &list.ranks,
-                            &mut list.sites,
-                            scratch,
-                        );
-                        for (&rank, site) in list.ranks.iter().zip(&list.sites) {
-                            let m = evaluate(site);
-                            s += m;
-                            seen += usize::from(m > 0.0);
-                            list.fresh.push((rank, *site));
-                        }
-                        count += list.ranks.len();
-                        drawn += list.ranks.len();
-                        list.runs.push((i as u8, list.fresh.len() as u32));
-                    }
-                    (list.sum, list.in_view) = (s, seen);
-                    (list.evaluated, list.placed) = (count, drawn);
+                    list.double(
+                        bins,
+                        (from, to),
+                        cached,
+                        (sampler, &cover),
+                        &evaluate,
+                        scratch,
+                    );
                 });
             for list in &self.lists[..chunks] {
                 sum += list.sum;
@@ -434,102 +448,13 @@ impl ShownEstimate {
     }
 }
 
-/// The point budget of a pool: see the module docs.
-impl LodPool {
-    /// Room for the ranks a pool draws beyond its prefix (the `budget` of
-    /// [`new`](Self::new)) for views whose multiplier is at most `max`: with base count
-    /// `base`, `base x max` (a view at the clamp everywhere asks for that many); with a
-    /// point budget of `shown` samples, at least [`CLOSE_ROOM`] times `shown x max`,
-    /// since a close view's bins reach past what it shows: 0.012 bounding radii
-    /// above the bunny, a budget of 10^5 needs 2.8 times as many entries with the
-    /// bins split for the view ([`lod_split`](super::lod_split)), 9.5 times without
-    /// (the `lod_budget` bench). The room is used only as views ask: the pool reserves
-    /// memory for its prefix and grows geometrically beyond.
-    pub fn room_for(base: u32, shown: Option<u32>, max: f64) -> usize {
-        let close = shown.map_or(0.0, |s| f64::from(s) * max * CLOSE_ROOM);
-        // `as` saturates; half the address space is more than any pool holds.
-        (((f64::from(base) * max).max(close)) as usize).min(usize::MAX / 2)
-    }
-
-    /// The base count under which `view` shows about `shown` samples (a point budget;
-    /// [`lod_budget`](super::lod_budget)), on the pool's current geometry, at most
-    /// 2^32 (the sequence's length): `None` when the estimate sees nothing in view.
-    /// Cost: [`mean_multiplier`](Self::mean_multiplier)'s.
-    pub fn base_for_shown(&mut self, sampler: &Sampler, view: &ViewLod, shown: f64) -> Option<f64> {
-        let mean = self.mean_multiplier(sampler, view).mean;
-        (mean > 0.0).then(|| (shown / mean).min(4_294_967_296.0))
-    }
-
-    /// The point budget's estimate of `view`'s mean multiplier over the sequence's
-    /// measure ([`lod_budget`](super::lod_budget)), on the pool's current geometry
-    /// (`sampler` must be the pool's). Cost: a multiplier per
-    /// [`PROBES`](super::lod_budget::PROBES); when fewer than
-    /// [`IN_VIEW`](super::lod_budget::IN_VIEW) of them are in view, the bins' bounds
-    /// (which the next [`update`](Self::update) for the view reuses) and the
-    /// refinement's ranks, at most [`REFINE_LIMIT`](super::lod_budget::REFINE_LIMIT);
-    /// nothing for the view of the last call.
-    pub fn mean_multiplier(&mut self, sampler: &Sampler, view: &ViewLod) -> MeanMultiplier {
-        if let Some(kept) = self.estimate.kept(view) {
-            return kept;
-        }
-        let probes = self.estimate.probe(view);
-        if probes.in_view >= IN_VIEW {
-            return self.estimate.keep(view, probes);
-        }
-        self.bound_view(view);
-        self.live.clear();
-        // The roots: they partition the surface (split bins' children are finer
-        // copies of parts of it).
-        self.live.extend(
-            self.multipliers[..self.roots]
-                .iter()
-                .enumerate()
-                .filter(|&(_, &m)| m > 0.0)
-                .map(|(b, _)| b as u32),
-        );
-        let bins = &self.bins;
-        let refined = self.estimate.refine(
-            sampler,
-            view,
-            probes,
-            &self.live,
-            |b| &bins[b].cover,
-            &self.shares,
-        );
-        self.estimate.keep(view, refined)
-    }
-
-    /// The base count a frame thresholds with: `base`, or with a point budget of
-    /// `shown` samples the one under which `view` shows about that many
-    /// ([`base_for_shown`](Self::base_for_shown)), rounded to `f32` (what a GPU's
-    /// uniform holds, so that the CPU's and the GPU's thresholds pick the same ranks),
-    /// and `base` when nothing is in view.
-    pub fn frame_base(
-        &mut self,
-        sampler: &Sampler,
-        view: &ViewLod,
-        base: f64,
-        shown: Option<u32>,
-    ) -> f64 {
-        shown
-            .and_then(|shown| self.base_for_shown(sampler, view, f64::from(shown)))
-            .map_or(base, |b| f64::from(b as f32))
-    }
-
-    /// The point budget's estimator, on the pool's current geometry.
-    pub fn shown_estimate(&self) -> &ShownEstimate {
-        &self.estimate
-    }
-}
-
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::sample::LodPool;
     use crate::sample::lod::fade;
     use crate::surface::tests::torus_sampler;
 
-    fn view(eye: DVec3, target: DVec3) -> ViewLod {
+    pub(in crate::sample::lod) fn view(eye: DVec3, target: DVec3) -> ViewLod {
         let fov = 50f64.to_radians();
         let proj = glam::dcamera::rh::proj::directx::perspective(fov, 1.5, 0.001, 100.0);
         let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
@@ -544,7 +469,12 @@ mod tests {
     }
 
     /// The multipliers of ranks `0..end` under `v`, by a scan.
-    fn multipliers(s: &Sampler, seed: u64, end: u32, v: &ViewLod) -> Vec<f64> {
+    pub(in crate::sample::lod) fn multipliers(
+        s: &Sampler,
+        seed: u64,
+        end: u32,
+        v: &ViewLod,
+    ) -> Vec<f64> {
         let mut sites = vec![SampleSite::default(); end as usize];
         s.progressive_sites_into(seed, 0, &mut sites);
         sites
@@ -558,7 +488,13 @@ mod tests {
     }
 
     /// The ranks below `end` visible under `v` with base `base`, by a scan.
-    fn count(s: &Sampler, seed: u64, end: u32, v: &ViewLod, base: f64) -> usize {
+    pub(in crate::sample::lod) fn count(
+        s: &Sampler,
+        seed: u64,
+        end: u32,
+        v: &ViewLod,
+        base: f64,
+    ) -> usize {
         let lods = multipliers(s, seed, end, v);
         (0..end)
             .zip(lods)
@@ -566,19 +502,10 @@ mod tests {
             .count()
     }
 
-    /// The samples `pool` shows under `v` with base `base`, once it holds them all.
-    fn shown(pool: &mut LodPool, s: &Sampler, v: &ViewLod, base: f64) -> usize {
-        pool.update(s, v, base);
-        assert!(pool.complete(v, base));
-        let mut fades = vec![0.0; pool.len()];
-        pool.fades_into(s, v, base, &mut fades);
-        fades.iter().filter(|&&f| f > 0.0).count()
-    }
-
     /// A camera `distance` above the torus's highest vertex, along its normal, looking
     /// down at it: a small part of the surface in view (the rest of the torus below it
     /// faces away).
-    fn close_view(s: &Sampler, distance: f64) -> ViewLod {
+    pub(in crate::sample::lod) fn close_view(s: &Sampler, distance: f64) -> ViewLod {
         let mesh = s.mesh();
         let (i, &p) = mesh
             .positions()
@@ -605,211 +532,5 @@ mod tests {
             assert_eq!(probed.in_view, lods.iter().filter(|&&m| m > 0.0).count());
             assert!(probed.in_view > 0 && probed.in_view < PROBES);
         }
-    }
-
-    #[test]
-    fn the_estimate_is_close_to_the_visible_count() {
-        let s = torus_sampler();
-        let mut pool = LodPool::new(&s, 7, 0, 1 << 22);
-        // Far and near, from above and from the side, part of the torus out of view.
-        for (eye, target) in [
-            (DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO),
-            (DVec3::new(2.5, 0.5, 0.0), DVec3::ZERO),
-            (DVec3::new(1.6, 0.6, 0.6), DVec3::new(1.0, 0.0, 0.0)),
-        ] {
-            let v = view(eye, target);
-            let estimate = pool.mean_multiplier(&s, &v);
-            // A base under which at most max * base ranks can show: the scan covers them.
-            let base = 20_000.0;
-            let exact = count(&s, 7, (base * v.max) as u32 + 1, &v, base) as f64;
-            let guess = base * estimate.mean;
-            assert!(exact > 1000.0, "{eye}: {exact} shown");
-            assert!(
-                (guess / exact - 1.0).abs() < 0.03,
-                "{eye}: estimate {guess} against {exact} ({estimate:?})"
-            );
-            let b = pool.base_for_shown(&s, &v, exact).expect("in view");
-            assert!((b / base - 1.0).abs() < 0.03, "{eye}: base {b}");
-            // A smaller budget, a proportionally smaller base.
-            let half = pool.base_for_shown(&s, &v, exact / 2.0).expect("in view");
-            assert!((half / b - 0.5).abs() < 1e-12);
-        }
-    }
-
-    #[test]
-    fn a_close_view_refines_the_estimate() {
-        let s = torus_sampler();
-        let mut pool = LodPool::new(&s, 7, 0, 1 << 22);
-        for distance in [0.05, 0.02] {
-            let v = close_view(&s, distance);
-            let probes = pool.shown_estimate().probe(&v);
-            let estimate = pool.mean_multiplier(&s, &v);
-            assert!(probes.in_view < 100, "{distance}: {probes:?}");
-            assert!(estimate.ranks > PROBES as u64 && estimate.evaluated > 0);
-            assert!(
-                estimate.evaluated <= REFINE_LIMIT,
-                "{distance}: {estimate:?}"
-            );
-            // Refined to IN_VIEW ranks in view (0.05), or until the next doubling would
-            // pass the limit (0.02: the view sees a small part of its bins).
-            assert!(
-                estimate.in_view >= IN_VIEW || estimate.evaluated > REFINE_LIMIT / 2,
-                "{distance}: {estimate:?}"
-            );
-            // The budget is shown, within 3%, where the probes alone are far off.
-            let budget = 20_000.0;
-            let base = pool.base_for_shown(&s, &v, budget).expect("in view");
-            let exact = shown(&mut pool, &s, &v, base) as f64;
-            assert!(
-                (exact / budget - 1.0).abs() < 0.03,
-                "{distance}: {exact} shown for {budget} ({estimate:?})"
-            );
-            let guess = probes.mean * base;
-            assert!(
-                (guess / exact - 1.0).abs() > 0.1,
-                "{distance}: the probes alone guess {guess} against {exact}"
-            );
-            // The same view again: the kept estimate.
-            assert_eq!(pool.mean_multiplier(&s, &v), estimate);
-        }
-    }
-
-    #[test]
-    fn the_refined_estimate_is_the_mean_over_a_prefix_for_any_thread_count() {
-        let s = torus_sampler();
-        let v = close_view(&s, 0.3);
-        let on = |threads: usize| {
-            let workers = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("thread pool");
-            workers.install(|| LodPool::new(&s, 7, 0, 1 << 20).mean_multiplier(&s, &v))
-        };
-        let estimate = on(1);
-        assert_eq!(on(3), estimate, "bit for bit");
-        assert!(estimate.ranks > PROBES as u64 && estimate.ranks <= 1 << 20);
-        let lods = multipliers(&s, 7, estimate.ranks as u32, &v);
-        let mean = lods.iter().sum::<f64>() / lods.len() as f64;
-        // The same ranks, summed in another order.
-        assert!(
-            (estimate.mean / mean - 1.0).abs() < 1e-12,
-            "{estimate:?} against {mean}"
-        );
-        let in_view = lods.iter().filter(|&&m| m > 0.0).count();
-        assert_eq!(estimate.in_view, in_view);
-        // One fewer doubling would have seen fewer than IN_VIEW.
-        let half = estimate.ranks as usize / 2;
-        assert!(lods[..half].iter().filter(|&&m| m > 0.0).count() < IN_VIEW);
-    }
-
-    #[test]
-    fn kept_sites_change_the_cost_never_the_estimate() {
-        let s = torus_sampler();
-        let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
-        let far = close_view(&s, 0.3);
-        let first = pool.mean_multiplier(&s, &far);
-        assert_eq!(first.placed, first.evaluated);
-        assert!(first.evaluated > 0);
-        // A camera coming nearer, 3% a step, then back: each estimate equals a fresh
-        // pool's, bit for bit; a step that averages as many ranks as the last reads
-        // most of its sites from the last one.
-        let (mut last, mut same) = (first, 0);
-        for step in (1..16).chain([0]) {
-            let v = close_view(&s, 0.3 * 0.97f64.powi(step));
-            let estimate = pool.mean_multiplier(&s, &v);
-            let fresh = LodPool::new(&s, 7, 0, 1 << 20).mean_multiplier(&s, &v);
-            assert_eq!(
-                (estimate.mean.to_bits(), estimate.ranks, estimate.in_view),
-                (fresh.mean.to_bits(), fresh.ranks, fresh.in_view),
-                "{step}"
-            );
-            assert_eq!(estimate.evaluated, fresh.evaluated);
-            assert_eq!(fresh.placed, fresh.evaluated);
-            if step > 0 && estimate.ranks == last.ranks {
-                assert!(
-                    estimate.placed * 4 < estimate.evaluated,
-                    "{step}: {estimate:?}"
-                );
-                same += 1;
-            }
-            last = estimate;
-        }
-        assert!(same >= 8, "{same} steps at the same doubling");
-    }
-
-    #[test]
-    fn a_view_of_nothing_has_no_base() {
-        let s = torus_sampler();
-        let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
-        let away = view(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 6.0));
-        let estimate = pool.mean_multiplier(&s, &away);
-        assert_eq!(
-            (estimate.mean, estimate.evaluated),
-            (0.0, 0),
-            "{estimate:?}"
-        );
-        assert_eq!(pool.base_for_shown(&s, &away, 1e6), None);
-        // A tiny multiplier: the base is capped at the sequence's length.
-        let far = ViewLod {
-            reference: 1e300,
-            ..view(DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO)
-        };
-        assert_eq!(pool.base_for_shown(&s, &far, 1e6), Some(4_294_967_296.0));
-    }
-
-    #[test]
-    fn deformed_probes_follow_the_mesh() {
-        let s = torus_sampler();
-        let mut pool = LodPool::new(&s, 7, 0, 1 << 20);
-        let v = view(DVec3::new(0.0, 3.0, 3.0), DVec3::ZERO);
-        let before = pool.mean_multiplier(&s, &v).mean;
-        let base = pool.base_for_shown(&s, &v, 1e4).expect("in view");
-        // The torus moved away from the camera: it shows less.
-        let rest = s.mesh();
-        let shift = DVec3::new(0.0, 1.0, 1.0);
-        let shifted: Vec<DVec3> = rest.positions().iter().map(|&p| p - shift).collect();
-        let moved = TriMesh::new(shifted, rest.triangles().to_vec()).expect("mesh");
-        pool.set_geometry(&s, &moved).expect("same topology");
-        let after = pool.mean_multiplier(&s, &v).mean;
-        assert!(after < 0.8 * before, "{after} against {before}");
-        // The kept estimate of the view is dropped with the old geometry.
-        let moved_base = pool.base_for_shown(&s, &v, 1e4).expect("in view");
-        assert!((moved_base * after / (base * before) - 1.0).abs() < 1e-12);
-        // The refinement follows the moved surface: a close view moved with it sees
-        // what it saw on the rest geometry bounded alike (up to rounding).
-        let near = close_view(&s, 0.05);
-        let near_moved = ViewLod {
-            clip_from_world: near.clip_from_world * glam::DMat4::from_translation(shift),
-            eye: near.eye - shift,
-            ..near
-        };
-        let close_moved = pool.mean_multiplier(&s, &near_moved);
-        let mut at_rest = LodPool::new(&s, 7, 0, 1 << 20);
-        at_rest.set_geometry(&s, rest).expect("the rest mesh");
-        let close = at_rest.mean_multiplier(&s, &near);
-        assert!(close.evaluated > 0 && close_moved.ranks == close.ranks);
-        assert_eq!(close_moved.in_view, close.in_view);
-        assert!((close_moved.mean / close.mean - 1.0).abs() < 1e-9);
-        // Moved back (the probes' columns and the bins' bounds rewritten in place): the
-        // same bits as the pool set on the rest mesh once.
-        pool.set_geometry(&s, rest).expect("the rest mesh");
-        let probes = |p: &LodPool| p.shown_estimate().mean_multiplier(&v).to_bits();
-        assert_eq!(probes(&pool), probes(&at_rest));
-        assert_eq!(pool.bins(), at_rest.bins());
-        for b in 0..pool.bins() {
-            assert_eq!(pool.bound(b, &v).to_bits(), at_rest.bound(b, &v).to_bits());
-        }
-        pool.set_geometry(&s, &moved).expect("same topology");
-        let other = TriMesh::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y], vec![[0, 1, 2]])
-            .expect("a triangle");
-        assert!(matches!(
-            pool.shown_estimate().clone().set_geometry(&s, &other),
-            Err(LodError::Mismatch { .. })
-        ));
-        assert!(matches!(
-            pool.set_geometry(&s, &other),
-            Err(LodError::Mismatch { .. })
-        ));
-        assert_eq!(pool.mean_multiplier(&s, &v).mean, after);
     }
 }

@@ -14,8 +14,8 @@ use std::ops::Range;
 
 use glam::{DVec3, DVec4, Vec4Swizzles};
 
-use super::Sampler;
-use super::lod::ViewLod;
+use super::view::ViewLod;
+use crate::sample::Sampler;
 
 /// A sphere holding some faces and a cone holding their vertex normals (hence every
 /// normal interpolated on them), for an upper bound of a view's multiplier there.

@@ -1,6 +1,5 @@
-//! View-dependent level of detail over progressive samples (issue 19): a density
-//! multiplier over the surface from a camera, and the rank threshold that turns it
-//! into a visible set.
+//! A view's level of detail: a density multiplier over the surface from a camera,
+//! and the rank threshold that turns it into a visible set.
 //!
 //! **Multiplier.** For a pinhole camera with focal length `f` in pixels, a surface
 //! element of area `dA` at point `p` with unit normal `n` covers on screen
@@ -17,7 +16,7 @@
 //! `0 <= z <= w`, `w > 0`: wgpu's convention) and, when asked, on faces turned away
 //! from the eye.
 //!
-//! **Visible set.** With progressive samples (rank `k` at `p_k`, [`Sampler::progressive_into`](super::Sampler::progressive_into))
+//! **Visible set.** With progressive samples (rank `k` at `p_k`, [`Sampler::progressive_into`](crate::sample::Sampler::progressive_into))
 //! and a base count `N` (the samples of the whole surface at multiplier 1), rank `k`
 //! is visible when `k < N lod(p_k)`, and its fade weight is
 //! `clamp(N lod(p_k) - k, 0, 1)`: a renderer scales or blends samples by it so that
@@ -78,6 +77,14 @@ pub enum LodError {
         /// Its faces.
         expected_faces: usize,
     },
+    /// A sampler other than the one a pool was built from
+    /// ([`LodPool::drawn_from`](super::LodPool::drawn_from)): the pool's entries are
+    /// sites of its own sampler's sequence.
+    #[error(
+        "level of detail: the pool was built from another sampler (a pool is updated \
+         with the sampler it was built from, or a clone of it)"
+    )]
+    OtherSampler,
     /// A mesh placed by a transform that is not a similarity (uniform positive scale,
     /// rotation, translation): its multiplier would vary per point in a way the pool's
     /// bounds do not follow.
