@@ -515,9 +515,13 @@ impl Sampler {
 
     /// The chains of segment indices used when segments are many relative to samples.
     pub fn chains(&self) -> Vec<&[u32]> {
-        (0..self.chains.len())
-            .map(|i| self.chains.members(i))
-            .collect()
+        self.chains_iter().collect()
+    }
+
+    /// The chains of [`chains`](Self::chains), in order, without collecting them (for
+    /// per-frame checks that must not allocate).
+    pub fn chains_iter(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
+        (0..self.chains.len()).map(|i| self.chains.members(i))
     }
 
     /// Levels of the continuous map inside a leaf of `seg` for a group receiving

@@ -15,6 +15,8 @@ use std::ops::Range;
 use glam::{DVec3, DVec4, Vec4Swizzles};
 
 use super::view::ViewLod;
+#[cfg(target_arch = "x86_64")]
+use crate::cpu::Level;
 use crate::sample::Sampler;
 
 /// A sphere holding some faces and a cone holding their vertex normals (hence every
@@ -203,8 +205,9 @@ impl BoundSet {
     /// approximate instruction).
     pub(super) fn multipliers_into(&self, frustum: &Frustum, first: usize, out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has every feature the function is compiled with.
+        if Level::detected() >= Level::Avx2 {
+            // SAFETY: the CPU has every feature of `Level::Avx2`, which is what the
+            // function is compiled with.
             #[allow(unsafe_code)]
             unsafe {
                 self.multipliers_into_v3(frustum, first, out);

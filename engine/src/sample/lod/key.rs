@@ -5,8 +5,8 @@
 //! Input: a [`Sampler`]. Output: a key that holds the sampler's shared parts (the mesh,
 //! the field and every segment's curve, by reference count) and its chain order, and
 //! says whether another sampler has the same ones. Cost: O(segments) pointer
-//! comparisons and one list of the chains per check (a few hundred nanoseconds on the
-//! bunny), nothing per sample.
+//! comparisons per check, allocating nothing (it runs every frame), nothing per
+//! sample.
 //!
 //! A [`Sampler`]'s clone shares its mesh, field and curves, so it is the same sampler
 //! here; a sampler rebuilt from new cells, a new field or a new mesh is another one,
@@ -61,17 +61,14 @@ impl SamplerKey {
                 .all(|(s, (id, curve, faces))| {
                     s.segment == *id && Arc::ptr_eq(&s.curve, curve) && s.faces.len() == *faces
                 })
-            && {
-                let chains = sampler.chains();
-                chains.len() == self.chain_lengths.len()
-                    && chains
-                        .iter()
-                        .zip(&self.chain_lengths)
-                        .all(|(c, &n)| c.len() == n as usize)
-                    && chains
-                        .iter()
-                        .flat_map(|c| c.iter())
-                        .eq(self.chain_order.iter())
-            }
+            && sampler.chains_iter().len() == self.chain_lengths.len()
+            && sampler
+                .chains_iter()
+                .zip(&self.chain_lengths)
+                .all(|(c, &n)| c.len() == n as usize)
+            && sampler
+                .chains_iter()
+                .flat_map(|c| c.iter())
+                .eq(self.chain_order.iter())
     }
 }

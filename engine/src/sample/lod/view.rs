@@ -28,6 +28,8 @@
 
 use glam::{DAffine3, DMat4, DVec3, DVec4};
 
+#[cfg(target_arch = "x86_64")]
+use crate::cpu::Level;
 use crate::mesh::TriMesh;
 
 /// A camera's level-of-detail request, in plain numbers.
@@ -219,8 +221,9 @@ impl ViewLod {
     /// `out`.
     pub(crate) fn multipliers_into(&self, p: [&[f64]; 3], n: [&[f64]; 3], out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has every feature the function is compiled with.
+        if Level::detected() >= Level::Avx2 {
+            // SAFETY: the CPU has every feature of `Level::Avx2`, which is what the
+            // function is compiled with.
             #[allow(unsafe_code)]
             unsafe {
                 self.multipliers_v3(p, n, out);
