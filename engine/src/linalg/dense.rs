@@ -7,7 +7,7 @@
 //!
 //! Kept rather than faer's `llt`: on a 300 x 300 Hermitian positive definite matrix
 //! (the size of a coarsest level) faer's solve agrees with this one to 4.9e-13 but only
-//! 2 of the 300 entries have the same bits (`cargo test --release -p strata-engine --lib linalg::faer_comparison -- --ignored --nocapture`),
+//! 2 of the 300 entries have the same bits (`cargo run --release -p strata-bench --bin linalg_faer`),
 //! so every multigrid-preconditioned field would change; and this one solves the
 //! three-column vectors of [`pcg::solve_three`](super::pcg::solve_three) with the
 //! same operations per column as a single column, which that solve's bits rest on.

@@ -45,8 +45,6 @@ mod csr;
 mod dense;
 pub mod dissection;
 mod error;
-#[cfg(test)]
-mod faer_comparison;
 pub(crate) mod lanczos;
 pub mod pcg;
 mod scalar;

@@ -7,16 +7,17 @@
 //! thread count.
 //!
 //! Kept rather than faer 0.24's matrix-free `conjugate_gradient` (which takes any
-//! preconditioner), measured with the same V-cycle as its preconditioner on a
+//! preconditioner). Measured with the same V-cycle as both preconditioners on a
 //! connection-like system of the bunny Loop-subdivided once (139k unknowns, complex
-//! Hermitian, relative tolerance 1e-6; `cargo test --release -p strata-engine --lib linalg::faer_comparison -- --ignored --nocapture`,
-//! 2 cores): this solve took 7 iterations, 135 ms on one thread, with the same bits
-//! on one and two threads; faer's stopped after 1 iteration at an answer 3.1 away
-//! (its recursively updated residual had fallen under the tolerance) and its bits
-//! changed with the thread count. faer's is block conjugate gradients (the columns
-//! share one Krylov space), so it could not give [`solve_three`]'s per-column results,
-//! which must equal three single solves bit for bit; and its sums use faer's own
-//! kernels, not the fixed block order the field's thread-count invariance rests on.
+//! Hermitian, relative tolerance 1e-6; `cargo run --release -p strata-bench --bin
+//! linalg_faer`, 2 cores, medians of 5): both take 7 iterations and the same time
+//! (275 against 273 ms on one thread, 286 against 291 on two: the V-cycle and the
+//! products, ours in both, are the cost), and agree to 9e-16, but not bit for bit. So
+//! faer's would buy no speed and would change every multigrid-solved field's bits; and
+//! it is block conjugate gradients (the columns share one Krylov space), so it could
+//! not give [`solve_three`]'s per-column results, which must equal three single solves
+//! bit for bit. (faer 0.24.4 also leaves its residual unset when told the initial guess
+//! is zero; the comparison passes a zeroed guess as `MaybeNonZero`.)
 
 use glam::DVec3;
 use rayon::prelude::*;
