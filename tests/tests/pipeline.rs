@@ -128,6 +128,47 @@ fn cli_writes_ply_and_csv_that_read_back() {
     );
 }
 
+/// `strata sample --threads N` runs on a pool of N workers beside the process's global
+/// pool (which the binary builds at start-up), and writes the same bytes for any N;
+/// counts outside 1..=MAX_THREADS are refused with the range.
+#[test]
+fn cli_sample_threads_gives_the_same_file_for_any_count() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let config = config_files()
+        .into_iter()
+        .find(|p| p.ends_with("default.ron"))
+        .expect("default.ron is bundled");
+    let config = config.to_str().expect("utf-8 path");
+    // The global pool exists already, as in the binary.
+    let _ = rayon::ThreadPoolBuilder::new().build_global();
+    let mut files = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = dir.path().join(format!("t{threads}.ply"));
+        strata(&[
+            "sample",
+            config,
+            "-n",
+            "70001",
+            "--threads",
+            threads,
+            "-o",
+            out.to_str().expect("utf-8"),
+        ])
+        .unwrap_or_else(|e| panic!("--threads {threads}: {}", one_line(&e)));
+        files.push(std::fs::read(&out).expect("written"));
+    }
+    assert!(files[0] == files[1] && files[1] == files[2]);
+    for bad in ["0", "1025", "100000000"] {
+        let e =
+            strata(&["sample", config, "-n", "10", "--threads", bad]).expect_err("out of range");
+        let message = one_line(&e);
+        assert!(
+            message.contains(&format!("--threads {bad}")) && message.contains("1 to 1024"),
+            "{message}"
+        );
+    }
+}
+
 #[test]
 fn cli_progressive_order_nests_its_prefixes() {
     // `--order progressive`: the samples of 500 are the first 500 of 800, bit for bit

@@ -30,7 +30,8 @@ pub struct SampleArgs {
     /// Output file: `.ply` (binary) or `.csv`, chosen by extension.
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
-    /// Worker threads (default: one per core). The samples do not depend on it.
+    /// Worker threads, 1 to 1024 (default: one per core). The samples do not depend on
+    /// it.
     #[arg(long)]
     pub threads: Option<usize>,
     /// Sample order: `stratified` (exactly stratified for this count) or
@@ -55,14 +56,30 @@ pub enum Order {
     Progressive,
 }
 
-/// Runs `strata sample`.
+/// Most worker threads `--threads` takes: far beyond any core count, and few enough
+/// that starting them cannot exhaust a process's threads.
+pub const MAX_THREADS: usize = 1024;
+
+/// Runs `strata sample`: on a pool of `--threads` workers when given (the samples are
+/// the same for any count), else on the process's pool.
 pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
-    if let Some(threads) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build_global()
-            .context("could not start the thread pool")?;
+    let Some(threads) = args.threads else {
+        return run_here(args);
+    };
+    if !(1..=MAX_THREADS).contains(&threads) {
+        anyhow::bail!("--threads {threads}: give a count from 1 to {MAX_THREADS}");
     }
+    // A pool of its own: the process's global pool is built at start-up (the binary
+    // makes its main thread a worker), and rayon's global pool cannot be rebuilt.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .with_context(|| format!("could not start {threads} worker threads"))?;
+    pool.install(|| run_here(args))
+}
+
+/// [`run`]'s work, on the pool it is called from.
+fn run_here(args: &SampleArgs) -> anyhow::Result<()> {
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[args.out.as_deref()])?;
     let out = match &args.out {
