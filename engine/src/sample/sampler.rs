@@ -719,7 +719,7 @@ mod tests {
 
     /// The torus fixture of `surface`, preprocessed with the default options.
     fn torus() -> crate::surface::Preprocessed {
-        let (mesh, field) = crate::surface::tests::torus_case();
+        let (mesh, field) = crate::fixtures::torus_case();
         crate::surface::Preprocessed::build(mesh, field, &crate::surface::SurfaceOptions::default())
             .expect("preprocessed")
     }

@@ -314,7 +314,7 @@ mod tests {
 
     use super::*;
     use crate::mesh::TriMesh;
-    use crate::segment::seeds::tests::{lattice, turning_field};
+    use crate::fixtures::{lattice, turning_field};
     use crate::segment::walk::{face_graph, local_seeds};
     use crate::segment::{WalkSystem, face_frames, place_seeds, random_walk, walk_weights};
 

@@ -759,7 +759,7 @@ mod tests {
 
     #[test]
     fn costs_and_walk_weights_do_not_depend_on_the_thread_count() {
-        let (mesh, field) = crate::surface::tests::torus_case();
+        let (mesh, field) = crate::fixtures::torus_case();
         let frames = crate::segment::face_frames(&mesh, &field);
         let blocked: Vec<bool> = (0..mesh.edge_count()).map(|e| e % 11 == 0).collect();
         let run = || {

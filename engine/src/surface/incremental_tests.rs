@@ -6,7 +6,7 @@ use super::*;
 use crate::field::FieldSpec;
 use crate::mesh::NONE;
 use crate::surface::Preprocessed;
-use crate::surface::tests::torus_case;
+use crate::fixtures::torus_case;
 
 /// The stages of a build that segments.
 const ALL_STAGES: [BuildStage; 4] = [

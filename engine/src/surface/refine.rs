@@ -564,7 +564,7 @@ fn most_different_faces(frames: &FaceField, faces: &[u32]) -> [u32; 2] {
 mod tests {
     use super::*;
     use crate::mesh::shapes;
-    use crate::surface::merge::tests::field_along;
+    use crate::fixtures::field_along;
 
     /// The unit plane of `2 n^2` faces with a 3:1 field along x, turned by 90 degrees
     /// inside the disc of `radius` about `centre`: its split context and all its faces.
