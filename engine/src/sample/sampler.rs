@@ -685,18 +685,14 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
 
 #[cfg(test)]
 mod tests {
+    use crate::fixtures::{along_x_2to1};
     use super::advance;
 
     #[test]
     fn a_field_of_another_mesh_is_an_error_not_a_panic() {
-        use crate::field::FieldSpec;
         use crate::mesh::shapes;
         use std::sync::Arc;
-        let spec = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        };
+        let spec = along_x_2to1();
         let mesh = Arc::new(shapes::plane(1.0, 4).expect("plane"));
         let field = Arc::new(spec.build(&mesh).expect("field"));
         let (good, _) = crate::planar::sampler(mesh.clone(), field, &Default::default())

@@ -655,7 +655,7 @@ mod tests {
     use crate::field::FieldSpec;
     use crate::mesh::shapes;
     use crate::segment::walk::walk_weights;
-    use crate::fixtures::{along_x, field_on, turning_plane};
+    use crate::fixtures::{self, along_x, field_on, turning_plane};
 
     /// The seeding's inputs over the whole of `mesh`: face frames, the walk's weights
     /// with no edge cut, and a mask of every face.
@@ -881,13 +881,7 @@ mod tests {
             .collect();
         let half_cylinder = TriMesh::new(bent, plane.triangles().to_vec()).expect("half cylinder");
         for (mesh, bounded_seeds_at_least) in [(plane, 1), (half_cylinder, 2)] {
-            let field = FieldSpec::Constant {
-                direction: [0.0, 1.0, 0.0],
-                anisotropy: 3.0,
-                density: 1.0,
-            }
-            .build(&mesh)
-            .expect("field");
+            let field = field_on(&mesh, &fixtures::constant([0.0, 1.0, 0.0], 3.0));
             let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
             let area = mesh.area();
             let eighth = RegionLimits {

@@ -336,6 +336,7 @@ pub fn random_walk(
 
 #[cfg(test)]
 mod tests {
+    use crate::fixtures::{along_x_2to1};
     use std::f64::consts::{FRAC_PI_4, PI};
 
     use super::*;
@@ -719,11 +720,7 @@ mod tests {
 
     #[test]
     fn sphere_and_torus_are_labelled_everywhere() {
-        let spec = crate::field::FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        };
+        let spec = along_x_2to1();
         for mesh in [
             shapes::sphere(1.0, 12).expect("sphere"),
             shapes::torus(2.0, 0.7, 32).expect("torus"),

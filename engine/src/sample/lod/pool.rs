@@ -510,8 +510,8 @@ impl LodPool {
 
 #[cfg(test)]
 mod tests {
+    use crate::fixtures::{along_x_2to1_on};
     use super::*;
-    use crate::field::FieldSpec;
     use crate::mesh::TriMesh;
     use crate::sample::lod::DRAW_AHEAD;
     use crate::fixtures::lod::{Frame, check_held, held_visible, moved, scan, view, view_at};
@@ -962,13 +962,7 @@ mod tests {
     #[test]
     fn a_single_segment_sampler_enumerates_every_rank() {
         let mesh = Arc::new(crate::mesh::shapes::plane(1.0, 4).expect("plane"));
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = along_x_2to1_on(&mesh);
         let pre =
             Preprocessed::build(mesh, Arc::new(field), &SurfaceOptions::default()).expect("built");
         let s = pre.sampler;
