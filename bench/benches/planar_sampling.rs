@@ -3,6 +3,7 @@
 
 use std::hint::black_box;
 use std::sync::Arc;
+use strata_engine::fixtures::{along_x, isotropic};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use strata_engine::curve::CurveOptions;
@@ -13,22 +14,8 @@ use strata_engine::sample::Sample;
 
 fn fields() -> Vec<(&'static str, FieldSpec)> {
     vec![
-        (
-            "isotropic",
-            FieldSpec::Constant {
-                direction: [1.0, 0.0, 0.0],
-                anisotropy: 1.0,
-                density: 1.0,
-            },
-        ),
-        (
-            "anisotropic-4to1",
-            FieldSpec::Constant {
-                direction: [1.0, 0.0, 0.0],
-                anisotropy: 4.0,
-                density: 1.0,
-            },
-        ),
+        ("isotropic", isotropic()),
+        ("anisotropic-4to1", along_x(4.0)),
         (
             "gaussian",
             FieldSpec::Planar {

@@ -3,6 +3,7 @@
 //! bench/RESULTS.md), and `strata analyze` end to end.
 
 use std::sync::Arc;
+use strata_engine::fixtures::{along_x, field_on};
 
 use clap::Parser;
 use glam::{DVec2, DVec3};
@@ -18,15 +19,7 @@ use strata_engine::surface::{Preprocessed, SurfaceOptions, segmentation_from_lab
 
 fn unit_square(anisotropy: f64) -> Sampler {
     let mesh = Arc::new(shapes::plane(1.0, 16).expect("plane"));
-    let field = Arc::new(
-        FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field"),
-    );
+    let field = Arc::new(field_on(&mesh, &along_x(anisotropy)));
     planar::sampler(mesh, field, &CurveOptions::default())
         .expect("sampler")
         .0

@@ -29,6 +29,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
+use strata_engine::fixtures::oblique;
 
 use glam::DVec3;
 use strata_engine::field::{FieldSpec, format_field_file, parse_field_file};
@@ -181,11 +182,7 @@ fn check_field_file(bytes: &[u8]) -> Result<bool, String> {
 
 /// A constant anisotropic field.
 fn constant_field() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.3, 0.2],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
+    oblique(3.0)
 }
 
 /// The meshes field files are read on (built once): a plane, a sphere and a tetrahedron.

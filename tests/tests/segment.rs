@@ -2,6 +2,7 @@
 //! shared meshes: partition, connectivity, disc topology, singularity indices.
 
 use std::collections::{HashSet, VecDeque};
+use strata_engine::fixtures::{along_x, field_on, isotropic_on, oblique};
 
 use strata_engine::field::{FieldSpec, TensorField};
 use strata_engine::mesh::{NONE, TriMesh, shapes};
@@ -10,11 +11,7 @@ use strata_engine::segment::{SegmentOptions, Segmentation, segment};
 use strata_tests::{corpus_dir, shared_mesh_dir};
 
 fn projected() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.3, 0.2],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
+    oblique(3.0)
 }
 
 /// Every invariant the parameterization relies on.
@@ -79,13 +76,7 @@ fn index_sum(seg: &Segmentation) -> f64 {
 #[test]
 fn constant_field_on_a_plane_is_one_segment() {
     let mesh = shapes::plane(1.0, 24).expect("plane");
-    let field = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("field");
+    let field = field_on(&mesh, &along_x(3.0));
     let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
     check(&mesh, &seg, "plane");
     assert_eq!(seg.segments.len(), 1);
@@ -189,13 +180,7 @@ fn same_seed_same_segments_whatever_the_thread_count() {
 fn awkward_inputs_still_segment_into_discs() {
     // Isotropic everywhere: directions are arbitrary, the walk must still partition.
     let mesh = shapes::sphere(1.0, 6).expect("sphere");
-    let iso = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("field");
+    let iso = isotropic_on(&mesh);
     let seg = segment(&mesh, &iso, &SegmentOptions::default()).expect("segment");
     check(&mesh, &seg, "isotropic sphere");
     // Corpus meshes: several components, boundaries, non-manifold edges, slivers.

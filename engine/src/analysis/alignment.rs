@@ -67,8 +67,8 @@ pub fn face_angle(mesh: &TriMesh, field: &TensorField, f: u32, uv: [DVec2; 3]) -
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{along_x_2to1_on};
     use super::*;
+    use crate::fixtures::along_x_2to1_on;
     use crate::mesh::shapes;
 
     #[test]

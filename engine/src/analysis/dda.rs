@@ -446,10 +446,10 @@ fn transform(hist: &[f64], bins_half: usize, bin: f64, k: usize, step: f64) -> V
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{isotropic_on};
     use super::*;
     use crate::analysis::baseline;
     use crate::analysis::spectrum::periodogram;
+    use crate::fixtures::isotropic_on;
 
     fn mean_over(r: &RadialProfile, from: f64, to: f64) -> f64 {
         let v: Vec<f64> = r

@@ -266,8 +266,8 @@ fn eliminate(neighbours: &[Vec<(u32, f64)>], mut weight: Vec<f64>, n: usize) -> 
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{isotropic_on};
     use super::*;
+    use crate::fixtures::isotropic_on;
     use crate::mesh::shapes;
 
     fn closest_pair(s: &[Sample]) -> f64 {

@@ -685,8 +685,8 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{along_x_2to1};
     use super::advance;
+    use crate::fixtures::along_x_2to1;
 
     #[test]
     fn a_field_of_another_mesh_is_an_error_not_a_panic() {

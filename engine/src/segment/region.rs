@@ -255,9 +255,9 @@ pub fn touched_segments<S: AsRef<[u32]>>(
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{along_x_2to1_on, constant, field_on, isotropic_on};
     use super::*;
     use crate::field::FieldSpec;
+    use crate::fixtures::{along_x_2to1_on, constant, field_on, isotropic_on};
     use crate::mesh::shapes;
     use crate::segment::segment;
 

@@ -653,9 +653,9 @@ mod tests {
 
     use super::*;
     use crate::field::FieldSpec;
+    use crate::fixtures::{self, along_x, field_on, turning_plane};
     use crate::mesh::shapes;
     use crate::segment::walk::walk_weights;
-    use crate::fixtures::{self, along_x, field_on, turning_plane};
 
     /// The seeding's inputs over the whole of `mesh`: face frames, the walk's weights
     /// with no edge cut, and a mask of every face.

@@ -336,13 +336,13 @@ pub fn random_walk(
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{along_x_2to1};
+    use crate::fixtures::along_x_2to1;
     use std::f64::consts::{FRAC_PI_4, PI};
 
     use super::*;
     use crate::field::TensorField;
-    use crate::mesh::shapes;
     use crate::fixtures::{along_x, field_on, lattice, turning_field, turning_plane};
+    use crate::mesh::shapes;
     use crate::segment::seeds::{face_frames, place_seeds};
 
     fn no_blocks(mesh: &TriMesh) -> Vec<bool> {
@@ -573,7 +573,13 @@ mod tests {
     fn blocked_edges_are_never_crossed() {
         let mesh = shapes::plane(1.0, 16).expect("plane");
         let blocked = middle_line(&mesh);
-        let (_, seeds, labels) = segment(&mesh, &field_on(&mesh, &along_x(2.0)), FRAC_PI_4, &blocked, 3);
+        let (_, seeds, labels) = segment(
+            &mesh,
+            &field_on(&mesh, &along_x(2.0)),
+            FRAC_PI_4,
+            &blocked,
+            3,
+        );
         assert_eq!(seeds.len(), 2);
         let parts = connected_parts(&mesh, &labels, &blocked);
         for l in [labels, parts] {

@@ -229,8 +229,8 @@ fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::field_along;
     use crate::field::TensorField;
+    use crate::fixtures::field_along;
     use crate::param::parameterize;
     use std::collections::BTreeMap;
 

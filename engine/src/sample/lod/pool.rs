@@ -510,12 +510,12 @@ impl LodPool {
 
 #[cfg(test)]
 mod tests {
-    use crate::fixtures::{along_x_2to1_on};
     use super::*;
-    use crate::mesh::TriMesh;
-    use crate::sample::lod::DRAW_AHEAD;
+    use crate::fixtures::along_x_2to1_on;
     use crate::fixtures::lod::{Frame, check_held, held_visible, moved, scan, view, view_at};
     use crate::fixtures::torus_sampler;
+    use crate::mesh::TriMesh;
+    use crate::sample::lod::DRAW_AHEAD;
     use crate::surface::{Preprocessed, SurfaceOptions};
     use std::sync::Arc;
 
@@ -875,7 +875,6 @@ mod tests {
         let held = check_held(&ahead, &s, 5);
         assert!(exact.ranks().iter().all(|k| held.binary_search(k).is_ok()));
     }
-
 
     #[test]
     fn bounds_follow_a_deformed_mesh() {

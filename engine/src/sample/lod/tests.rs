@@ -3,13 +3,13 @@
 
 use glam::DVec3;
 
-use crate::fixtures::lod::{Frame, check_held, held_visible, moved};
 use super::split::{SPLIT_ROOM, SPLIT_WAYS};
 use super::{LodError, LodPool, PoolChange, ViewLod};
+use crate::fixtures::lod::{Frame, check_held, held_visible, moved};
+use crate::fixtures::torus_sampler;
 use crate::mesh::TriMesh;
 use crate::sample::faces::position_normal;
 use crate::sample::{SampleSite, Sampler};
-use crate::fixtures::torus_sampler;
 
 /// The splits of close views.
 mod splits {
