@@ -3,11 +3,11 @@
 
 use std::hint::black_box;
 use std::sync::Arc;
-use strata_engine::fixtures::{along_x, isotropic};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use strata_engine::curve::CurveOptions;
 use strata_engine::field::{FieldSpec, PlanarDensity};
+use strata_engine::fixtures::{along_x, isotropic};
 use strata_engine::mesh::shapes;
 use strata_engine::planar;
 use strata_engine::sample::Sample;

@@ -3,7 +3,6 @@
 //! bench/RESULTS.md), and `strata analyze` end to end.
 
 use std::sync::Arc;
-use strata_engine::fixtures::{along_x, field_on};
 
 use clap::Parser;
 use glam::{DVec2, DVec3};
@@ -12,6 +11,7 @@ use strata_engine::analysis::spectrum::periodogram;
 use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, ShapeFamily, baseline};
 use strata_engine::curve::CurveOptions;
 use strata_engine::field::{FieldSpec, PlanarDensity, TensorField};
+use strata_engine::fixtures::{along_x, field_on};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::planar;
 use strata_engine::sample::{Sample, Sampler};

@@ -2,11 +2,11 @@
 //! chains (section 6.2) keeps the discrepancy down where independent segments raise it.
 
 use std::sync::Arc;
-use strata_engine::fixtures::isotropic_on;
 
 use glam::DVec2;
 use strata_engine::analysis::{star_discrepancy_l2, star_discrepancy_sup};
 use strata_engine::curve::{CurveDomain, CurveOptions, SegmentCurve};
+use strata_engine::fixtures::isotropic_on;
 use strata_engine::mesh::shapes;
 use strata_engine::sample::{Sample, Sampler, SegmentSampling};
 

@@ -4,11 +4,11 @@
 //! same code measures uniform random sampling as a reference.
 
 use std::sync::Arc;
-use strata_engine::fixtures::{along_x, isotropic};
 
 use glam::DVec2;
 use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, baseline};
 use strata_engine::curve::CurveOptions;
+use strata_engine::fixtures::{along_x, isotropic};
 use strata_engine::mesh::shapes;
 use strata_engine::planar;
 use strata_engine::sample::Sampler;

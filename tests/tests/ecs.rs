@@ -4,11 +4,11 @@
 
 use std::collections::HashSet;
 use std::sync::Arc;
-use strata_engine::fixtures::{field_on, oblique};
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use strata_engine::field::TensorField;
+use strata_engine::fixtures::{field_on, oblique};
 use strata_engine::mesh::{NONE, TriMesh};
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
 use strata_systems::ecs::{

@@ -6,11 +6,11 @@
 
 use std::sync::Arc;
 use std::time::Duration;
-use strata_engine::fixtures::constant;
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
 use strata_engine::field::TensorField;
+use strata_engine::fixtures::constant;
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::sample::Sample;
 use strata_engine::surface::SurfaceOptions;

@@ -29,10 +29,10 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-use strata_engine::fixtures::oblique;
 
 use glam::DVec3;
 use strata_engine::field::{FieldSpec, format_field_file, parse_field_file};
+use strata_engine::fixtures::oblique;
 use strata_engine::io;
 use strata_engine::mesh::{MeshError, TriMesh, shapes};
 use strata_engine::rng::Rng;

@@ -4,9 +4,9 @@
 //! GPU and always run.
 
 use std::path::Path;
-use strata_engine::fixtures::along_x_2to1_on;
 
 use glam::Vec3;
+use strata_engine::fixtures::along_x_2to1_on;
 use strata_engine::sample::{Sample, SampleSite};
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::buffers::{MIN_CAPACITY, next_capacity};

@@ -7,10 +7,10 @@
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use strata_engine::fixtures::{constant, field_on};
 
 use bevy_app::{App, Update};
 use bevy_ecs::prelude::*;
+use strata_engine::fixtures::{constant, field_on};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::sample::Sample;
 use strata_engine::surface::SurfaceOptions;

@@ -2,17 +2,13 @@
 //! shared meshes: partition, connectivity, disc topology, singularity indices.
 
 use std::collections::{HashSet, VecDeque};
-use strata_engine::fixtures::{along_x, field_on, isotropic_on, oblique};
 
 use strata_engine::field::{FieldSpec, TensorField};
+use strata_engine::fixtures::{along_x, field_on, isotropic_on, oblique, torus_case};
 use strata_engine::mesh::{NONE, TriMesh, shapes};
 use strata_engine::segment::topology::patch_topology;
 use strata_engine::segment::{SegmentOptions, Segmentation, segment};
 use strata_tests::{corpus_dir, shared_mesh_dir};
-
-fn projected() -> FieldSpec {
-    oblique(3.0)
-}
 
 /// Every invariant the parameterization relies on.
 fn check(mesh: &TriMesh, seg: &Segmentation, name: &str) {
@@ -112,7 +108,7 @@ fn closed_shapes_have_index_sum_equal_to_euler_characteristic() {
         ("torus", shapes::torus(1.0, 0.35, 24).expect("torus")),
         ("genus2", shapes::genus2(1.0, 2).expect("genus2")),
     ] {
-        let field = projected().build(&mesh).expect("field");
+        let field = oblique(3.0).build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
         check(&mesh, &seg, name);
         assert_eq!(
@@ -131,7 +127,7 @@ fn every_shared_mesh_segments_into_discs() {
     };
     for name in strata_tests::SHARED_MESHES {
         let mesh = strata_engine::io::load(&dir.join(format!("{name}.obj"))).expect("mesh");
-        let field = projected().build(&mesh).expect("field");
+        let field = oblique(3.0).build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
         check(&mesh, &seg, name);
         // Poincare-Hopf on closed meshes, against the Euler characteristic of the
@@ -164,8 +160,7 @@ fn curvature_field_on_spot_keeps_poincare_hopf() {
 
 #[test]
 fn same_seed_same_segments_whatever_the_thread_count() {
-    let mesh = shapes::torus(1.0, 0.4, 20).expect("torus");
-    let field = projected().build(&mesh).expect("field");
+    let (mesh, field) = torus_case();
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -193,7 +188,7 @@ fn awkward_inputs_still_segment_into_discs() {
     ] {
         let path = corpus_dir().join(file);
         let mesh = strata_engine::io::load(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
-        let field = projected().build(&mesh).expect("field");
+        let field = oblique(3.0).build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default())
             .unwrap_or_else(|e| panic!("{file}: {e}"));
         check(&mesh, &seg, file);

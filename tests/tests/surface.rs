@@ -2,9 +2,9 @@
 //! splitting, cells, samples) on built-in shapes and the shared meshes.
 
 use std::sync::Arc;
-use strata_engine::fixtures::{constant, isotropic, oblique};
 
 use strata_engine::field::FieldSpec;
+use strata_engine::fixtures::{constant, isotropic, oblique};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
 use strata_tests::shared_mesh_dir;

@@ -1,4 +1,3 @@
-use crate::fixtures::{along_x, constant, isotropic, isotropic_on};
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
@@ -6,6 +5,7 @@ use glam::{DVec2, DVec3};
 use super::*;
 use crate::curve::{barycentric, clip_triangle};
 use crate::field::{FieldSpec, PlanarDensity};
+use crate::fixtures::{along_x, constant, isotropic, isotropic_on};
 use crate::mesh::shapes;
 use crate::rng::Rng;
 use crate::sample::Sample;

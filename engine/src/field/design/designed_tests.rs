@@ -2,11 +2,11 @@
 //! counts), alignment to curvature, resolution independence, smoothness against the
 //! projected constant field, constraints, settings and errors.
 
-use crate::fixtures::{field_on, oblique};
 use glam::DVec3;
 
 use super::*;
 use crate::field::{FieldSpec, eigen_in_plane, line_field_energy};
+use crate::fixtures::{field_on, oblique};
 use crate::io::shared_mesh;
 use crate::mesh::{TriMesh, loop_subdivide, shapes};
 use crate::segment::{Singularity, detect_singularities, line_angle};
