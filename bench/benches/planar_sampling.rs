@@ -7,28 +7,15 @@ use std::sync::Arc;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use strata_engine::curve::CurveOptions;
 use strata_engine::field::{FieldSpec, PlanarDensity};
+use strata_engine::fixtures::{along_x, isotropic};
 use strata_engine::mesh::shapes;
 use strata_engine::planar;
 use strata_engine::sample::Sample;
 
 fn fields() -> Vec<(&'static str, FieldSpec)> {
     vec![
-        (
-            "isotropic",
-            FieldSpec::Constant {
-                direction: [1.0, 0.0, 0.0],
-                anisotropy: 1.0,
-                density: 1.0,
-            },
-        ),
-        (
-            "anisotropic-4to1",
-            FieldSpec::Constant {
-                direction: [1.0, 0.0, 0.0],
-                anisotropy: 4.0,
-                density: 1.0,
-            },
-        ),
+        ("isotropic", isotropic()),
+        ("anisotropic-4to1", along_x(4.0)),
         (
             "gaussian",
             FieldSpec::Planar {

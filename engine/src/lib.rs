@@ -25,6 +25,8 @@ mod cpu;
 pub mod curve;
 mod fast_map;
 pub mod field;
+#[cfg(any(test, feature = "fixtures"))]
+pub mod fixtures;
 pub mod io;
 pub mod linalg;
 pub mod mesh;

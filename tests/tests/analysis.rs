@@ -11,6 +11,7 @@ use strata_engine::analysis::spectrum::periodogram;
 use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, ShapeFamily, baseline};
 use strata_engine::curve::CurveOptions;
 use strata_engine::field::{FieldSpec, PlanarDensity, TensorField};
+use strata_engine::fixtures::{along_x, field_on};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::planar;
 use strata_engine::sample::{Sample, Sampler};
@@ -18,15 +19,7 @@ use strata_engine::surface::{Preprocessed, SurfaceOptions, segmentation_from_lab
 
 fn unit_square(anisotropy: f64) -> Sampler {
     let mesh = Arc::new(shapes::plane(1.0, 16).expect("plane"));
-    let field = Arc::new(
-        FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field"),
-    );
+    let field = Arc::new(field_on(&mesh, &along_x(anisotropy)));
     planar::sampler(mesh, field, &CurveOptions::default())
         .expect("sampler")
         .0

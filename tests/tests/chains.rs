@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::DVec2;
 use strata_engine::analysis::{star_discrepancy_l2, star_discrepancy_sup};
 use strata_engine::curve::{CurveDomain, CurveOptions, SegmentCurve};
-use strata_engine::field::FieldSpec;
+use strata_engine::fixtures::isotropic_on;
 use strata_engine::mesh::shapes;
 use strata_engine::sample::{Sample, Sampler, SegmentSampling};
 
@@ -15,15 +15,7 @@ use strata_engine::sample::{Sample, Sampler, SegmentSampling};
 fn blocks(k: u32) -> Sampler {
     let res = 4 * k;
     let mesh = Arc::new(shapes::plane(1.0, res).expect("plane"));
-    let field = Arc::new(
-        FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 1.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field"),
-    );
+    let field = Arc::new(isotropic_on(&mesh));
     let mut groups: Vec<Vec<u32>> = vec![Vec::new(); (k * k) as usize];
     for (f, t) in mesh.triangles().iter().enumerate() {
         let c = t

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use glam::DVec2;
 use strata_engine::analysis::{Discrepancy, DiscrepancyCurve, baseline};
 use strata_engine::curve::CurveOptions;
-use strata_engine::field::FieldSpec;
+use strata_engine::fixtures::{along_x, isotropic};
 use strata_engine::mesh::shapes;
 use strata_engine::planar;
 use strata_engine::sample::Sampler;
@@ -22,11 +22,7 @@ fn ns() -> Vec<usize> {
 
 fn isotropic_sampler() -> Sampler {
     let mesh = Arc::new(shapes::plane(1.0, 16).expect("plane"));
-    let spec = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    };
+    let spec = isotropic();
     let field = Arc::new(spec.build(&mesh).expect("field"));
     planar::sampler(mesh, field, &CurveOptions::default())
         .expect("sampler")
@@ -90,11 +86,7 @@ fn four_to_one_sampling_is_low_discrepancy() {
     // Axis-aligned boxes map to boxes of the same relative area under the field's
     // axis-aligned linear map, so the world-space box discrepancy is the metric one.
     let mesh = Arc::new(shapes::plane(1.0, 16).expect("plane"));
-    let spec = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 4.0,
-        density: 1.0,
-    };
+    let spec = along_x(4.0);
     let field = Arc::new(spec.build(&mesh).expect("field"));
     let sampler = planar::sampler(mesh, field, &CurveOptions::default())
         .expect("sampler")

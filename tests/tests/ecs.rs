@@ -7,7 +7,8 @@ use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
-use strata_engine::field::{FieldSpec, TensorField};
+use strata_engine::field::TensorField;
+use strata_engine::fixtures::{field_on, oblique};
 use strata_engine::mesh::{NONE, TriMesh};
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
 use strata_systems::ecs::{
@@ -24,15 +25,7 @@ fn bunny() -> Option<Arc<TriMesh>> {
 }
 
 fn projected(mesh: &TriMesh) -> Arc<TensorField> {
-    Arc::new(
-        FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 3.0,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("field"),
-    )
+    Arc::new(field_on(mesh, &oblique(3.0)))
 }
 
 /// Longest wait for a build (the bunny on a busy machine).

@@ -9,7 +9,8 @@ use std::time::Duration;
 
 use bevy_ecs::prelude::*;
 use glam::DVec3;
-use strata_engine::field::{FieldSpec, TensorField};
+use strata_engine::field::TensorField;
+use strata_engine::fixtures::constant;
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::sample::Sample;
 use strata_engine::surface::SurfaceOptions;
@@ -22,11 +23,7 @@ const LIMIT: Duration = Duration::from_secs(120);
 
 /// A 3:1 field along `direction` (projected into the tangent planes).
 fn field(mesh: &TriMesh, direction: [f64; 3]) -> Arc<TensorField> {
-    let spec = FieldSpec::Constant {
-        direction,
-        anisotropy: 3.0,
-        density: 1.0,
-    };
+    let spec = constant(direction, 3.0);
     Arc::new(spec.build(mesh).expect("field"))
 }
 

@@ -32,6 +32,7 @@ use std::time::{Duration, Instant};
 
 use glam::DVec3;
 use strata_engine::field::{FieldSpec, format_field_file, parse_field_file};
+use strata_engine::fixtures::oblique;
 use strata_engine::io;
 use strata_engine::mesh::{MeshError, TriMesh, shapes};
 use strata_engine::rng::Rng;
@@ -181,11 +182,7 @@ fn check_field_file(bytes: &[u8]) -> Result<bool, String> {
 
 /// A constant anisotropic field.
 fn constant_field() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.3, 0.2],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
+    oblique(3.0)
 }
 
 /// The meshes field files are read on (built once): a plane, a sphere and a tetrahedron.

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use glam::Vec3;
+use strata_engine::fixtures::along_x_2to1_on;
 use strata_engine::sample::{Sample, SampleSite};
 use strata_systems::config::SceneConfig;
 use strata_systems::gpu::buffers::{MIN_CAPACITY, next_capacity};
@@ -653,7 +654,6 @@ fn render_without_an_adapter_fails_in_one_line() {
 fn ecs_upload_system_streams_the_engine_samples() {
     use bevy_ecs::prelude::{Schedule, World};
     use std::sync::Arc;
-    use strata_engine::field::FieldSpec;
     use strata_engine::mesh::shapes;
     use strata_engine::surface::SurfaceOptions;
     use strata_systems::ecs::{self, MeshBundle, SampleBuffer, SamplingSettings};
@@ -673,15 +673,7 @@ fn ecs_upload_system_streams_the_engine_samples() {
     world.insert_resource(GpuSplats::new(ctx, renderer));
 
     let mesh = Arc::new(shapes::sphere(1.0, 3).expect("sphere"));
-    let field = Arc::new(
-        FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field"),
-    );
+    let field = Arc::new(along_x_2to1_on(&mesh));
     let e = world
         .spawn(MeshBundle::new(
             mesh,

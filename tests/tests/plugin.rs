@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use bevy_app::{App, Update};
 use bevy_ecs::prelude::*;
-use strata_engine::field::FieldSpec;
+use strata_engine::fixtures::{constant, field_on};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::sample::Sample;
 use strata_engine::surface::SurfaceOptions;
@@ -34,15 +34,7 @@ fn constant_field(
     direction: [f64; 3],
     anisotropy: f64,
 ) -> Arc<strata_engine::field::TensorField> {
-    Arc::new(
-        FieldSpec::Constant {
-            direction,
-            anisotropy,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("field"),
-    )
+    Arc::new(field_on(mesh, &constant(direction, anisotropy)))
 }
 
 /// An app with the plugin and two mesh entities: a sphere and a torus, with different

@@ -4,18 +4,11 @@
 use std::collections::{HashSet, VecDeque};
 
 use strata_engine::field::{FieldSpec, TensorField};
+use strata_engine::fixtures::{along_x, field_on, isotropic_on, oblique, torus_case};
 use strata_engine::mesh::{NONE, TriMesh, shapes};
 use strata_engine::segment::topology::patch_topology;
 use strata_engine::segment::{SegmentOptions, Segmentation, segment};
 use strata_tests::{corpus_dir, shared_mesh_dir};
-
-fn projected() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.3, 0.2],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
-}
 
 /// Every invariant the parameterization relies on.
 fn check(mesh: &TriMesh, seg: &Segmentation, name: &str) {
@@ -79,13 +72,7 @@ fn index_sum(seg: &Segmentation) -> f64 {
 #[test]
 fn constant_field_on_a_plane_is_one_segment() {
     let mesh = shapes::plane(1.0, 24).expect("plane");
-    let field = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("field");
+    let field = field_on(&mesh, &along_x(3.0));
     let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
     check(&mesh, &seg, "plane");
     assert_eq!(seg.segments.len(), 1);
@@ -121,7 +108,7 @@ fn closed_shapes_have_index_sum_equal_to_euler_characteristic() {
         ("torus", shapes::torus(1.0, 0.35, 24).expect("torus")),
         ("genus2", shapes::genus2(1.0, 2).expect("genus2")),
     ] {
-        let field = projected().build(&mesh).expect("field");
+        let field = oblique(3.0).build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
         check(&mesh, &seg, name);
         assert_eq!(
@@ -140,7 +127,7 @@ fn every_shared_mesh_segments_into_discs() {
     };
     for name in strata_tests::SHARED_MESHES {
         let mesh = strata_engine::io::load(&dir.join(format!("{name}.obj"))).expect("mesh");
-        let field = projected().build(&mesh).expect("field");
+        let field = oblique(3.0).build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
         check(&mesh, &seg, name);
         // Poincare-Hopf on closed meshes, against the Euler characteristic of the
@@ -173,8 +160,7 @@ fn curvature_field_on_spot_keeps_poincare_hopf() {
 
 #[test]
 fn same_seed_same_segments_whatever_the_thread_count() {
-    let mesh = shapes::torus(1.0, 0.4, 20).expect("torus");
-    let field = projected().build(&mesh).expect("field");
+    let (mesh, field) = torus_case();
     let run = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -189,13 +175,7 @@ fn same_seed_same_segments_whatever_the_thread_count() {
 fn awkward_inputs_still_segment_into_discs() {
     // Isotropic everywhere: directions are arbitrary, the walk must still partition.
     let mesh = shapes::sphere(1.0, 6).expect("sphere");
-    let iso = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("field");
+    let iso = isotropic_on(&mesh);
     let seg = segment(&mesh, &iso, &SegmentOptions::default()).expect("segment");
     check(&mesh, &seg, "isotropic sphere");
     // Corpus meshes: several components, boundaries, non-manifold edges, slivers.
@@ -208,7 +188,7 @@ fn awkward_inputs_still_segment_into_discs() {
     ] {
         let path = corpus_dir().join(file);
         let mesh = strata_engine::io::load(&path).unwrap_or_else(|e| panic!("{file}: {e}"));
-        let field = projected().build(&mesh).expect("field");
+        let field = oblique(3.0).build(&mesh).expect("field");
         let seg = segment(&mesh, &field, &SegmentOptions::default())
             .unwrap_or_else(|e| panic!("{file}: {e}"));
         check(&mesh, &seg, file);

@@ -4,16 +4,13 @@
 use std::sync::Arc;
 
 use strata_engine::field::FieldSpec;
+use strata_engine::fixtures::{constant, isotropic, oblique};
 use strata_engine::mesh::{TriMesh, shapes};
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
 use strata_tests::shared_mesh_dir;
 
 fn projected() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.3, 0.2],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
+    oblique(3.0)
 }
 
 /// Preprocesses, then checks: every face in exactly one final segment, every final
@@ -128,11 +125,7 @@ fn built_in_shapes_preprocess_and_sample() {
 
 #[test]
 fn isotropic_fields_give_valid_parameterizations() {
-    let iso = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    };
+    let iso = isotropic();
     let pre = check(
         shapes::sphere(1.0, 10).expect("sphere"),
         &iso,
@@ -172,14 +165,6 @@ fn isotropic_fields_give_valid_parameterizations() {
             );
             assert!(p.report.mean_stretch <= 1.5, "{:?}", p.report);
         }
-    }
-}
-
-fn isotropic() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
     }
 }
 
@@ -261,11 +246,7 @@ fn cylinder_four_to_one_along_the_axis() {
     // A 4:1 field along the axis of an open cylinder: samples four times closer along
     // z than around. Measured like the planar test: spacing from the nearest
     // neighbours in the field's metric, in the unrolled (angle * r, z) plane.
-    let spec = FieldSpec::Constant {
-        direction: [0.0, 0.0, 1.0],
-        anisotropy: 4.0,
-        density: 1.0,
-    };
+    let spec = constant([0.0, 0.0, 1.0], 4.0);
     // sqrt(l): 2 along z, 1/2 around (the metric stretches z by 2 and the angle by 1/2).
     let ratio = cylinder_spacing_ratio(spec, [0.5, 2.0]);
     assert!((ratio - 4.0).abs() <= 0.4, "ratio {ratio}");

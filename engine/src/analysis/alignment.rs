@@ -68,19 +68,13 @@ pub fn face_angle(mesh: &TriMesh, field: &TensorField, f: u32, uv: [DVec2; 3]) -
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::FieldSpec;
+    use crate::fixtures::along_x_2to1_on;
     use crate::mesh::shapes;
 
     #[test]
     fn a_rotated_parameterization_gives_its_angle() {
         let mesh = shapes::plane(1.0, 2).expect("plane");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = along_x_2to1_on(&mesh);
         let rot = glam::DMat2::from_angle(30f64.to_radians());
         for f in 0..mesh.face_count() as u32 {
             let uv = mesh.face_positions(f).map(|p| rot * p.truncate());

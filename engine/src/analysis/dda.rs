@@ -449,6 +449,7 @@ mod tests {
     use super::*;
     use crate::analysis::baseline;
     use crate::analysis::spectrum::periodogram;
+    use crate::fixtures::isotropic_on;
 
     fn mean_over(r: &RadialProfile, from: f64, to: f64) -> f64 {
         let v: Vec<f64> = r
@@ -581,7 +582,6 @@ mod tests {
     #[test]
     fn white_noise_on_a_thin_torus_is_flat() {
         use crate::analysis::mesh_baseline::mesh_uniform_random;
-        use crate::field::FieldSpec;
         let torus = crate::mesh::shapes::torus(1.0, 0.2, 64).expect("torus");
         let s = 1.0 / torus.area().sqrt();
         let torus = crate::mesh::TriMesh::new(
@@ -589,13 +589,7 @@ mod tests {
             torus.triangles().to_vec(),
         )
         .expect("mesh");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 1.0,
-            density: 1.0,
-        }
-        .build(&torus)
-        .expect("field");
+        let field = isotropic_on(&torus);
         let sets: Vec<Vec<Sample>> = (1..=6)
             .map(|k| mesh_uniform_random(&torus, &field, 3000, k))
             .collect();

@@ -267,7 +267,7 @@ fn eliminate(neighbours: &[Vec<(u32, f64)>], mut weight: Vec<f64>, n: usize) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::FieldSpec;
+    use crate::fixtures::isotropic_on;
     use crate::mesh::shapes;
 
     fn closest_pair(s: &[Sample]) -> f64 {
@@ -284,13 +284,7 @@ mod tests {
     #[test]
     fn random_follows_density_and_poisson_is_spaced() {
         let mesh = shapes::plane(1.0, 8).expect("plane");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 1.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = isotropic_on(&mesh);
         let n = 800;
         let r = mesh_uniform_random(&mesh, &field, n, 3);
         let p = mesh_poisson_disk(&mesh, &field, n, 3);

@@ -5,7 +5,7 @@ use glam::{DVec2, DVec3};
 use super::*;
 use crate::analysis::baseline::uniform_random;
 use crate::curve::CurveOptions;
-use crate::field::FieldSpec;
+use crate::fixtures;
 use crate::mesh::shapes;
 use crate::planar;
 
@@ -13,11 +13,7 @@ type TestResult = Result<(), Box<dyn std::error::Error>>;
 
 fn isotropic(mesh: TriMesh) -> Result<Sampler, Box<dyn std::error::Error>> {
     let mesh = Arc::new(mesh);
-    let spec = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    };
+    let spec = fixtures::isotropic();
     let field = Arc::new(spec.build(&mesh)?);
     Ok(planar::sampler(mesh, field, &CurveOptions::default())?.0)
 }

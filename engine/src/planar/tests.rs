@@ -5,6 +5,7 @@ use glam::{DVec2, DVec3};
 use super::*;
 use crate::curve::{barycentric, clip_triangle};
 use crate::field::{FieldSpec, PlanarDensity};
+use crate::fixtures::{along_x, constant, isotropic, isotropic_on};
 use crate::mesh::shapes;
 use crate::rng::Rng;
 use crate::sample::Sample;
@@ -16,11 +17,7 @@ fn build(spec: FieldSpec, resolution: u32) -> (Sampler, PlanarMap) {
 }
 
 fn iso() -> FieldSpec {
-    FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    }
+    isotropic()
 }
 
 fn xy(s: &Sample) -> DVec2 {
@@ -148,11 +145,7 @@ fn worst_box_deviation(points: &[DVec2], nx: usize, ny: usize) -> f64 {
 
 #[test]
 fn four_to_one_field_gives_four_to_one_spacing() {
-    let spec = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 4.0,
-        density: 1.0,
-    };
+    let spec = along_x(4.0);
     let (sampler, map) = build(spec, 16);
     assert!((map.reference.anisotropy() - 4.0).abs() < 1e-12);
     let pts: Vec<DVec2> = sampler.sample(3000, 3).iter().map(xy).collect();
@@ -187,11 +180,7 @@ fn four_to_one_field_gives_four_to_one_spacing() {
 #[test]
 fn rotated_anisotropy_follows_the_direction() {
     let dir = DVec2::new(1.0, 1.0).normalize();
-    let spec = FieldSpec::Constant {
-        direction: [dir.x, dir.y, 0.0],
-        anisotropy: 3.0,
-        density: 1.0,
-    };
+    let spec = constant([dir.x, dir.y, 0.0], 3.0);
     let (sampler, _) = build(spec, 16);
     let samples = sampler.sample(3000, 9);
     // Rotate so that the field's major direction is +x (about the square's centre).
@@ -320,23 +309,11 @@ fn gaussian_density_is_followed_far_better_than_random() {
 fn non_planar_mesh_is_rejected_clearly() {
     let mut p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.5)];
     let mesh = crate::mesh::TriMesh::new(p.clone(), vec![[0, 1, 3], [0, 3, 2]]).expect("mesh");
-    let field = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("field");
+    let field = isotropic_on(&mesh);
     let err = planar_map(&mesh, &field).expect_err("not planar");
     assert!(err.to_string().contains("not planar"), "{err}");
     p[3].z = 0.0;
     let mesh = crate::mesh::TriMesh::new(p, vec![[0, 1, 3], [0, 3, 2]]).expect("mesh");
-    let field = FieldSpec::Constant {
-        direction: [1.0, 0.0, 0.0],
-        anisotropy: 1.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("field");
+    let field = isotropic_on(&mesh);
     assert!(planar_map(&mesh, &field).is_ok());
 }

@@ -9,7 +9,7 @@
 //! on the thread count), no allocation.
 
 mod chains;
-mod faces;
+pub(crate) mod faces;
 pub mod lod;
 pub mod progressive;
 mod sampler;

@@ -537,7 +537,7 @@ mod tests {
 
     #[test]
     fn cover_sites_equal_the_sequences_sites_bit_for_bit() {
-        let s = crate::surface::tests::torus_sampler();
+        let s = crate::fixtures::torus_sampler();
         let seed = 9;
         let (mut checked, mut boundary) = (0, 0);
         for (segment, seg) in s.segments().iter().enumerate() {

@@ -686,17 +686,13 @@ fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::advance;
+    use crate::fixtures::along_x_2to1;
 
     #[test]
     fn a_field_of_another_mesh_is_an_error_not_a_panic() {
-        use crate::field::FieldSpec;
         use crate::mesh::shapes;
         use std::sync::Arc;
-        let spec = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        };
+        let spec = along_x_2to1();
         let mesh = Arc::new(shapes::plane(1.0, 4).expect("plane"));
         let field = Arc::new(spec.build(&mesh).expect("field"));
         let (good, _) = crate::planar::sampler(mesh.clone(), field, &Default::default())
@@ -719,7 +715,7 @@ mod tests {
 
     /// The torus fixture of `surface`, preprocessed with the default options.
     fn torus() -> crate::surface::Preprocessed {
-        let (mesh, field) = crate::surface::tests::torus_case();
+        let (mesh, field) = crate::fixtures::torus_case();
         crate::surface::Preprocessed::build(mesh, field, &crate::surface::SurfaceOptions::default())
             .expect("preprocessed")
     }

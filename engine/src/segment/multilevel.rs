@@ -313,8 +313,8 @@ mod tests {
     use std::f64::consts::FRAC_PI_4;
 
     use super::*;
+    use crate::fixtures::{lattice, turning_field};
     use crate::mesh::TriMesh;
-    use crate::segment::seeds::tests::{lattice, turning_field};
     use crate::segment::walk::{face_graph, local_seeds};
     use crate::segment::{WalkSystem, face_frames, place_seeds, random_walk, walk_weights};
 

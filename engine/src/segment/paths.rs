@@ -661,6 +661,7 @@ mod tests {
 
     use super::*;
     use crate::field::FieldSpec;
+    use crate::fixtures;
     use crate::io::shared_mesh;
     use crate::mesh::shapes;
     use crate::segment::singularity::detect_singularities;
@@ -692,14 +693,9 @@ mod tests {
         (mesh.positions()[b as usize] - mesh.positions()[a as usize]).normalize()
     }
 
+    /// The constant 2:1 field along `direction` on `mesh`.
     fn constant(mesh: &TriMesh, direction: [f64; 3]) -> TensorField {
-        FieldSpec::Constant {
-            direction,
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("valid field")
+        fixtures::field_on(mesh, &fixtures::constant(direction, 2.0))
     }
 
     /// Checks that `edges` (in order) form a chain from `start`; returns its end.
@@ -759,7 +755,7 @@ mod tests {
 
     #[test]
     fn costs_and_walk_weights_do_not_depend_on_the_thread_count() {
-        let (mesh, field) = crate::surface::tests::torus_case();
+        let (mesh, field) = crate::fixtures::torus_case();
         let frames = crate::segment::face_frames(&mesh, &field);
         let blocked: Vec<bool> = (0..mesh.edge_count()).map(|e| e % 11 == 0).collect();
         let run = || {

@@ -257,19 +257,14 @@ pub fn touched_segments<S: AsRef<[u32]>>(
 mod tests {
     use super::*;
     use crate::field::FieldSpec;
+    use crate::fixtures::{along_x_2to1_on, constant, field_on, isotropic_on};
     use crate::mesh::shapes;
     use crate::segment::segment;
 
     #[test]
     fn a_changed_vertex_touches_exactly_the_segments_around_it() {
         let mesh = shapes::plane(1.0, 4).expect("plane");
-        let old = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let old = along_x_2to1_on(&mesh);
         // One segment per row of quads (8 faces each).
         let rows: Vec<Vec<u32>> = (0..4).map(|r| (8 * r..8 * r + 8).collect()).collect();
         assert!(touched_segments(&mesh, &old, &old, &rows).is_empty());
@@ -308,13 +303,7 @@ mod tests {
     #[test]
     fn whole_mesh_region_equals_segment() {
         let mesh = shapes::torus(1.0, 0.4, 24).expect("torus");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.0],
-            anisotropy: 3.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = field_on(&mesh, &constant([1.0, 0.3, 0.0], 3.0));
         let all: Vec<u32> = (0..mesh.face_count() as u32).collect();
         let options = SegmentOptions::default();
         let whole = segment(&mesh, &field, &options).expect("segment");
@@ -325,13 +314,7 @@ mod tests {
     #[test]
     fn region_segments_cover_the_region_only_and_are_connected() {
         let mesh = shapes::sphere(1.0, 8).expect("sphere");
-        let field = FieldSpec::Constant {
-            direction: [0.0, 0.0, 1.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = field_on(&mesh, &constant([0.0, 0.0, 1.0], 2.0));
         // The faces whose barycentre has x > 0.3: a cap.
         let region: Vec<u32> = (0..mesh.face_count() as u32)
             .filter(|&f| mesh.face_positions(f).iter().map(|p| p.x).sum::<f64>() > 0.9)
@@ -359,13 +342,7 @@ mod tests {
     #[test]
     fn bad_regions_are_errors() {
         let mesh = shapes::plane(1.0, 2).expect("plane");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 1.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = isotropic_on(&mesh);
         let o = SegmentOptions::default();
         assert!(matches!(
             segment_region(&mesh, &field, &[], &o),

@@ -648,11 +648,12 @@ impl<'a> RegionGrower<'a> {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use std::f64::consts::{FRAC_PI_4, PI};
 
     use super::*;
     use crate::field::FieldSpec;
+    use crate::fixtures::{self, along_x, field_on, turning_plane};
     use crate::mesh::shapes;
     use crate::segment::walk::walk_weights;
 
@@ -664,71 +665,9 @@ pub(crate) mod tests {
         (faces, w, vec![true; mesh.face_count()])
     }
 
-    /// A plane on `[0, 1]^2` whose major direction turns by `pi` from `x = 0` to
-    /// `x = 1` (`theta = pi x`), spacing ratio 3.
-    pub(crate) fn turning_plane(resolution: u32) -> (TriMesh, TensorField) {
-        turning_field(shapes::plane(1.0, resolution).expect("plane"))
-    }
-
-    /// A triangulated unit square of near-equilateral triangles, `n` per row (rows
-    /// alternate a half-triangle offset, so the left and right sides are jagged).
-    ///
-    /// Unlike [`shapes::plane`], whose right triangles all have their diagonal the same
-    /// way, its face graph has no preferred direction: with weights `|e|` a walk on the
-    /// face graph of `plane` diffuses 2.35 times faster along (1, 1) than along (1, -1)
-    /// (from the weighted second moments of the three links between barycentres), which
-    /// would slant every label.
-    pub(crate) fn lattice(n: u32) -> TriMesh {
-        let h = 1.0 / f64::from(n);
-        let rows = (f64::from(n) * 2.0 / 3f64.sqrt()).round() as u32;
-        let dy = 1.0 / f64::from(rows);
-        let mut positions = Vec::new();
-        for j in 0..=rows {
-            let offset = if j % 2 == 1 { 0.5 * h } else { 0.0 };
-            for i in 0..=n {
-                positions.push(DVec3::new(
-                    f64::from(i) * h + offset,
-                    f64::from(j) * dy,
-                    0.0,
-                ));
-            }
-        }
-        let v = |i: u32, j: u32| j * (n + 1) + i;
-        let mut triangles = Vec::new();
-        for j in 0..rows {
-            for i in 0..n {
-                if j % 2 == 0 {
-                    triangles.push([v(i, j), v(i + 1, j), v(i, j + 1)]);
-                    triangles.push([v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)]);
-                } else {
-                    triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
-                    triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
-                }
-            }
-        }
-        TriMesh::new(positions, triangles).expect("lattice")
-    }
-
-    /// The field `theta = pi x` with spacing ratio 3 on `mesh`.
-    pub(crate) fn turning_field(mesh: TriMesh) -> (TriMesh, TensorField) {
-        let dirs: Vec<DVec3> = mesh
-            .positions()
-            .iter()
-            .map(|p| DVec3::new((PI * p.x).cos(), (PI * p.x).sin(), 0.0))
-            .collect();
-        let ev = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
-        let field = TensorField::from_frames(&mesh, &dirs, &ev).expect("field");
-        (mesh, field)
-    }
-
-    pub(crate) fn constant(mesh: &TriMesh, anisotropy: f64) -> TensorField {
-        FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("field")
+    /// The constant field along x with spacing ratio `anisotropy` on `mesh`.
+    fn constant(mesh: &TriMesh, anisotropy: f64) -> TensorField {
+        field_on(mesh, &along_x(anisotropy))
     }
 
     #[test]
@@ -942,13 +881,7 @@ pub(crate) mod tests {
             .collect();
         let half_cylinder = TriMesh::new(bent, plane.triangles().to_vec()).expect("half cylinder");
         for (mesh, bounded_seeds_at_least) in [(plane, 1), (half_cylinder, 2)] {
-            let field = FieldSpec::Constant {
-                direction: [0.0, 1.0, 0.0],
-                anisotropy: 3.0,
-                density: 1.0,
-            }
-            .build(&mesh)
-            .expect("field");
+            let field = field_on(&mesh, &fixtures::constant([0.0, 1.0, 0.0], 3.0));
             let (faces, w, mask) = whole_mesh_inputs(&mesh, &field);
             let area = mesh.area();
             let eighth = RegionLimits {

@@ -360,6 +360,7 @@ pub fn isotropic_faces(mesh: &TriMesh, field: &TensorField, max_coherence: f64) 
 
 #[cfg(test)]
 mod tests {
+    use crate::fixtures::{field_on, isotropic_on, oblique};
     use std::time::Instant;
 
     use glam::{DVec2, DVec3};
@@ -410,13 +411,7 @@ mod tests {
     }
 
     fn constant_field(mesh: &TriMesh) -> TensorField {
-        FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("constant field")
+        field_on(mesh, &oblique(2.0))
     }
 
     /// A field with an independent random major direction at every vertex: many
@@ -576,13 +571,7 @@ mod tests {
     #[test]
     fn isotropic_field_gives_no_nan_and_exact_sum() {
         let mesh = shapes::sphere(1.0, 4).expect("test input is valid");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 1.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("test input is valid");
+        let field = isotropic_on(&mesh);
         let transport = line_field_transport(&mesh, &field);
         assert!(transport.edge_turn.iter().all(|x| x.is_finite()));
         assert!(transport.face_holonomy.iter().all(|x| x.is_finite()));

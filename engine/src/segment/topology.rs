@@ -617,11 +617,11 @@ pub fn disc_cuts(mesh: &TriMesh, costs: &[f64], faces: &[u32], cut: &[bool]) -> 
 
 #[cfg(test)]
 mod tests {
+    use crate::fixtures::{field_on, oblique};
     use std::collections::BTreeSet;
     use std::time::Instant;
 
     use super::*;
-    use crate::field::FieldSpec;
     use crate::io::shared_mesh;
     use crate::mesh::shapes;
     use crate::segment::paths::field_edge_costs;
@@ -662,13 +662,7 @@ mod tests {
     }
 
     fn costs(mesh: &TriMesh) -> Vec<f64> {
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("constant field");
+        let field = field_on(mesh, &oblique(2.0));
         field_edge_costs(mesh, &field)
     }
 

@@ -336,12 +336,13 @@ pub fn random_walk(
 
 #[cfg(test)]
 mod tests {
+    use crate::fixtures::along_x_2to1;
     use std::f64::consts::{FRAC_PI_4, PI};
 
     use super::*;
     use crate::field::TensorField;
+    use crate::fixtures::{along_x, field_on, lattice, turning_field, turning_plane};
     use crate::mesh::shapes;
-    use crate::segment::seeds::tests::{constant, lattice, turning_field, turning_plane};
     use crate::segment::seeds::{face_frames, place_seeds};
 
     fn no_blocks(mesh: &TriMesh) -> Vec<bool> {
@@ -414,7 +415,7 @@ mod tests {
     #[test]
     fn weights_of_a_constant_field_are_edge_lengths() {
         let mesh = shapes::plane(1.0, 8).expect("plane");
-        let faces = face_frames(&mesh, &constant(&mesh, 3.0));
+        let faces = face_frames(&mesh, &field_on(&mesh, &along_x(3.0)));
         let mut blocked = no_blocks(&mesh);
         let interior: Vec<usize> = (0..mesh.edge_count())
             .filter(|&e| is_interior(&mesh, e))
@@ -508,7 +509,7 @@ mod tests {
         let mesh = shapes::plane(1.0, 16).expect("plane");
         let (_, seeds, labels) = segment(
             &mesh,
-            &constant(&mesh, 3.0),
+            &field_on(&mesh, &along_x(3.0)),
             FRAC_PI_4,
             &no_blocks(&mesh),
             1,
@@ -572,7 +573,13 @@ mod tests {
     fn blocked_edges_are_never_crossed() {
         let mesh = shapes::plane(1.0, 16).expect("plane");
         let blocked = middle_line(&mesh);
-        let (_, seeds, labels) = segment(&mesh, &constant(&mesh, 2.0), FRAC_PI_4, &blocked, 3);
+        let (_, seeds, labels) = segment(
+            &mesh,
+            &field_on(&mesh, &along_x(2.0)),
+            FRAC_PI_4,
+            &blocked,
+            3,
+        );
         assert_eq!(seeds.len(), 2);
         let parts = connected_parts(&mesh, &labels, &blocked);
         for l in [labels, parts] {
@@ -594,7 +601,7 @@ mod tests {
             .zip(&blocked)
             .map(|([a, b], &m)| m && p[*a as usize].y.max(p[*b as usize].y) <= 0.5)
             .collect();
-        let faces = face_frames(&mesh, &constant(&mesh, 2.0));
+        let faces = face_frames(&mesh, &field_on(&mesh, &along_x(2.0)));
         let w = walk_weights(&mesh, &faces, 1.0, &half);
         let labels = vec![0; mesh.face_count()];
         let parts = connected_parts(&mesh, &labels, &half);
@@ -610,7 +617,7 @@ mod tests {
     fn a_part_without_seed_is_an_error() {
         let mesh = shapes::plane(1.0, 8).expect("plane");
         let blocked = middle_line(&mesh);
-        let faces = face_frames(&mesh, &constant(&mesh, 2.0));
+        let faces = face_frames(&mesh, &field_on(&mesh, &along_x(2.0)));
         let w = walk_weights(&mesh, &faces, 1.0, &blocked);
         let first_right = (0..mesh.face_count() as u32)
             .find(|&f| !left_of_middle(&mesh, f))
@@ -719,11 +726,7 @@ mod tests {
 
     #[test]
     fn sphere_and_torus_are_labelled_everywhere() {
-        let spec = crate::field::FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        };
+        let spec = along_x_2to1();
         for mesh in [
             shapes::sphere(1.0, 12).expect("sphere"),
             shapes::torus(2.0, 0.7, 32).expect("torus"),

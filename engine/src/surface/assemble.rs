@@ -62,7 +62,7 @@ pub fn order_segments(
 mod tests {
     use super::*;
     use crate::curve::CellInput;
-    use crate::surface::tests::torus_case;
+    use crate::fixtures::torus_case;
     use crate::surface::{Preprocessed, SurfaceOptions, lowest_face, segment_cells};
 
     /// A fixed permutation of `0..n` (Fisher-Yates with a xorshift), far from sorted.

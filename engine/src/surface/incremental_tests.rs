@@ -4,9 +4,9 @@ use glam::DVec3;
 
 use super::*;
 use crate::field::FieldSpec;
+use crate::fixtures::torus_case;
 use crate::mesh::NONE;
 use crate::surface::Preprocessed;
-use crate::surface::tests::torus_case;
 
 /// The stages of a build that segments.
 const ALL_STAGES: [BuildStage; 4] = [

@@ -228,8 +228,9 @@ fn adjacent_pairs(mesh: &TriMesh, cut: &[bool], pieces: &[SegmentParam]) -> Vec<
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use crate::field::TensorField;
+    use crate::fixtures::field_along;
     use crate::param::parameterize;
     use std::collections::BTreeMap;
 
@@ -246,16 +247,6 @@ pub(crate) mod tests {
             out.entry(key((a + b + c) / 3.0)).or_default().push(f);
         }
         out.into_values().collect()
-    }
-
-    /// A 3:1 field along the world direction `d` (projected into the surface).
-    pub(crate) fn field_along(mesh: &TriMesh, d: DVec3) -> TensorField {
-        TensorField::from_frames(
-            mesh,
-            &vec![d; mesh.vertex_count()],
-            &vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()],
-        )
-        .expect("field")
     }
 
     /// [`merge_pieces`] with the field's table made for the call.

@@ -448,32 +448,12 @@ fn record_stage(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
     use crate::field::FieldSpec;
+    use crate::fixtures::torus_case;
     use crate::mesh::shapes;
     use crate::segment::segment;
-
-    /// A torus with a constant 3:1 field: a small curved case with several segments.
-    pub(crate) fn torus_case() -> (Arc<TriMesh>, Arc<TensorField>) {
-        let mesh = Arc::new(shapes::torus(1.0, 0.4, 20).expect("torus"));
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 3.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
-        (mesh, Arc::new(field))
-    }
-
-    /// The sampler of [`torus_case`], preprocessed with the default options.
-    pub(crate) fn torus_sampler() -> crate::sample::Sampler {
-        let (mesh, field) = torus_case();
-        Preprocessed::build(mesh, field, &SurfaceOptions::default())
-            .expect("preprocessed")
-            .sampler
-    }
 
     #[test]
     fn per_segment_parameterization_and_cells_equal_the_whole_build() {

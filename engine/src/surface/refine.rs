@@ -563,8 +563,8 @@ fn most_different_faces(frames: &FaceField, faces: &[u32]) -> [u32; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fixtures::field_along;
     use crate::mesh::shapes;
-    use crate::surface::merge::tests::field_along;
 
     /// The unit plane of `2 n^2` faces with a 3:1 field along x, turned by 90 degrees
     /// inside the disc of `radius` about `centre`: its split context and all its faces.

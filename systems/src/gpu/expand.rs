@@ -411,7 +411,7 @@ impl SiteExpander {
 mod tests {
     use std::mem::{offset_of, size_of};
 
-    use super::super::layout::tests::wgsl_layout;
+    use super::super::wgsl_layout::wgsl_layout;
     use super::*;
 
     /// `Site` and `ExpandParams` in expand.wgsl have the layouts of `SampleSite` and

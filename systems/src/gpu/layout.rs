@@ -263,29 +263,9 @@ pub fn log_density_range(samples: &[Sample]) -> [f32; 2] {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
+    use super::super::wgsl_layout::wgsl_layout;
     use super::*;
-
-    /// Byte offsets of the members of WGSL struct `name` in module `source`, and its
-    /// size (naga's layout, which is what the GPU sees).
-    pub(crate) fn wgsl_layout(source: &str, name: &str) -> (Vec<(String, usize)>, usize) {
-        let module = naga::front::wgsl::parse_str(source).expect("WGSL module parses");
-        let (_, ty) = module
-            .types
-            .iter()
-            .find(|(_, t)| t.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("struct {name} in the module"));
-        match &ty.inner {
-            naga::TypeInner::Struct { members, span } => (
-                members
-                    .iter()
-                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
-                    .collect(),
-                *span as usize,
-            ),
-            other => panic!("{name} is not a struct: {other:?}"),
-        }
-    }
 
     /// The WGSL `Sample` and `Frame` structs have the Rust structs' sizes and offsets.
     #[test]

@@ -34,6 +34,8 @@ pub mod shaders;
 pub mod splat;
 pub mod stream;
 pub mod upload;
+#[cfg(test)]
+mod wgsl_layout;
 
 /// The wgpu version this module is written against, re-exported so that callers (an
 /// ECS render system, tests) name the same types.

@@ -466,9 +466,9 @@ fn segment_fill(id: usize, valid: bool) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use strata_engine::fixtures::{constant, field_on};
 
     use glam::DQuat;
-    use strata_engine::field::FieldSpec;
     use strata_engine::mesh::shapes;
     use strata_engine::param::{ParamOptions, parameterize};
 
@@ -574,13 +574,7 @@ mod tests {
     }
 
     fn constant_field(mesh: &TriMesh, direction: [f64; 3]) -> TensorField {
-        FieldSpec::Constant {
-            direction,
-            anisotropy: 3.0,
-            density: 1.0,
-        }
-        .build(mesh)
-        .expect("field")
+        field_on(mesh, &constant(direction, 3.0))
     }
 
     fn param_all(mesh: &TriMesh, field: &TensorField) -> SegmentParam {

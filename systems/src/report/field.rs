@@ -286,6 +286,7 @@ pub fn write_field_ply_to<W: Write>(
 mod tests {
     use glam::DVec3;
     use strata_engine::field::FieldSpec;
+    use strata_engine::fixtures::{along_x_2to1_on, field_on, isotropic_on, oblique};
     use strata_engine::mesh::shapes;
     use strata_engine::segment::detect_singularities;
 
@@ -399,13 +400,7 @@ mod tests {
     #[test]
     fn sphere_singularities_are_marked_and_reported() {
         let mesh = shapes::sphere(1.0, 4).expect("sphere");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.3, 0.2],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = field_on(&mesh, &oblique(2.0));
         let singularities = detect_singularities(&mesh, &field);
         assert!(!singularities.is_empty());
         let mut bytes = Vec::new();
@@ -445,13 +440,7 @@ mod tests {
     #[test]
     fn summary_names_open_meshes_failures_and_isotropic_vertices() {
         let mesh = shapes::plane(1.0, 2).expect("plane");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 1.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = isotropic_on(&mesh);
         let report = FieldReport::new(&mesh, &field, &[], 1.05, 0.0);
         assert_eq!(report.near_isotropic_vertices, mesh.vertex_count());
         let line = report.summary();
@@ -482,13 +471,7 @@ mod tests {
     #[test]
     fn touching_opposite_singularities_count_as_one_dipole_cluster() {
         let mesh = shapes::plane(1.0, 4).expect("plane");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = along_x_2to1_on(&mesh);
         // Faces 0 and 1 share an edge; face 31 is at the far corner.
         let found = [
             Singularity {
@@ -519,13 +502,7 @@ mod tests {
     #[test]
     fn singularities_outside_the_mesh_are_refused() {
         let mesh = shapes::plane(1.0, 2).expect("plane");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = along_x_2to1_on(&mesh);
         let bad = [Singularity {
             face: mesh.face_count() as u32,
             index: 0.5,

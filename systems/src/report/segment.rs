@@ -202,7 +202,7 @@ pub fn segment_color(id: u32) -> [u8; 3] {
 
 #[cfg(test)]
 mod tests {
-    use strata_engine::field::FieldSpec;
+    use strata_engine::fixtures::along_x_2to1_on;
     use strata_engine::mesh::shapes;
     use strata_engine::segment::{SegmentOptions, segment};
     use strata_engine::surface::{SurfaceOptions, parameterize_with_splitting};
@@ -212,13 +212,7 @@ mod tests {
     #[test]
     fn colors_follow_the_final_segments_and_mark_singular_faces() {
         let mesh = shapes::sphere(1.0, 4).expect("sphere");
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = along_x_2to1_on(&mesh);
         let seg = segment(&mesh, &field, &SegmentOptions::default()).expect("segment");
         let (params, split) =
             parameterize_with_splitting(&mesh, &field, &seg, &SurfaceOptions::default())

@@ -6,6 +6,7 @@ use glam::DVec3;
 
 use super::*;
 use crate::field::{FieldSpec, eigen_in_plane, line_field_energy};
+use crate::fixtures::{field_on, oblique};
 use crate::io::shared_mesh;
 use crate::mesh::{TriMesh, loop_subdivide, shapes};
 use crate::segment::{Singularity, detect_singularities, line_angle};
@@ -200,13 +201,7 @@ fn designed_fields_are_smoother_than_the_projected_constant_and_follow_strong_cu
     let Some(mesh) = shared_mesh("stanford-bunny.obj") else {
         return;
     };
-    let constant = FieldSpec::Constant {
-        direction: [1.0, 0.3, 0.2],
-        anisotropy: 3.0,
-        density: 1.0,
-    }
-    .build(&mesh)
-    .expect("constant");
+    let constant = field_on(&mesh, &oblique(3.0));
     let majors = |f: &TensorField| -> Vec<DVec3> {
         f.tensors()
             .iter()

@@ -449,72 +449,10 @@ impl ShownEstimate {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-    use crate::sample::lod::fade;
-    use crate::surface::tests::torus_sampler;
-
-    pub(in crate::sample::lod) fn view(eye: DVec3, target: DVec3) -> ViewLod {
-        let fov = 50f64.to_radians();
-        let proj = glam::dcamera::rh::proj::directx::perspective(fov, 1.5, 0.001, 100.0);
-        let look = glam::dcamera::rh::view::look_at_mat4(eye, target, DVec3::Y);
-        ViewLod {
-            clip_from_world: proj * look,
-            eye,
-            focal_pixels: 500.0 / (2.0 * (fov / 2.0).tan()),
-            reference: 5000.0,
-            max: 4.0,
-            cull_back_faces: true,
-        }
-    }
-
-    /// The multipliers of ranks `0..end` under `v`, by a scan.
-    pub(in crate::sample::lod) fn multipliers(
-        s: &Sampler,
-        seed: u64,
-        end: u32,
-        v: &ViewLod,
-    ) -> Vec<f64> {
-        let mut sites = vec![SampleSite::default(); end as usize];
-        s.progressive_sites_into(seed, 0, &mut sites);
-        sites
-            .iter()
-            .map(|site| {
-                let (p, n) =
-                    position_normal(s.mesh(), site.face, site.barycentric().map(f64::from));
-                v.multiplier(p, n)
-            })
-            .collect()
-    }
-
-    /// The ranks below `end` visible under `v` with base `base`, by a scan.
-    pub(in crate::sample::lod) fn count(
-        s: &Sampler,
-        seed: u64,
-        end: u32,
-        v: &ViewLod,
-        base: f64,
-    ) -> usize {
-        let lods = multipliers(s, seed, end, v);
-        (0..end)
-            .zip(lods)
-            .filter(|&(k, lod)| fade(k, base, lod) > 0.0)
-            .count()
-    }
-
-    /// A camera `distance` above the torus's highest vertex, along its normal, looking
-    /// down at it: a small part of the surface in view (the rest of the torus below it
-    /// faces away).
-    pub(in crate::sample::lod) fn close_view(s: &Sampler, distance: f64) -> ViewLod {
-        let mesh = s.mesh();
-        let (i, &p) = mesh
-            .positions()
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.z.total_cmp(&b.1.z))
-            .expect("vertices");
-        view(p + mesh.vertex_normals()[i] * distance, p)
-    }
+    use crate::fixtures::lod::{close_view, culled_view as view, multipliers};
+    use crate::fixtures::torus_sampler;
 
     #[test]
     fn the_probes_mean_is_the_sum_of_their_multipliers_in_rank_order() {

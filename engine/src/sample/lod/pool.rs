@@ -509,89 +509,15 @@ impl LodPool {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-    use crate::field::FieldSpec;
+    use crate::fixtures::along_x_2to1_on;
+    use crate::fixtures::lod::{Frame, check_held, held_visible, moved, scan, view, view_at};
+    use crate::fixtures::torus_sampler;
     use crate::mesh::TriMesh;
     use crate::sample::lod::DRAW_AHEAD;
-    use crate::surface::tests::torus_sampler;
     use crate::surface::{Preprocessed, SurfaceOptions};
     use std::sync::Arc;
-
-    /// One frame with a base count, as the tests run them.
-    pub(in crate::sample::lod) trait Frame {
-        /// [`LodPool::update`] with [`Budget::Base`]`(base)`, for the pool's sampler.
-        fn frame(&mut self, s: &Sampler, v: &ViewLod, base: f64) -> PoolChange;
-    }
-
-    impl Frame for LodPool {
-        fn frame(&mut self, s: &Sampler, v: &ViewLod, base: f64) -> PoolChange {
-            let update = self
-                .update(s, v, Budget::Base(base))
-                .expect("the pool's sampler");
-            assert_eq!(update.base, base);
-            update.change
-        }
-    }
-
-    pub(in crate::sample::lod) fn view(eye: DVec3, max: f64) -> ViewLod {
-        view_at(eye, DVec3::ZERO, max)
-    }
-
-    pub(in crate::sample::lod) fn view_at(eye: DVec3, target: DVec3, max: f64) -> ViewLod {
-        let fov = 50f64.to_radians();
-        let proj = glam::camera::rh::proj::directx::perspective(fov as f32, 1.0, 0.01, 100.0);
-        let look =
-            glam::camera::rh::view::look_at_mat4(eye.as_vec3(), target.as_vec3(), glam::Vec3::Y);
-        ViewLod {
-            clip_from_world: (proj * look).as_dmat4(),
-            eye,
-            focal_pixels: 500.0 / (2.0 * (fov / 2.0).tan()),
-            reference: 5000.0,
-            max,
-            cull_back_faces: false,
-        }
-    }
-
-    /// The visible ranks and their sites, by a scan of the whole sequence up to `end`.
-    pub(in crate::sample::lod) fn scan(
-        s: &Sampler,
-        seed: u64,
-        end: u32,
-        v: &ViewLod,
-        base: f64,
-    ) -> Vec<(u32, SampleSite)> {
-        let mut sites = vec![SampleSite::default(); end as usize];
-        s.progressive_sites_into(seed, 0, &mut sites);
-        (0..end)
-            .zip(sites)
-            .filter(|&(k, site)| {
-                let r = s
-                    .record(site.face, site.barycentric().map(f64::from), 0, k, 1)
-                    .expect("record");
-                let p = DVec3::from(r.position.map(f64::from));
-                let n = DVec3::from(r.normal.map(f64::from));
-                fade(k, base, v.multiplier(p, n)) > 0.0
-            })
-            .collect()
-    }
-
-    /// The visible entries (rank and site), in rank order.
-    pub(in crate::sample::lod) fn held_visible(
-        pool: &LodPool,
-        s: &Sampler,
-        v: &ViewLod,
-        base: f64,
-    ) -> Vec<(u32, SampleSite)> {
-        let mut fades = vec![0.0; pool.len()];
-        pool.fades_into(s, v, base, &mut fades);
-        let mut shown: Vec<(u32, SampleSite)> = (0..pool.len())
-            .filter(|&i| fades[i] > 0.0)
-            .map(|i| (pool.ranks()[i], pool.sites()[i]))
-            .collect();
-        shown.sort_by_key(|e| e.0);
-        shown
-    }
 
     #[test]
     fn room_for_a_point_budget_covers_close_views() {
@@ -950,34 +876,6 @@ pub(crate) mod tests {
         assert!(exact.ranks().iter().all(|k| held.binary_search(k).is_ok()));
     }
 
-    /// Checks that each rank is held once, and that every `step`-th bin (split or not,
-    /// children too) holds every rank below its reach that falls in it; the ranks
-    /// held, sorted.
-    pub(in crate::sample::lod) fn check_held(pool: &LodPool, s: &Sampler, step: usize) -> Vec<u32> {
-        let mut held = pool.ranks().to_vec();
-        held.sort_unstable();
-        held.dedup();
-        assert_eq!(held.len(), pool.len(), "a rank held twice");
-        let mut listed = Vec::new();
-        for b in (0..pool.bins()).step_by(step) {
-            let (segment, leaves) = pool.bin(b);
-            listed.clear();
-            let (seed, reach) = (pool.seed(), pool.reach(b));
-            s.progressive_ranks_in_leaves(seed, segment, leaves, 0, reach, usize::MAX, &mut listed);
-            assert!(
-                listed.iter().all(|k| held.binary_search(k).is_ok()),
-                "bin {b}"
-            );
-        }
-        held
-    }
-
-    /// `mesh` with every vertex moved by `f` (the same triangles).
-    pub(in crate::sample::lod) fn moved(mesh: &TriMesh, f: impl Fn(&DVec3) -> DVec3) -> TriMesh {
-        let positions = mesh.positions().iter().map(f).collect();
-        TriMesh::new(positions, mesh.triangles().to_vec()).expect("mesh")
-    }
-
     #[test]
     fn bounds_follow_a_deformed_mesh() {
         let s = torus_sampler();
@@ -1063,13 +961,7 @@ pub(crate) mod tests {
     #[test]
     fn a_single_segment_sampler_enumerates_every_rank() {
         let mesh = Arc::new(crate::mesh::shapes::plane(1.0, 4).expect("plane"));
-        let field = FieldSpec::Constant {
-            direction: [1.0, 0.0, 0.0],
-            anisotropy: 2.0,
-            density: 1.0,
-        }
-        .build(&mesh)
-        .expect("field");
+        let field = along_x_2to1_on(&mesh);
         let pre =
             Preprocessed::build(mesh, Arc::new(field), &SurfaceOptions::default()).expect("built");
         let s = pre.sampler;

@@ -3,13 +3,13 @@
 
 use glam::DVec3;
 
-use super::pool::tests::{Frame, check_held, held_visible, moved};
 use super::split::{SPLIT_ROOM, SPLIT_WAYS};
 use super::{LodError, LodPool, PoolChange, ViewLod};
+use crate::fixtures::lod::{Frame, check_held, held_visible, moved};
+use crate::fixtures::torus_sampler;
 use crate::mesh::TriMesh;
 use crate::sample::faces::position_normal;
 use crate::sample::{SampleSite, Sampler};
-use crate::surface::tests::torus_sampler;
 
 /// The splits of close views.
 mod splits {
@@ -252,7 +252,7 @@ mod splits {
 /// The point budget's estimate, refined in the pool's bins.
 mod estimates {
     use super::*;
-    use crate::sample::lod::estimate::tests::{close_view, count, multipliers, view};
+    use crate::fixtures::lod::{close_view, count, culled_view as view, multipliers};
     use crate::sample::lod::{IN_VIEW, PROBES, REFINE_LIMIT};
 
     /// The samples `pool` shows under `v` with base `base`, once it holds them all.
