@@ -370,6 +370,43 @@ fn numbers_are_whole_tokens() {
     assert!(!numbers("2.43").contains(&"2.4".to_owned()));
 }
 
+/// The CLI reference names every command and every long option that clap defines
+/// in its own section of `docs/cli.md` (`render` and `view` share the camera and look
+/// table), so a new option cannot go undocumented.
+#[test]
+fn the_cli_reference_lists_every_command_and_option() {
+    use clap::CommandFactory;
+    let reference = std::fs::read_to_string(workspace().join("docs/cli.md")).expect("cli.md");
+    // The text from a heading to the next heading of level two.
+    let section = |heading: &str| {
+        reference.find(heading).map_or("", |at| {
+            let rest = &reference[at + heading.len()..];
+            &rest[..rest.find("\n## ").unwrap_or(rest.len())]
+        })
+    };
+    let camera = section("### Camera and look options");
+    let mut missing = Vec::new();
+    for command in Cli::command().get_subcommands() {
+        let name = command.get_name();
+        let own = section(&format!("## `strata {name}`"));
+        if own.is_empty() {
+            missing.push(format!("strata {name}"));
+        }
+        let text = format!("{own}{camera}");
+        for arg in command.get_arguments() {
+            let documented = match (arg.get_long(), arg.get_short()) {
+                (Some(long), _) => text.contains(&format!("`--{long}")),
+                (None, Some(short)) => text.contains(&format!("`-{short}")),
+                (None, None) => true, // a positional argument: the usage lines show it
+            };
+            if !documented && arg.get_id() != "help" {
+                missing.push(format!("strata {name} --{}", arg.get_id()));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "not in docs/cli.md: {missing:?}");
+}
+
 /// A planted broken command (a scene that does not exist, an option that does not)
 /// and a broken scene block are reported with their lines; good ones are not.
 #[test]
