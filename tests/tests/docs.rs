@@ -24,9 +24,10 @@
 //! key (`field: Designed(...)`) is that section of a scene, parsed inside a scene with a
 //! small built-in plane as its mesh.
 //!
-//! A third check keeps the README's measured numbers from drifting: every decimal
-//! number in its prose must occur in the benchmark report (`bench/README.md`) or the
-//! paper's experiments (`bench/RESULTS.md`).
+//! Further checks: every relative link of those files points at a file that exists;
+//! the CLI reference names every option clap defines; and every decimal number in the
+//! README's prose occurs in the benchmark report (`bench/README.md`) or the paper's
+//! experiments (`bench/RESULTS.md`), so measured numbers are not typed twice.
 //!
 //! Cost: one preprocessing per command (the bunny's designed field dominates); about a
 //! minute in release on 2 cores.
@@ -405,6 +406,52 @@ fn the_cli_reference_lists_every_command_and_option() {
         }
     }
     assert!(missing.is_empty(), "not in docs/cli.md: {missing:?}");
+}
+
+/// Guides that other work adds; a link to one is not checked until it exists.
+const PENDING_GUIDES: [&str; 2] = ["docs/python.md", "docs/c-api.md"];
+
+/// The relative link targets of a Markdown text (`](target)`, without `#anchor`), with
+/// the 1-based line of each; web addresses and pure anchors are left out.
+fn local_links(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let mut rest = line;
+        while let Some(at) = rest.find("](") {
+            rest = &rest[at + 2..];
+            let target = &rest[..rest.find(')').unwrap_or(rest.len())];
+            let path = target.split('#').next().unwrap_or_default();
+            if !path.is_empty() && !path.contains("://") {
+                out.push((i + 1, path.to_owned()));
+            }
+        }
+    }
+    out
+}
+
+/// Every relative link in the README and the guides points at a file that exists
+/// (pictures included).
+#[test]
+fn every_local_link_points_at_a_file() {
+    let root = workspace();
+    let mut broken = Vec::new();
+    for file in doc_files() {
+        let text = std::fs::read_to_string(&file).expect("readable doc");
+        let folder = file.parent().unwrap_or(&root);
+        for (line, target) in local_links(&text) {
+            let path = folder.join(&target);
+            let pending = PENDING_GUIDES.iter().any(|g| path.ends_with(g));
+            if !path.exists() && !pending {
+                broken.push(format!("{}:{line}: {target}", file.display()));
+            }
+        }
+    }
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+    let found = local_links("[a](docs/x.md#y) ![p](p.png) [w](https://e.org) [z](#top)");
+    assert_eq!(
+        found,
+        [(1, "docs/x.md".to_owned()), (1, "p.png".to_owned())]
+    );
 }
 
 /// A planted broken command (a scene that does not exist, an option that does not)
