@@ -1,6 +1,7 @@
 //! strata integration tests: one binary, one module per stage.
 mod analysis;
 mod chains;
+mod cli;
 mod discrepancy;
 mod ecs;
 mod ecs_jobs;

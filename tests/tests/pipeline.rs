@@ -163,7 +163,8 @@ fn cli_sample_threads_gives_the_same_file_for_any_count() {
             strata(&["sample", config, "-n", "10", "--threads", bad]).expect_err("out of range");
         let message = one_line(&e);
         assert!(
-            message.contains(&format!("--threads {bad}")) && message.contains("1 to 1024"),
+            message.contains(&format!("invalid value '{bad}' for '--threads <THREADS>'"))
+                && message.contains("give a count from 1 to 1024"),
             "{message}"
         );
     }

@@ -47,6 +47,13 @@ pub(super) fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
     if args.runs == 0 {
         bail!("--runs must be at least 1");
     }
+    // The output folder first: a mistake there must not cost the sampling.
+    if args.out.exists() && !args.out.is_dir() {
+        bail!("{}: --out names a file; give a folder", args.out.display());
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("--out: creating the folder {}", args.out.display()))?;
+    super::check_folder(&args.out.join("x"), "--out")?;
     let input = load(args)?;
     let options = AnalysisOptions {
         epsilon: args.epsilon,

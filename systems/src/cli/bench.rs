@@ -67,6 +67,9 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.repeat == 0 {
         bail!("--repeat must be at least 1");
     }
+    if let Some(path) = &args.json {
+        super::check_output(path, "--json", &["json"])?;
+    }
     let config = SceneConfig::load(&args.config)?;
     let count = args.count.unwrap_or(config.sampling.count);
     let fits = if args.ignore_memory_check {

@@ -33,6 +33,12 @@ pub(super) fn run(args: &FieldArgs) -> anyhow::Result<()> {
         &config,
         &[args.out.as_deref(), args.report.as_deref()],
     )?;
+    if let Some(path) = &args.out {
+        super::check_output(path, "--out (a PLY mesh)", &["ply"])?;
+    }
+    if let Some(path) = &args.report {
+        super::check_output(path, "--report (JSON)", &["json"])?;
+    }
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();
     let (mesh, _) = crate::scene::stage(&progress, "mesh", || crate::scene::load_mesh(&config));

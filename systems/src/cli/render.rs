@@ -28,11 +28,11 @@ pub struct RenderArgs {
     /// Output image (PNG).
     #[arg(long, short = 'o')]
     pub out: PathBuf,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 1280)]
+    /// Image width in pixels (at least 1).
+    #[arg(long, default_value_t = 1280, value_parser = super::pixels)]
     pub width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 960)]
+    /// Image height in pixels (at least 1).
+    #[arg(long, default_value_t = 960, value_parser = super::pixels)]
     pub height: u32,
     /// Samples per pixel (1 or 4).
     #[arg(long, default_value_t = 4)]
@@ -80,6 +80,10 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
     }
     let npr = args.paint.npr_kind_for(args.lod.lod)?;
+    super::check_output(&args.out, "--out (PNG)", &["png"])?;
+    if args.lod.lod {
+        check_lod_args(args)?;
+    }
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.

@@ -32,7 +32,7 @@ pub struct SampleArgs {
     pub out: Option<PathBuf>,
     /// Worker threads, 1 to 1024 (default: one per core). The samples do not depend on
     /// it.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// Sample order: `stratified` (exactly stratified for this count) or
     /// `progressive` (the first N of one sequence per scene and seed, so the samples of
@@ -60,6 +60,14 @@ pub enum Order {
 /// that starting them cannot exhaust a process's threads.
 pub const MAX_THREADS: usize = 1024;
 
+/// Parses `--threads`: a count from 1 to [`MAX_THREADS`].
+fn parse_threads(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!("give a count from 1 to {MAX_THREADS}")),
+    }
+}
+
 /// Runs `strata sample`: on a pool of `--threads` workers when given (the samples are
 /// the same for any count), else on the process's pool.
 pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
@@ -83,7 +91,11 @@ fn run_here(args: &SampleArgs) -> anyhow::Result<()> {
     let config = SceneConfig::load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[args.out.as_deref()])?;
     let out = match &args.out {
-        Some(path) => Some((path.as_path(), output_kind(path)?)),
+        Some(path) => {
+            let kind = output_kind(path)?;
+            super::check_output(path, "--out", &[])?;
+            Some((path.as_path(), kind))
+        }
         None => None,
     };
     let count = check_request(args, &config, out)?;

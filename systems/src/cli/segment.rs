@@ -48,6 +48,15 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
             args.atlas.as_deref(),
         ],
     )?;
+    for (path, flag, ext) in [
+        (&args.out, "--out (a PLY mesh)", "ply"),
+        (&args.report, "--report (JSON)", "json"),
+        (&args.atlas, "--atlas (SVG)", "svg"),
+    ] {
+        if let Some(path) = path {
+            super::check_output(path, flag, &[ext])?;
+        }
+    }
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();
     let (mesh, mesh_time) =

@@ -12,11 +12,11 @@ use crate::viewer::{self, ViewerOptions};
 pub struct ViewArgs {
     /// Scene file (RON).
     pub config: PathBuf,
-    /// Initial window width (logical pixels).
-    #[arg(long, default_value_t = 1280)]
+    /// Initial window width (logical pixels, at least 1).
+    #[arg(long, default_value_t = 1280, value_parser = super::pixels)]
     pub width: u32,
-    /// Initial window height (logical pixels).
-    #[arg(long, default_value_t = 960)]
+    /// Initial window height (logical pixels, at least 1).
+    #[arg(long, default_value_t = 960, value_parser = super::pixels)]
     pub height: u32,
     /// Close after this many frames and print the last frame's timings (for scripted
     /// runs); default: run until the window closes.
