@@ -20,12 +20,7 @@ fn triangle(s: &str) -> String {
 
 #[test]
 fn every_reliability_case_ends_in_its_clear_error() {
-    let with_mesh = |obj: String| {
-        vec![
-            ("m.obj", obj),
-            ("scene.ron", scene("File(\"m.obj\")", "")),
-        ]
-    };
+    let with_mesh = |obj: String| vec![("m.obj", obj), ("scene.ron", scene("File(\"m.obj\")", ""))];
     let sphere = || vec![("scene.ron", scene(SPHERE, ""))];
     let sample = &["sample", "{dir}/scene.ron", "-o", "{dir}/s.ply"] as &'static [&'static str];
     let cases = vec![
@@ -205,10 +200,20 @@ fn vectors_in_designed_fields_take_both_spellings() {
             .field
     };
     let flat = parse("Direction(0.0, 1.0, 0.5)", "Point(0.5, 0.5, 0.0)");
-    assert_eq!(flat, parse("Direction((0.0, 1.0, 0.5))", "Point((0.5, 0.5, 0.0))"));
+    assert_eq!(
+        flat,
+        parse("Direction((0.0, 1.0, 0.5))", "Point((0.5, 0.5, 0.0))")
+    );
     assert_eq!(flat, parse("Direction(0, 1, 0.5)", "Point((0.5, 0.5, 0))"));
-    assert_ne!(flat, parse("Direction(0.0, 1.0, 0.25)", "Point(0.5, 0.5, 0.0)"));
-    for bad in ["Direction(0.0, 1.0)", "Direction((0.0, 1.0, 0.0), 2.0)", "Direction((0.0, 1.0))"] {
+    assert_ne!(
+        flat,
+        parse("Direction(0.0, 1.0, 0.25)", "Point(0.5, 0.5, 0.0)")
+    );
+    for bad in [
+        "Direction(0.0, 1.0)",
+        "Direction((0.0, 1.0, 0.0), 2.0)",
+        "Direction((0.0, 1.0))",
+    ] {
         let text = format!("(mesh: Shape(Plane()), field: Designed(guidance: {bad}))");
         let e = SceneConfig::from_ron(&text, Path::new("d.ron")).expect_err(bad);
         assert!(e.to_string().starts_with("d.ron:1:"), "{bad}: {e}");
@@ -230,12 +235,21 @@ fn samples_files_never_hold_non_finite_values() {
 
 /// Every field kind, on the messy-scan corpus.
 const FIELDS: &[(&str, &str)] = &[
-    ("constant", "Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0)"),
-    ("isotropic", "Constant(direction: (1.0, 0.0, 0.0), anisotropy: 1.0, density: 1.0)"),
+    (
+        "constant",
+        "Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0)",
+    ),
+    (
+        "isotropic",
+        "Constant(direction: (1.0, 0.0, 0.0), anisotropy: 1.0, density: 1.0)",
+    ),
     ("curvature", "Curvature(max_anisotropy: 3.0)"),
     ("designed smoothest", "Designed(guidance: Smoothest)"),
     ("designed curvature", "Designed(guidance: Curvature())"),
-    ("designed direction", "Designed(guidance: Direction(1.0, 0.0, 0.0))"),
+    (
+        "designed direction",
+        "Designed(guidance: Direction(1.0, 0.0, 0.0))",
+    ),
     (
         "designed with a constraint",
         "Designed(guidance: Smoothest, constraints: [(at: Vertex(0), direction: (1.0, 1.0, 0.0))])",
@@ -293,8 +307,170 @@ fn messy_scans_end_in_samples_or_a_clear_error_for_every_field() {
     }
     assert_eq!(runs, 6 * FIELDS.len());
     // The plain fields always sample.
+    assert!(failed.iter().all(|f| f.contains("designed")), "{failed:#?}");
+}
+
+/// Runs `strata args...` in process (`{dir}` stands for `dir`).
+fn strata_in(dir: &Path, args: &[&str]) -> anyhow::Result<()> {
+    let folder = dir.to_str().expect("utf-8 temp path");
+    let argv =
+        std::iter::once("strata".to_owned()).chain(args.iter().map(|a| a.replace("{dir}", folder)));
+    run(Cli::try_parse_from(argv)?)
+}
+
+/// The mesh flags that `strata sample <mesh>` and `strata scene <mesh>` share, each
+/// with an effect on the samples.
+const MESH_FLAGS: &[&[&str]] = &[
+    &[],
+    &["--field", "smooth"],
+    &["--field", "curvature", "--anisotropy", "2"],
+    &["--field", "direction:0,1,0", "--anisotropy", "4"],
+    &["--anisotropy", "2"],
+    &["--density-from", "{dir}/density.field"],
+];
+
+#[test]
+fn a_mesh_is_a_scene_and_strata_scene_writes_the_same_one() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    let mesh = strata_engine::mesh::shapes::sphere(1.0, 4).expect("sphere");
+    strata_engine::io::write_mesh_ply(&d.join("m.ply"), &mesh, None).expect("write mesh");
+    // Density 4 on the upper half, 1 below (l1 = l2 = density).
+    let mut field = String::from("strata-field 1\n");
+    for p in mesh.positions() {
+        let v = if p.y > 0.0 { 4.0 } else { 1.0 };
+        field.push_str(&format!("{v} {v} 1 0 0\n"));
+    }
+    std::fs::write(d.join("density.field"), field).expect("write field");
+    let mut files: Vec<Vec<u8>> = Vec::new();
+    for (i, flags) in MESH_FLAGS.iter().enumerate() {
+        let out = format!("{{dir}}/mesh{i}.ply");
+        let mut args = vec![
+            "sample",
+            "{dir}/m.ply",
+            "-n",
+            "400",
+            "--seed",
+            "5",
+            "-o",
+            &out,
+        ];
+        args.extend_from_slice(flags);
+        strata_in(d, &args).unwrap_or_else(|e| panic!("{flags:?}: {}", one_line(&e)));
+        // The scene `strata scene` prints for the same flags, run as a scene file from
+        // another folder, gives the same bytes.
+        let folder = d.to_str().expect("utf-8");
+        let mut scene_args = vec![
+            "strata".to_owned(),
+            "scene".into(),
+            format!("{folder}/m.ply"),
+        ];
+        scene_args.extend(flags.iter().map(|f| f.replace("{dir}", folder)));
+        let Ok(strata_systems::cli::Cli {
+            command: strata_systems::cli::Command::Scene(scene),
+        }) = Cli::try_parse_from(&scene_args)
+        else {
+            panic!("{scene_args:?} parses as strata scene");
+        };
+        let config = scene.input.scene_for_mesh(&scene.mesh).expect("scene");
+        let text = strata_systems::cli::scene_ron(&config).expect("ron");
+        std::fs::create_dir_all(d.join("elsewhere")).expect("mkdir");
+        std::fs::write(d.join("elsewhere/scene.ron"), &text).expect("write scene");
+        let again = format!("{{dir}}/again{i}.ply");
+        strata_in(
+            d,
+            &[
+                "sample",
+                "{dir}/elsewhere/scene.ron",
+                "-n",
+                "400",
+                "--seed",
+                "5",
+                "-o",
+                &again,
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{flags:?}: {}\n{text}", one_line(&e)));
+        let bytes = std::fs::read(d.join(format!("mesh{i}.ply"))).expect("read");
+        assert!(
+            bytes == std::fs::read(d.join(format!("again{i}.ply"))).expect("read"),
+            "{flags:?}: the scene's samples differ"
+        );
+        files.push(bytes);
+    }
+    // Every flag set changes the samples.
+    for i in 0..files.len() {
+        for j in 0..i {
+            assert!(
+                files[i] != files[j],
+                "{:?} = {:?}",
+                MESH_FLAGS[i],
+                MESH_FLAGS[j]
+            );
+        }
+    }
+    let read = |i: usize| {
+        strata_engine::io::read_samples_ply(&d.join(format!("mesh{i}.ply"))).expect("samples")
+    };
+    // Uniform: isotropic; direction:0,1,0 with --anisotropy 4: spacings 4:1.
+    let median_ratio = |i: usize| {
+        let mut r: Vec<f32> = read(i)
+            .iter()
+            .map(|s| s.spacing[0].max(s.spacing[1]) / s.spacing[0].min(s.spacing[1]))
+            .collect();
+        r.sort_by(f32::total_cmp);
+        r[r.len() / 2]
+    };
+    assert!(median_ratio(0) < 1.5, "{}", median_ratio(0));
+    assert!(median_ratio(3) > 3.0, "{}", median_ratio(3));
+    // --density-from: four times the density above, so most samples are there.
+    let above = read(5).iter().filter(|s| s.position[1] > 0.0).count();
+    assert!(above > 250, "{above} of 400 above");
+}
+
+#[test]
+fn mesh_flags_on_a_scene_file_are_refused_and_bad_values_named() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("scene.ron"), scene(SPHERE, "")).expect("write");
+    std::fs::write(dir.path().join("q.obj"), QUAD).expect("write");
+    let e = strata_in(
+        dir.path(),
+        &["sample", "{dir}/scene.ron", "--field", "smooth"],
+    )
+    .expect_err("--field with a scene");
+    assert!(one_line(&e).contains("apply to a mesh input"), "{e}");
+    let e = strata_in(
+        dir.path(),
+        &["sample", "{dir}/q.obj", "--anisotropy", "0.5"],
+    )
+    .expect_err("anisotropy under 1");
     assert!(
-        failed.iter().all(|f| f.contains("designed")),
-        "{failed:#?}"
+        one_line(&e).contains("--anisotropy must be a number of at least 1"),
+        "{e}"
     );
+    let e = strata_in(dir.path(), &["sample", "{dir}/q.obj", "--field", "wavy"])
+        .expect_err("unknown field");
+    assert!(
+        e.to_string()
+            .contains("give uniform, smooth, curvature or direction:X,Y,Z"),
+        "{e}"
+    );
+    let e = strata_in(dir.path(), &["scene", "{dir}/scene.ron"]).expect_err("not a mesh");
+    assert!(one_line(&e).contains("strata scene takes a mesh"), "{e}");
+}
+
+#[test]
+fn sample_leaves_a_file_beside_its_input_unless_told_not_to() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    std::fs::write(dir.path().join("scene.ron"), scene(SPHERE, "")).expect("write");
+    std::fs::write(dir.path().join("q.obj"), QUAD).expect("write");
+    strata_in(dir.path(), &["sample", "{dir}/scene.ron", "-n", "50"]).expect("sample");
+    let samples = strata_engine::io::read_samples_ply(&dir.path().join("scene.samples.ply"))
+        .expect("the default output");
+    assert_eq!(samples.len(), 50);
+    strata_in(dir.path(), &["sample", "{dir}/q.obj", "-n", "20"]).expect("sample a mesh");
+    assert!(dir.path().join("q.samples.ply").is_file());
+    std::fs::remove_file(dir.path().join("q.samples.ply")).expect("rm");
+    strata_in(dir.path(), &["sample", "{dir}/q.obj", "--no-out"]).expect("no output");
+    assert!(!dir.path().join("q.samples.ply").exists());
 }

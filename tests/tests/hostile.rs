@@ -219,18 +219,6 @@ fn every_hostile_request_of_issue_22_ends_in_its_clear_error() {
             &["sample", "{dir}/scene.ron", "--out", "{dir}/needle.ply"],
             None,
         ),
-        case(
-            "analyze given a mesh PLY",
-            vec![(
-                "mesh.ply",
-                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
-                 property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
-                 end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
-                    .to_owned(),
-            )],
-            &["analyze", "{dir}/mesh.ply", "-o", "{dir}/analysis"],
-            Some(&["mesh.ply: not a sample file"]),
-        ),
     ];
     // Sizes that depend on the machine: refused wherever they do not fit (2^32
     // samples are 275 GB on disk; 10^9 are 64 GB in memory).

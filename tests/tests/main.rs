@@ -6,6 +6,7 @@ mod discrepancy;
 mod ecs;
 mod ecs_jobs;
 mod field;
+mod flags;
 mod fuzz;
 mod gpu;
 mod hostile;

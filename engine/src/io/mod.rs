@@ -78,9 +78,7 @@ pub fn load(path: &Path) -> Result<TriMesh, MeshError> {
     // read it (reading a folder fails with a bare "Is a directory").
     let not_a_mesh = |what: &str| MeshError::Io {
         path: path.to_path_buf(),
-        source: std::io::Error::other(format!(
-            "{what}; give a mesh file ending in .obj or .ply"
-        )),
+        source: std::io::Error::other(format!("{what}; give a mesh file ending in .obj or .ply")),
     };
     if path.is_dir() {
         return Err(not_a_mesh("is a folder, not a mesh file"));

@@ -9,7 +9,7 @@ use anyhow::{Context, bail};
 use strata_engine::field::FieldSpec;
 use strata_engine::field::design::{Anisotropy, Density, Design, Guidance};
 
-use crate::config::{MeshSource, SceneConfig};
+use crate::config::SceneConfig;
 
 /// The field of a mesh given as input, from its flags.
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -62,10 +62,14 @@ fn parse_field(text: &str) -> Result<FieldChoice, String> {
                 .collect::<Result<_, _>>()
                 .map_err(|_| format!("direction:X,Y,Z takes three numbers; {usage}"))?;
             match v[..] {
-                [x, y, z] if [x, y, z].iter().all(|c| c.is_finite()) && (x, y, z) != (0.0, 0.0, 0.0) => {
+                [x, y, z]
+                    if [x, y, z].iter().all(|c| c.is_finite()) && (x, y, z) != (0.0, 0.0, 0.0) =>
+                {
                     Ok(FieldChoice::Direction([x, y, z]))
                 }
-                _ => Err(format!("direction:X,Y,Z takes three finite numbers, not all 0; {usage}")),
+                _ => Err(format!(
+                    "direction:X,Y,Z takes three finite numbers, not all 0; {usage}"
+                )),
             }
         }
     }
@@ -122,9 +126,7 @@ impl MeshFieldArgs {
                 density: 1.0,
             },
             FieldChoice::Smooth => designed(Guidance::Smoothest),
-            FieldChoice::Curvature if self.density_from.is_some() => {
-                designed(Guidance::default())
-            }
+            FieldChoice::Curvature if self.density_from.is_some() => designed(Guidance::default()),
             FieldChoice::Curvature => match FieldSpec::default_curvature() {
                 FieldSpec::Curvature {
                     measure,
@@ -178,6 +180,33 @@ impl MeshFieldArgs {
         }
         Ok(SceneConfig::load(input)?)
     }
+}
+
+/// Arguments of `strata scene`.
+#[derive(Debug, clap::Args)]
+pub struct SceneArgs {
+    /// Mesh file (OBJ, PLY).
+    pub mesh: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`.
+    #[command(flatten)]
+    pub input: MeshFieldArgs,
+}
+
+/// Runs `strata scene`: prints the scene of a mesh and its flags
+/// (`strata scene m.obj --field smooth > m.ron`).
+pub(super) fn run_scene(args: &SceneArgs) -> anyhow::Result<()> {
+    if !is_mesh(&args.mesh) {
+        bail!(
+            "{}: strata scene takes a mesh (.obj, .ply)",
+            args.mesh.display()
+        );
+    }
+    let config = args.input.scene_for_mesh(&args.mesh)?;
+    let text = scene_ron(&config)?;
+    let mut out = std::io::stdout().lock();
+    std::io::Write::write_all(&mut out, text.as_bytes())?;
+    std::io::Write::flush(&mut out)?;
+    Ok(())
 }
 
 /// `path` made absolute (left as it is if the working folder is unknown).

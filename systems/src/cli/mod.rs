@@ -10,6 +10,7 @@
 mod analyze;
 mod bench;
 mod field;
+mod input;
 mod lod;
 mod look;
 mod render;
@@ -28,6 +29,7 @@ use clap::{Parser, Subcommand};
 pub use analyze::AnalyzeArgs;
 pub use bench::{BenchArgs, BenchReport};
 pub use field::FieldArgs;
+pub use input::{FieldChoice, MeshFieldArgs, SceneArgs, scene_ron};
 pub use lod::LodArgs;
 pub use look::LookArgs;
 pub use render::RenderArgs;
@@ -69,6 +71,8 @@ pub enum Command {
     Watch(WatchArgs),
     /// Measure samples: discrepancy, spectra, differential domain analysis (JSON + PNG).
     Analyze(AnalyzeArgs),
+    /// Print the scene file (RON) that a mesh and its `--field` flags stand for.
+    Scene(SceneArgs),
 }
 
 impl Command {
@@ -100,9 +104,8 @@ pub fn ensure_runtime_dir() {
     }
     let uid = rustix::process::getuid().as_raw();
     let dir = std::env::temp_dir().join(format!("strata-runtime-{uid}"));
-    let made = std::fs::create_dir_all(&dir).and_then(|()| {
-        std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700))
-    });
+    let made = std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)));
     let Ok(exe) = std::env::current_exe() else {
         return;
     };
@@ -140,6 +143,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::View(args) => view::run(&args),
         Command::Watch(args) => watch::run(&args),
         Command::Analyze(args) => analyze::run(&args),
+        Command::Scene(args) => input::run_scene(&args),
     }
 }
 
@@ -171,7 +175,10 @@ fn check_output(path: &Path, flag: &str, extensions: &[&str]) -> anyhow::Result<
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     if !extensions.is_empty() && !extensions.iter().any(|e| e.eq_ignore_ascii_case(ext)) {
         let names: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
-        bail!("{shown}: {flag} writes {}; name the file so", names.join(" or "));
+        bail!(
+            "{shown}: {flag} writes {}; name the file so",
+            names.join(" or ")
+        );
     }
     if path.is_dir() {
         bail!("{shown}: {flag} names a folder; give a file name");
@@ -210,7 +217,10 @@ fn pixels(text: &str) -> Result<u32, String> {
     match text.parse::<u32>() {
         Ok(0) => Err("must be at least 1 pixel".to_owned()),
         Ok(n) => Ok(n),
-        Err(_) => Err(format!("give a whole number of pixels from 1 to {}", u32::MAX)),
+        Err(_) => Err(format!(
+            "give a whole number of pixels from 1 to {}",
+            u32::MAX
+        )),
     }
 }
 

@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 
 use super::{LodArgs, LookArgs, StyleArgs};
-use crate::config::SceneConfig;
 use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{LodPool, PoolChange, Sample};
 
@@ -23,8 +22,12 @@ use crate::scene::Scene;
 /// Arguments of `strata render`.
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
-    /// Scene file (RON).
+    /// Scene file (RON), or a mesh (OBJ, PLY) sampled with the field of `--field`
+    /// (uniform density by default).
     pub config: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
     /// Output image (PNG).
     #[arg(long, short = 'o')]
     pub out: PathBuf,
@@ -84,7 +87,7 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.lod.lod {
         check_lod_args(args)?;
     }
-    let config = SceneConfig::load(&args.config)?;
+    let config = args.input.load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.
     let ctx = GpuContext::headless(&args.look.gpu_options()).context("opening a GPU")?;
