@@ -222,8 +222,10 @@ fn vectors_in_designed_fields_take_both_spellings() {
 
 #[test]
 fn samples_files_never_hold_non_finite_values() {
-    let mut s = Sample::default();
-    s.position = [1.0, f32::INFINITY, 0.0];
+    let mut s = Sample {
+        position: [1.0, f32::INFINITY, 0.0],
+        ..Sample::default()
+    };
     let mut bytes = Vec::new();
     let e = strata_engine::io::write_samples_ply_to(&mut bytes, &[s]).expect_err("inf");
     assert!(e.to_string().contains("non-finite"), "{e}");

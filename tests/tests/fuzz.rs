@@ -177,9 +177,11 @@ fn check_scene(bytes: &[u8]) -> Result<bool, String> {
                 .validate()
                 .map_err(|e| format!("from_ron passed a scene validate fails: {e}"))?;
             // A designed field that parses is built on a small mesh: a field or an error.
+            // On a pool of its own, so that other tests' work on the global pool does not
+            // hold it past `SLOW_CASE`.
             if matches!(scene.field, FieldSpec::Designed(_))
                 && scene.field.files().is_empty()
-                && let Ok(field) = scene.field.build(&field_meshes()[1])
+                && let Ok(field) = own_pool().install(|| scene.field.build(&field_meshes()[1]))
                 && !field.tensors().iter().all(|t| t.is_finite())
             {
                 return Err("a designed field with a non-finite tensor".to_owned());
@@ -208,6 +210,17 @@ fn check_args(bytes: &[u8]) -> Result<bool, String> {
         Err(e) if e.to_string().is_empty() => Err("clap gave an empty error".to_owned()),
         Err(_) => Ok(false),
     }
+}
+
+/// A one-thread pool for the fields that scene cases build.
+fn own_pool() -> &'static rayon::ThreadPool {
+    static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
+    POOL.get_or_init(|| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a one-thread pool")
+    })
 }
 
 /// A field file on each of the field meshes: a field that parses has one tensor per

@@ -62,9 +62,9 @@ impl<'de> Visitor<'de> for Vec3Visitor {
 
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[f64; 3], A::Error> {
         let mut out = [0.0; 3];
-        for i in 0..3 {
+        for (i, slot) in out.iter_mut().enumerate() {
             match seq.next_element::<Item>()? {
-                Some(Item::Number(v)) => out[i] = v,
+                Some(Item::Number(v)) => *slot = v,
                 // `((x, y, z))`: the whole vector as the one element.
                 Some(Item::Vector(v)) if i == 0 => {
                     if seq.next_element::<Item>()?.is_some() {

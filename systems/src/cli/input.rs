@@ -100,13 +100,16 @@ impl MeshFieldArgs {
             None => FieldChoice::Uniform,
         });
         let designed = |guidance: Guidance| {
-            let mut design = Design::default();
-            design.guidance = guidance;
-            design.anisotropy = Anisotropy::Constant(self.anisotropy.unwrap_or(3.0));
-            if let Some(path) = &self.density_from {
-                design.density = Density::File(absolute(path));
-            }
-            FieldSpec::Designed(design)
+            let density = match &self.density_from {
+                Some(path) => Density::File(absolute(path)),
+                None => Density::default(),
+            };
+            FieldSpec::Designed(Design {
+                guidance,
+                anisotropy: Anisotropy::Constant(self.anisotropy.unwrap_or(3.0)),
+                density,
+                ..Design::default()
+            })
         };
         Ok(match choice {
             FieldChoice::Uniform | FieldChoice::Direction(_) if self.density_from.is_some() => {
