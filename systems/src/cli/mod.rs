@@ -54,7 +54,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Sample a scene and optionally write the samples (PLY or CSV).
+    /// Sample a scene or a mesh and write the samples (PLY or CSV; beside the input by
+    /// default).
     Sample(SampleArgs),
     /// Segment a scene's mesh along its field; write the mesh coloured by segment.
     Segment(SegmentArgs),
