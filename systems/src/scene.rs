@@ -133,12 +133,56 @@ pub(crate) fn progress_spinners() -> impl Fn(strata_engine::surface::Progress) {
     }
 }
 
-/// Loads or builds the scene's mesh.
+/// Largest coordinate magnitude of a placed mesh: samples are 32-bit floats (at most
+/// 3.4e38), and their spacings and the renderer's arithmetic need room above the
+/// coordinates.
+pub const MAX_SAMPLE_COORDINATE: f64 = 1e36;
+
+/// Smallest bounding-box diagonal of a placed mesh: its sample spacings (down to a
+/// millionth of it for the largest counts) must stay normal 32-bit floats (1.2e-38).
+pub const MIN_SAMPLE_EXTENT: f64 = 1e-30;
+
+/// Loads or builds the scene's mesh, refusing one whose samples, placed by the scene's
+/// transform, would not be representable as 32-bit floats
+/// ([`MAX_SAMPLE_COORDINATE`], [`MIN_SAMPLE_EXTENT`]).
 pub fn load_mesh(config: &SceneConfig) -> Result<TriMesh, MeshError> {
-    match &config.mesh {
-        MeshSource::File(path) => strata_engine::io::load(path),
-        MeshSource::Shape(shape) => shape.build(),
+    let mesh = match &config.mesh {
+        MeshSource::File(path) => strata_engine::io::load(path)?,
+        MeshSource::Shape(shape) => shape.build()?,
+    };
+    let name = match &config.mesh {
+        MeshSource::File(path) => path.clone(),
+        MeshSource::Shape(_) => "the built-in shape".into(),
+    };
+    match sample_range_problem(&mesh, config.transform.scale, config.transform.translation) {
+        None => Ok(mesh),
+        Some(what) => Err(MeshError::Io {
+            path: name,
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, what),
+        }),
     }
+}
+
+/// Why `mesh`, scaled by `scale` and moved by `translation`, makes samples that 32-bit
+/// floats cannot hold, or `None`.
+fn sample_range_problem(mesh: &TriMesh, scale: f64, translation: [f64; 3]) -> Option<String> {
+    let (lo, hi) = mesh.bounds();
+    let reach = lo.abs().max(hi.abs()).max_element() * scale
+        + glam::DVec3::from(translation).abs().max_element();
+    let extent = (hi - lo).length() * scale;
+    if reach > MAX_SAMPLE_COORDINATE {
+        return Some(format!(
+            "placed coordinates reach {reach:.3e}, beyond the {MAX_SAMPLE_COORDINATE:.0e} that 32-bit samples hold with room for their spacings; scale the mesh down (for example `transform: (scale: {:.0e})`)",
+            MAX_SAMPLE_COORDINATE / reach / 10.0
+        ));
+    }
+    if extent < MIN_SAMPLE_EXTENT {
+        return Some(format!(
+            "the placed mesh spans only {extent:.3e} (its bounding-box diagonal), under the {MIN_SAMPLE_EXTENT:.0e} at which 32-bit samples still resolve their spacings; scale the mesh up (for example `transform: (scale: {:.0e})`)",
+            MIN_SAMPLE_EXTENT / extent * 10.0
+        ));
+    }
+    None
 }
 
 #[cfg(test)]

@@ -141,7 +141,11 @@ fn field_command_errors_are_one_line() {
     .expect_err("unwritable output");
     let line = one_line(&e);
     assert!(
-        line.starts_with(&format!("writing {}", out.display())) && !line.contains('\n'),
+        line.starts_with(&format!(
+            "{}: --out (a PLY mesh): the folder ",
+            out.display()
+        )) && line.ends_with("no-such-folder does not exist")
+            && !line.contains('\n'),
         "{line}"
     );
 }

@@ -30,6 +30,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
+use clap::Parser;
 use glam::DVec3;
 use strata_engine::field::{FieldSpec, format_field_file, parse_field_file};
 use strata_engine::fixtures::oblique;
@@ -65,6 +66,7 @@ enum Kind {
     Samples,
     Ron,
     Field,
+    Args,
 }
 
 impl Kind {
@@ -72,9 +74,16 @@ impl Kind {
     /// up to its first `-`: how pinned files say which reader they are for.
     fn from_file_name(name: &str) -> Option<Kind> {
         let prefix = name.split('-').next()?;
-        [Kind::Obj, Kind::Ply, Kind::Samples, Kind::Ron, Kind::Field]
-            .into_iter()
-            .find(|k| format!("{k:?}").to_lowercase() == prefix)
+        [
+            Kind::Obj,
+            Kind::Ply,
+            Kind::Samples,
+            Kind::Ron,
+            Kind::Field,
+            Kind::Args,
+        ]
+        .into_iter()
+        .find(|k| format!("{k:?}").to_lowercase() == prefix)
     }
 
     /// Words of the format, swapped in for a word of the input by `mutate`.
@@ -92,6 +101,12 @@ impl Kind {
                  sampling count seed"
             }
             Kind::Field => "t strata-field 1 # \u{feff}",
+            Kind::Args => {
+                "sample segment field bench render view watch analyze scene -n -o --out \
+                 --seed --count --threads --order progressive --field smooth curvature \
+                 uniform direction:1,0,0 --anisotropy --density-from --no-out --report \
+                 --width --height --lod --style strokes --brush -- - = 0 -1"
+            }
         };
         words.split_ascii_whitespace().collect()
     }
@@ -108,6 +123,7 @@ impl Kind {
             },
             Kind::Ron => check_scene(bytes),
             Kind::Field => check_field_file(bytes),
+            Kind::Args => check_args(bytes),
         }
     }
 }
@@ -156,12 +172,55 @@ fn check_mesh(result: Result<TriMesh, MeshError>, file: &str) -> Result<bool, St
 fn check_scene(bytes: &[u8]) -> Result<bool, String> {
     let text = String::from_utf8_lossy(bytes);
     match SceneConfig::from_ron(&text, Path::new("configs/fuzz.ron")) {
-        Ok(scene) => scene
-            .validate()
-            .map(|()| true)
-            .map_err(|e| format!("from_ron passed a scene validate fails: {e}")),
+        Ok(scene) => {
+            scene
+                .validate()
+                .map_err(|e| format!("from_ron passed a scene validate fails: {e}"))?;
+            // A designed field that parses is built on a small mesh: a field or an error.
+            // On a pool of its own, so that other tests' work on the global pool does not
+            // hold it past `SLOW_CASE`.
+            if matches!(scene.field, FieldSpec::Designed(_))
+                && scene.field.files().is_empty()
+                && let Ok(field) = own_pool().install(|| scene.field.build(&field_meshes()[1]))
+                && !field.tensors().iter().all(|t| t.is_finite())
+            {
+                return Err("a designed field with a non-finite tensor".to_owned());
+            }
+            Ok(true)
+        }
         Err(e) => names_file(&e, "fuzz.ron"),
     }
+}
+
+/// A command line (the bytes split at white space) parses or gives clap's error, and
+/// one that parses as a mesh's `--field` flags gives a field or a one-line error.
+fn check_args(bytes: &[u8]) -> Result<bool, String> {
+    let text = String::from_utf8_lossy(bytes);
+    let argv = std::iter::once("strata").chain(text.split_whitespace());
+    match strata_systems::cli::Cli::try_parse_from(argv) {
+        Ok(cli) => {
+            if let strata_systems::cli::Command::Scene(args) = &cli.command
+                && let Err(e) = args.input.field_spec()
+                && strata_systems::cli::one_line(&e).contains('\n')
+            {
+                return Err(format!("a mesh flag's error spans lines: {e}"));
+            }
+            Ok(true)
+        }
+        Err(e) if e.to_string().is_empty() => Err("clap gave an empty error".to_owned()),
+        Err(_) => Ok(false),
+    }
+}
+
+/// A one-thread pool for the fields that scene cases build.
+fn own_pool() -> &'static rayon::ThreadPool {
+    static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
+    POOL.get_or_init(|| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("a one-thread pool")
+    })
 }
 
 /// A field file on each of the field meshes: a field that parses has one tensor per
@@ -529,7 +588,36 @@ fn samples_seeds() -> Vec<Seed> {
 }
 
 fn ron_seeds() -> Vec<Seed> {
-    config_files().iter().map(|path| Seed::file(path)).collect()
+    let mut seeds: Vec<Seed> = config_files().iter().map(|path| Seed::file(path)).collect();
+    // Designed fields with every kind of guidance, constraint and source.
+    seeds.push(Seed::new(
+        "designed with constraints",
+        "(mesh: Shape(Sphere(radius: 1.0, resolution: 2)), field: Designed(guidance: \
+         Direction((0.0, 1.0, 0.5)), weight: 2.0, smoothness: 0.5, constraints: [(at: \
+         Vertex(3), direction: (1.0, 0.0, 0.0)), (at: Point(0.0, 1.0, 0.0), direction: \
+         (0.0, 0.0, 1.0))], anisotropy: Curvature(min: 1.0, max: 4.0), density: \
+         Curvature(floor: 0.5)))",
+    ));
+    seeds.push(Seed::new(
+        "designed smoothest",
+        "(mesh: Shape(Torus(major_radius: 1.0, minor_radius: 0.4, resolution: 2)), field: \
+         Designed(guidance: Smoothest, anisotropy: Constant(2.0), cancel_distance: 0.5))",
+    ));
+    seeds
+}
+
+fn args_seeds() -> Vec<Seed> {
+    [
+        "sample configs/default.ron -n 100 --seed 3 -o out.ply --order progressive",
+        "sample mesh.obj --field direction:1,0,0 --anisotropy 3 --no-out",
+        "scene mesh.ply --field curvature --density-from d.field",
+        "render s.ron -o r.png --width 64 --height 48 --lod --lod-max 2 --frames 2",
+        "analyze s.ron -o out -n 64 --runs 2 --epsilon 5 --no-plots",
+        "segment s.ron -o seg.ply --report r.json --atlas a.svg --seed 4",
+    ]
+    .into_iter()
+    .map(|line| Seed::new(line, line))
+    .collect()
 }
 
 fn field_seeds() -> Vec<Seed> {
@@ -582,6 +670,11 @@ fn fuzz_samples_ply() {
 #[test]
 fn fuzz_scene_ron() {
     fuzz("ron", Kind::Ron, 5, &ron_seeds(), 20_000);
+}
+
+#[test]
+fn fuzz_command_lines() {
+    fuzz("args", Kind::Args, 8, &args_seeds(), 5_000);
 }
 
 #[test]

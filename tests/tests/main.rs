@@ -1,10 +1,12 @@
 //! strata integration tests: one binary, one module per stage.
 mod analysis;
 mod chains;
+mod cli;
 mod discrepancy;
 mod ecs;
 mod ecs_jobs;
 mod field;
+mod flags;
 mod fuzz;
 mod gpu;
 mod hostile;

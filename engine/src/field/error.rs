@@ -149,7 +149,7 @@ pub enum LineFieldError {
     },
     /// A constraint's direction is not finite or has no part in the tangent plane.
     #[error(
-        "constraint {index} at vertex {vertex}: the direction is not finite or is normal to the surface"
+        "constraint {index} at vertex {vertex}: the direction is not finite or lies within 1 degree of the surface normal there, so it gives no line along the surface; give a direction in the tangent plane"
     )]
     ConstraintDirection {
         /// Position of the constraint in the list.

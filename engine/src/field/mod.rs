@@ -27,6 +27,8 @@ mod isotropic;
 mod params;
 mod shading;
 mod spec;
+#[cfg(feature = "serde")]
+mod vec3_serde;
 mod warp;
 
 pub use curvature::{

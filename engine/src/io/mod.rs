@@ -74,6 +74,18 @@ pub use write::{
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn load(path: &Path) -> Result<TriMesh, MeshError> {
+    // A folder or a name without an extension is no mesh file: say so before trying to
+    // read it (reading a folder fails with a bare "Is a directory").
+    let not_a_mesh = |what: &str| MeshError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(format!("{what}; give a mesh file ending in .obj or .ply")),
+    };
+    if path.is_dir() {
+        return Err(not_a_mesh("is a folder, not a mesh file"));
+    }
+    if path.extension().is_none() {
+        return Err(not_a_mesh("has no extension, so its format is unknown"));
+    }
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
@@ -245,9 +257,20 @@ fn build_mesh(
             .collect();
         TriMesh::from_polygons(positions, &polygons)
     };
-    let mut mesh = built.map_err(|source| MeshError::InFile {
-        path: path.to_path_buf(),
-        source: Box::new(source),
+    let mut mesh = built.map_err(|source| match (&source, skipped.lines.first()) {
+        // Nothing usable, and faces were skipped: the line of the first says why.
+        (MeshError::Empty { faces: 0, .. }, Some(&line)) => MeshError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            what: format!(
+                "no usable face: the face on this line has fewer than 3 corners (a point or a line, which a surface cannot use); {} such faces were skipped and no face of 3 or more corners remains",
+                skipped.count
+            ),
+        },
+        _ => MeshError::InFile {
+            path: path.to_path_buf(),
+            source: Box::new(source),
+        },
     })?;
     if skipped.count > 0 {
         mesh.warnings.insert(

@@ -145,6 +145,7 @@ fn write_ply_header<W: Write>(w: &mut W, count: u64) -> io::Result<()> {
 /// The 64-byte records of `samples`.
 fn write_ply_rows<W: Write>(w: &mut W, samples: &[Sample]) -> io::Result<()> {
     for s in samples {
+        check_finite(s)?;
         let mut record = [0u8; 64];
         for (chunk, word) in record.chunks_exact_mut(4).zip(sample_row(s)) {
             chunk.copy_from_slice(&word.to_le_bytes());
@@ -180,6 +181,7 @@ fn write_csv_header<W: Write>(w: &mut W) -> io::Result<()> {
 /// The CSV rows of `samples`.
 fn write_csv_rows<W: Write>(w: &mut W, samples: &[Sample]) -> io::Result<()> {
     for s in samples {
+        check_finite(s)?;
         let [x, y, z] = s.position;
         let [nx, ny, nz] = s.normal;
         let [mx, my, mz] = s.major_axis;
@@ -264,6 +266,23 @@ pub fn write_samples_in_blocks(
         path: path.to_path_buf(),
         source,
     })
+}
+
+/// Refuses a sample with a non-finite position or spacing
+/// ([`io::ErrorKind::InvalidData`]): a file never holds one (coordinates beyond `f32`'s
+/// range overflow to infinity when samples are made).
+fn check_finite(s: &Sample) -> io::Result<()> {
+    let values = s.position.iter().chain(&s.spacing);
+    if values.clone().all(|v| v.is_finite()) {
+        return Ok(());
+    }
+    Err(io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!(
+            "sample {} has a non-finite position {:?} or spacing {:?} (beyond the 32-bit floats samples are written in); nothing was written",
+            s.index, s.position, s.spacing
+        ),
+    ))
 }
 
 /// The 16 values of a sample row as 32-bit words (float bits or uint), in

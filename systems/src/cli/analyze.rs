@@ -5,16 +5,18 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 
-use crate::config::SceneConfig;
 use crate::report::analysis::{AnalysisInput, AnalysisOptions, write_analysis};
 use crate::scene::Scene;
 
 /// Arguments of `strata analyze`.
 #[derive(Debug, clap::Args)]
 pub struct AnalyzeArgs {
-    /// Scene file (`.ron`) to sample, or a sample file (`.ply`, as `strata sample`
-    /// writes) to analyse as it is.
+    /// Scene file (`.ron`) or mesh (`.obj`, a `.ply` mesh) to sample, or a sample file
+    /// (`.ply`, as `strata sample` writes) to analyse as it is.
     pub input: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub mesh: super::MeshFieldArgs,
     /// Output folder for the JSON and PNG files (created if missing).
     #[arg(long, short = 'o', default_value = "analysis")]
     pub out: PathBuf,
@@ -47,6 +49,13 @@ pub(super) fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
     if args.runs == 0 {
         bail!("--runs must be at least 1");
     }
+    // The output folder first: a mistake there must not cost the sampling.
+    if args.out.exists() && !args.out.is_dir() {
+        bail!("{}: --out names a file; give a folder", args.out.display());
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("--out: creating the folder {}", args.out.display()))?;
+    super::check_folder(&args.out.join("x"), "--out")?;
     let input = load(args)?;
     let options = AnalysisOptions {
         epsilon: args.epsilon,
@@ -75,24 +84,20 @@ fn load(args: &AnalyzeArgs) -> anyhow::Result<AnalysisInput> {
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    // A mesh PLY reads as points without spacings: it is sampled as a mesh.
+    let samples = match ext.as_deref() {
+        Some("ply") => Some(strata_engine::io::read_samples_ply(&args.input).ok())
+            .flatten()
+            .filter(|s| s.iter().any(|s| s.spacing != [0.0, 0.0])),
+        _ => None,
+    };
     match ext.as_deref() {
-        Some("ply") => {
-            let samples = strata_engine::io::read_samples_ply(&args.input)
-                .with_context(|| args.input.display().to_string())?;
-            if samples.is_empty() {
-                bail!("{}: no samples", args.input.display());
-            }
-            // A mesh PLY reads as points without spacings: say what the file is not.
-            if samples.iter().all(|s| s.spacing == [0.0, 0.0]) {
-                bail!(
-                    "{}: not a sample file: its points have no spacing_major and spacing_minor (a mesh? `strata sample --out` writes sample files)",
-                    args.input.display()
-                );
-            }
+        Some("ply") if samples.is_some() => {
+            let samples = samples.unwrap_or_default();
             Ok(AnalysisInput::from_samples(samples))
         }
-        Some("ron") => {
-            let config = SceneConfig::load(&args.input)?;
+        Some("ron" | "obj" | "ply") => {
+            let config = args.mesh.load(&args.input)?;
             let count = args.count.unwrap_or(config.sampling.count);
             if count == 0 {
                 bail!("sample count must be at least 1");
@@ -111,7 +116,7 @@ fn load(args: &AnalyzeArgs) -> anyhow::Result<AnalysisInput> {
             ))
         }
         _ => bail!(
-            "{}: expected a scene (.ron) or a sample file (.ply)",
+            "{}: expected a scene (.ron), a mesh (.obj, .ply) or a sample file (.ply)",
             args.input.display()
         ),
     }

@@ -8,14 +8,17 @@ use anyhow::{Context, bail};
 use strata_engine::sample::{Sample, SampleSite};
 
 use super::write_file;
-use crate::config::SceneConfig;
 use crate::scene::Scene;
 
 /// Arguments of `strata bench`.
 #[derive(Debug, clap::Args)]
 pub struct BenchArgs {
-    /// Scene file (RON).
+    /// Scene file (RON), or a mesh (OBJ, PLY) sampled with the field of `--field`
+    /// (uniform density by default).
     pub config: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
     /// Samples per run (overrides the scene's `sampling.count`).
     #[arg(long, short = 'n')]
     pub count: Option<u64>,
@@ -67,7 +70,10 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.repeat == 0 {
         bail!("--repeat must be at least 1");
     }
-    let config = SceneConfig::load(&args.config)?;
+    if let Some(path) = &args.json {
+        super::check_output(path, "--json", &["json"])?;
+    }
+    let config = args.input.load(&args.config)?;
     let count = args.count.unwrap_or(config.sampling.count);
     let fits = if args.ignore_memory_check {
         crate::budget::check_count(count)

@@ -7,15 +7,17 @@ use std::path::PathBuf;
 use anyhow::Context;
 
 use super::write_file;
-use crate::config::SceneConfig;
 use crate::report::field::{FieldReport, write_field_ply};
 
 /// Arguments of `strata field`.
 #[derive(Debug, clap::Args)]
 pub struct FieldArgs {
-    /// Scene file (RON); its `mesh` and `field` sections are used, and `param`'s
-    /// `isotropy_threshold` says which vertices count as near-isotropic.
+    /// Scene file (RON), or a mesh (OBJ, PLY) sampled with the field of `--field`
+    /// (uniform density by default).
     pub config: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
     /// Output mesh (binary PLY) with per-vertex normal, major direction, anisotropy and
     /// density, and per-face singularity index.
     #[arg(long, short = 'o')]
@@ -27,12 +29,18 @@ pub struct FieldArgs {
 
 /// Runs `strata field`.
 pub(super) fn run(args: &FieldArgs) -> anyhow::Result<()> {
-    let config = SceneConfig::load(&args.config)?;
+    let config = args.input.load(&args.config)?;
     super::refuse_inputs_as_outputs(
         &args.config,
         &config,
         &[args.out.as_deref(), args.report.as_deref()],
     )?;
+    if let Some(path) = &args.out {
+        super::check_output(path, "--out (a PLY mesh)", &["ply"])?;
+    }
+    if let Some(path) = &args.report {
+        super::check_output(path, "--report (JSON)", &["json"])?;
+    }
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();
     let (mesh, _) = crate::scene::stage(&progress, "mesh", || crate::scene::load_mesh(&config));

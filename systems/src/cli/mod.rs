@@ -10,6 +10,7 @@
 mod analyze;
 mod bench;
 mod field;
+mod input;
 mod lod;
 mod look;
 mod render;
@@ -28,6 +29,7 @@ use clap::{Parser, Subcommand};
 pub use analyze::AnalyzeArgs;
 pub use bench::{BenchArgs, BenchReport};
 pub use field::FieldArgs;
+pub use input::{FieldChoice, MeshFieldArgs, SceneArgs, scene_ron};
 pub use lod::LodArgs;
 pub use look::LookArgs;
 pub use render::RenderArgs;
@@ -38,8 +40,11 @@ pub use view::ViewArgs;
 pub use watch::WatchArgs;
 
 /// strata: anisotropic, density-controlled stratified sampling of surfaces.
+///
+/// Every command takes a scene file (RON) or a mesh (OBJ or PLY) with uniform density;
+/// `strata scene <mesh>` writes the scene a mesh and its flags stand for.
 #[derive(Debug, Parser)]
-#[command(name = "strata", version, about)]
+#[command(name = "strata", version)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -49,7 +54,8 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Sample a scene and optionally write the samples (PLY or CSV).
+    /// Sample a scene or a mesh and write the samples (PLY or CSV; beside the input by
+    /// default).
     Sample(SampleArgs),
     /// Segment a scene's mesh along its field; write the mesh coloured by segment.
     Segment(SegmentArgs),
@@ -66,6 +72,51 @@ pub enum Command {
     Watch(WatchArgs),
     /// Measure samples: discrepancy, spectra, differential domain analysis (JSON + PNG).
     Analyze(AnalyzeArgs),
+    /// Print the scene file (RON) that a mesh and its `--field` flags stand for.
+    Scene(SceneArgs),
+}
+
+impl Command {
+    /// Whether the command opens a GPU (`render`, `view`).
+    pub fn opens_gpu(&self) -> bool {
+        matches!(self, Self::Render(_) | Self::View(_))
+    }
+}
+
+/// Whether `error` comes from writing to a closed pipe (a reader that stopped early).
+pub fn is_broken_pipe(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Gives the GPU drivers a private runtime folder when `XDG_RUNTIME_DIR` is unset or
+/// not a folder (containers, CI), so that Mesa does not print its complaint about it:
+/// runs this program again with `XDG_RUNTIME_DIR` set to `<temp>/strata-runtime-<uid>`
+/// (mode 0700). Returns only if that is not needed or not possible.
+pub fn ensure_runtime_dir() {
+    use std::os::unix::fs::PermissionsExt;
+    use std::os::unix::process::CommandExt;
+    const VAR: &str = "XDG_RUNTIME_DIR";
+    if std::env::var_os(VAR).is_some_and(|d| Path::new(&d).is_dir()) {
+        return;
+    }
+    let uid = rustix::process::getuid().as_raw();
+    let dir = std::env::temp_dir().join(format!("strata-runtime-{uid}"));
+    let made = std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)));
+    let Ok(exe) = std::env::current_exe() else {
+        return;
+    };
+    if made.is_ok() {
+        // `exec` returns only on failure; then this process goes on as it is.
+        let _ = std::process::Command::new(exe)
+            .args(std::env::args_os().skip(1))
+            .env(VAR, &dir)
+            .exec();
+    }
 }
 
 /// An error and its causes in one line, joined by `": "`, leaving out causes whose
@@ -93,6 +144,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::View(args) => view::run(&args),
         Command::Watch(args) => watch::run(&args),
         Command::Analyze(args) => analyze::run(&args),
+        Command::Scene(args) => input::run_scene(&args),
     }
 }
 
@@ -112,6 +164,64 @@ fn output_kind(path: &Path) -> anyhow::Result<SampleFormat> {
         Some("ply") => Ok(SampleFormat::Ply),
         Some("csv") => Ok(SampleFormat::Csv),
         _ => bail!("{}: output must end in .ply or .csv", path.display()),
+    }
+}
+
+/// Checks an output file before any work: `flag` names the option in messages; its
+/// name must end in one of `extensions` (any case; none to accept any), it must not be
+/// a folder, and its folder must exist and be writable. A device or pipe that exists
+/// (`/dev/null`) is written as it is.
+fn check_output(path: &Path, flag: &str, extensions: &[&str]) -> anyhow::Result<()> {
+    let shown = path.display();
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !extensions.is_empty() && !extensions.iter().any(|e| e.eq_ignore_ascii_case(ext)) {
+        let names: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+        bail!(
+            "{shown}: {flag} writes {}; name the file so",
+            names.join(" or ")
+        );
+    }
+    if path.is_dir() {
+        bail!("{shown}: {flag} names a folder; give a file name");
+    }
+    if path.exists() && !path.is_file() {
+        return Ok(());
+    }
+    check_folder(path, flag)
+}
+
+/// Checks that the folder `path` would be written into exists and is writable.
+fn check_folder(path: &Path, flag: &str) -> anyhow::Result<()> {
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        bail!(
+            "{}: {flag}: the folder {} does not exist",
+            path.display(),
+            folder.display()
+        );
+    }
+    if rustix::fs::access(folder, rustix::fs::Access::WRITE_OK).is_err() {
+        bail!(
+            "{}: {flag}: the folder {} is not writable",
+            path.display(),
+            folder.display()
+        );
+    }
+    Ok(())
+}
+
+/// Parses a size in pixels (`--width`, `--height`): at least 1.
+fn pixels(text: &str) -> Result<u32, String> {
+    match text.parse::<u32>() {
+        Ok(0) => Err("must be at least 1 pixel".to_owned()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!(
+            "give a whole number of pixels from 1 to {}",
+            u32::MAX
+        )),
     }
 }
 

@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 
 use super::{LodArgs, LookArgs, StyleArgs};
-use crate::config::SceneConfig;
 use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{LodPool, PoolChange, Sample};
 
@@ -23,16 +22,20 @@ use crate::scene::Scene;
 /// Arguments of `strata render`.
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
-    /// Scene file (RON).
+    /// Scene file (RON), or a mesh (OBJ, PLY) sampled with the field of `--field`
+    /// (uniform density by default).
     pub config: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
     /// Output image (PNG).
     #[arg(long, short = 'o')]
     pub out: PathBuf,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 1280)]
+    /// Image width in pixels (at least 1).
+    #[arg(long, default_value_t = 1280, value_parser = super::pixels)]
     pub width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 960)]
+    /// Image height in pixels (at least 1).
+    #[arg(long, default_value_t = 960, value_parser = super::pixels)]
     pub height: u32,
     /// Samples per pixel (1 or 4).
     #[arg(long, default_value_t = 4)]
@@ -80,7 +83,11 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!("--msaa must be 1 or 4, not {}", args.msaa);
     }
     let npr = args.paint.npr_kind_for(args.lod.lod)?;
-    let config = SceneConfig::load(&args.config)?;
+    super::check_output(&args.out, "--out (PNG)", &["png"])?;
+    if args.lod.lod {
+        check_lod_args(args)?;
+    }
+    let config = args.input.load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.
     let ctx = GpuContext::headless(&args.look.gpu_options()).context("opening a GPU")?;

@@ -19,20 +19,28 @@ const BLOCK: usize = 1 << 16;
 /// Arguments of `strata sample`.
 #[derive(Debug, clap::Args)]
 pub struct SampleArgs {
-    /// Scene file (RON); see configs/ and the README.
+    /// Scene file (RON), or a mesh (OBJ, PLY) sampled with the field of `--field`
+    /// (uniform density by default).
     pub config: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
     /// Number of samples (overrides the scene's `sampling.count`).
     #[arg(long, short = 'n')]
     pub count: Option<u64>,
     /// Random seed (overrides the scene's `sampling.seed`).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Output file: `.ply` (binary) or `.csv`, chosen by extension.
+    /// Output file: `.ply` (binary) or `.csv`, chosen by extension (default:
+    /// `<input name>.samples.ply` beside the input).
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
+    /// Write no file: print the timings only.
+    #[arg(long, conflicts_with = "out")]
+    pub no_out: bool,
     /// Worker threads, 1 to 1024 (default: one per core). The samples do not depend on
     /// it.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// Sample order: `stratified` (exactly stratified for this count) or
     /// `progressive` (the first N of one sequence per scene and seed, so the samples of
@@ -60,6 +68,14 @@ pub enum Order {
 /// that starting them cannot exhaust a process's threads.
 pub const MAX_THREADS: usize = 1024;
 
+/// Parses `--threads`: a count from 1 to [`MAX_THREADS`].
+fn parse_threads(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!("give a count from 1 to {MAX_THREADS}")),
+    }
+}
+
 /// Runs `strata sample`: on a pool of `--threads` workers when given (the samples are
 /// the same for any count), else on the process's pool.
 pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
@@ -80,10 +96,15 @@ pub(super) fn run(args: &SampleArgs) -> anyhow::Result<()> {
 
 /// [`run`]'s work, on the pool it is called from.
 fn run_here(args: &SampleArgs) -> anyhow::Result<()> {
-    let config = SceneConfig::load(&args.config)?;
-    super::refuse_inputs_as_outputs(&args.config, &config, &[args.out.as_deref()])?;
-    let out = match &args.out {
-        Some(path) => Some((path.as_path(), output_kind(path)?)),
+    let config = args.input.load(&args.config)?;
+    super::refuse_inputs_as_outputs(&args.config, &config, &[output_path(args).as_deref()])?;
+    let out_path = output_path(args);
+    let out = match &out_path {
+        Some(path) => {
+            let kind = output_kind(path)?;
+            super::check_output(path, "--out", &[])?;
+            Some((path.as_path(), kind))
+        }
         None => None,
     };
     let count = check_request(args, &config, out)?;
@@ -96,10 +117,30 @@ fn run_here(args: &SampleArgs) -> anyhow::Result<()> {
     draw.all(out)?;
     draw.bar.finish_and_clear();
     print_timings(&scene, args.order, count, seed, draw.took);
-    if let Some(path) = &args.out {
+    if let Some(path) = &out_path {
         println!("wrote {}", path.display());
+        if args.out.is_none() {
+            let image = path.with_extension("").with_extension("png");
+            println!(
+                "see them: strata render {} -o {}",
+                args.config.display(),
+                image.display()
+            );
+        }
     }
     Ok(())
+}
+
+/// Where the samples go: `--out`, else `<input stem>.samples.ply` beside the input,
+/// or nowhere with `--no-out`.
+fn output_path(args: &SampleArgs) -> Option<PathBuf> {
+    if args.no_out {
+        return None;
+    }
+    args.out.clone().or_else(|| {
+        let stem = args.config.file_stem()?.to_string_lossy().into_owned();
+        Some(args.config.with_file_name(format!("{stem}.samples.ply")))
+    })
 }
 
 /// Every check of the request before the preprocessing: the sample count, and the

@@ -12,15 +12,17 @@ use strata_engine::surface::{
 };
 
 use super::write_file;
-use crate::config::SceneConfig;
 use crate::report::segment::{SegmentReport, segment_colors};
 
 /// Arguments of `strata segment`.
 #[derive(Debug, clap::Args)]
 pub struct SegmentArgs {
-    /// Scene file (RON); its `mesh`, `field`, `segment`, `param` and `surface` sections
-    /// are used.
+    /// Scene file (RON), or a mesh (OBJ, PLY) sampled with the field of `--field`
+    /// (uniform density by default).
     pub config: PathBuf,
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
     /// Output mesh (binary PLY) with one colour per segment; singular faces are black.
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
@@ -38,7 +40,7 @@ pub struct SegmentArgs {
 /// Runs `strata segment`.
 pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     check_out_is_ply(args)?;
-    let config = SceneConfig::load(&args.config)?;
+    let config = args.input.load(&args.config)?;
     super::refuse_inputs_as_outputs(
         &args.config,
         &config,
@@ -48,6 +50,15 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
             args.atlas.as_deref(),
         ],
     )?;
+    for (path, flag, ext) in [
+        (&args.out, "--out (a PLY mesh)", "ply"),
+        (&args.report, "--report (JSON)", "json"),
+        (&args.atlas, "--atlas (SVG)", "svg"),
+    ] {
+        if let Some(path) = path {
+            super::check_output(path, flag, &[ext])?;
+        }
+    }
     let name = args.config.display().to_string();
     let progress = crate::scene::progress_spinners();
     let (mesh, mesh_time) =

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use anyhow::Context;
+
 use super::{LodArgs, LookArgs, StyleArgs};
 use crate::gpu::StyleChoice;
 use crate::viewer::{self, ViewerOptions};
@@ -10,13 +12,17 @@ use crate::viewer::{self, ViewerOptions};
 /// Arguments of `strata view`.
 #[derive(Debug, clap::Args)]
 pub struct ViewArgs {
-    /// Scene file (RON).
+    /// Scene file (RON), or a mesh (OBJ, PLY) with the field of `--field` (uniform
+    /// density by default).
     pub config: PathBuf,
-    /// Initial window width (logical pixels).
-    #[arg(long, default_value_t = 1280)]
+    /// `--field`, `--anisotropy` and `--density-from`, for a mesh input.
+    #[command(flatten)]
+    pub input: super::MeshFieldArgs,
+    /// Initial window width (logical pixels, at least 1).
+    #[arg(long, default_value_t = 1280, value_parser = super::pixels)]
     pub width: u32,
-    /// Initial window height (logical pixels).
-    #[arg(long, default_value_t = 960)]
+    /// Initial window height (logical pixels, at least 1).
+    #[arg(long, default_value_t = 960, value_parser = super::pixels)]
     pub height: u32,
     /// Close after this many frames and print the last frame's timings (for scripted
     /// runs); default: run until the window closes.
@@ -39,8 +45,19 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let lod = &args.lod;
     lod.validate()?;
     let paint = StyleChoice::new(args.paint.npr_kind_for(lod.lod)?);
+    let scene = if super::input::is_mesh(&args.config) {
+        // The viewer watches a scene file: the mesh's scene, written to a temporary one.
+        let config = args.input.load(&args.config)?;
+        let path = std::env::temp_dir().join(format!("strata-view-{}.ron", std::process::id()));
+        super::write_file(&path, super::input::scene_ron(&config)?.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        path
+    } else {
+        args.input.load(&args.config)?;
+        args.config.clone()
+    };
     let options = ViewerOptions {
-        scene: args.config.clone(),
+        scene,
         size: (args.width, args.height),
         max_frames: args.frames,
         count: args

@@ -28,6 +28,9 @@ pub struct WatchArgs {
 
 /// Runs `strata watch`.
 pub(super) fn run(args: &WatchArgs) -> anyhow::Result<()> {
+    if let Some(path) = &args.out {
+        super::check_output(path, "--out (binary PLY samples)", &["ply"])?;
+    }
     // A scene that does not load yet is waited for; one that does must not name the
     // output among its inputs.
     if let Ok(config) = crate::config::SceneConfig::load(&args.config) {

@@ -48,7 +48,12 @@ pub enum Guidance {
     /// [`FieldSpec::Constant`](crate::field::FieldSpec::Constant) the field turns smoothly
     /// where the surface faces the direction instead of flipping.
     Direction(
-        /// World direction, finite and non-zero.
+        /// World direction, finite and non-zero; `Direction(x, y, z)` or
+        /// `Direction((x, y, z))` in RON.
+        #[cfg_attr(
+            feature = "serde",
+            serde(deserialize_with = "crate::field::vec3_serde::deserialize")
+        )]
         [f64; 3],
     ),
 }
@@ -68,8 +73,15 @@ impl Default for Guidance {
 pub enum Site {
     /// A mesh vertex, by index (after the loader's repairs).
     Vertex(u32),
-    /// The mesh vertex nearest to a world point.
-    Point([f64; 3]),
+    /// The mesh vertex nearest to a world point: `Point(x, y, z)` or
+    /// `Point((x, y, z))` in RON.
+    Point(
+        #[cfg_attr(
+            feature = "serde",
+            serde(deserialize_with = "crate::field::vec3_serde::deserialize")
+        )]
+        [f64; 3],
+    ),
 }
 
 /// A hard constraint of a designed field: its line at `at` is exactly `direction`'s.
@@ -254,6 +266,30 @@ fn four() -> f64 {
     4.0
 }
 
+/// Refuses a constraint whose direction lies within 1 degree of its vertex's normal:
+/// its projection into the tangent plane, the constrained line, would be noise.
+/// Vertices out of range are left to the solver, which names them.
+fn check_constraints_leave_the_normal(
+    mesh: &TriMesh,
+    constraints: &[LineConstraint],
+) -> Result<(), FieldError> {
+    let normals = mesh.vertex_normals();
+    for (index, c) in constraints.iter().enumerate() {
+        let Some(n) = normals.get(c.vertex as usize) else {
+            continue;
+        };
+        let along = c.direction.normalize_or_zero().dot(*n).abs();
+        if along > 1f64.to_radians().cos() {
+            return Err(super::LineFieldError::ConstraintDirection {
+                index,
+                vertex: c.vertex,
+            }
+            .into());
+        }
+    }
+    Ok(())
+}
+
 #[cfg(feature = "serde")]
 fn default_light() -> [f64; 3] {
     crate::field::DEFAULT_LIGHT
@@ -369,6 +405,7 @@ impl Design {
                 direction: DVec3::from(c.direction),
             })
             .collect();
+        check_constraints_leave_the_normal(mesh, &constraints)?;
         let options = LineFieldOptions {
             weight: self.weight,
             smoothness: self.smoothness,
