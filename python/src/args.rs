@@ -11,6 +11,7 @@ use pyo3::types::{PyDict, PyString};
 use strata_engine::surface::SurfaceOptions;
 
 use crate::field::Field;
+use crate::scene_ron;
 
 /// A field argument: `None` (uniform), a [`Field`], a RON description (a scene
 /// file's `field:` entry) or a dictionary of the same structure.
@@ -48,7 +49,7 @@ pub fn options_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<SurfaceOptions> {
         return Ok(SurfaceOptions::default());
     };
     let parsed = if let Ok(text) = obj.cast::<PyString>() {
-        ron::from_str::<SurfaceOptions>(&text.to_cow()?).map_err(|e| e.to_string())
+        scene_ron::parse::<SurfaceOptions>(&text.to_cow()?)
     } else if obj.cast::<PyDict>().is_ok() {
         serde_json::from_str::<SurfaceOptions>(&to_json(obj)?).map_err(|e| e.to_string())
     } else {

@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use strata_engine::field::{FieldSpec, TensorField};
 use strata_engine::mesh::TriMesh;
 
-use crate::arrays;
+use crate::{arrays, scene_ron};
 
 /// What a [`Field`] is made from.
 #[derive(Clone, Debug)]
@@ -106,7 +106,7 @@ impl Field {
 
     /// A field from RON (see `from_ron`).
     pub fn from_ron_text(text: &str) -> PyResult<Self> {
-        let spec: FieldSpec = ron::from_str(text)
+        let spec: FieldSpec = scene_ron::parse(text)
             .map_err(|e| PyValueError::new_err(format!("field description: {e}")))?;
         Self::checked(spec)
     }

@@ -19,11 +19,12 @@ mod arrays;
 mod field;
 mod preprocess;
 mod sampler;
+mod scene_ron;
 
 use glam::DVec3;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError, PyValueError};
 use pyo3::prelude::*;
 use strata_engine::mesh::MeshError;
 
@@ -40,9 +41,13 @@ type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<u32>>);
 fn load_mesh<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<MeshArrays<'py>> {
     let mesh = py
         .detach(|| strata_engine::io::load(&path))
-        .map_err(|e| match e {
-            MeshError::Io { .. } => PyOSError::new_err(e.to_string()),
-            e => PyValueError::new_err(e.to_string()),
+        .map_err(|e| match &e {
+            MeshError::Io { source, .. } => match source.kind() {
+                std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(e.to_string()),
+                std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(e.to_string()),
+                _ => PyOSError::new_err(e.to_string()),
+            },
+            _ => PyValueError::new_err(e.to_string()),
         })?;
     let v: Vec<f64> = mesh.positions().iter().flat_map(DVec3::to_array).collect();
     let f: Vec<u32> = mesh.triangles().iter().flatten().copied().collect();

@@ -32,7 +32,7 @@ ranks             (n,)     uint32    rank of the sample in its sequence
 from __future__ import annotations
 
 import json
-from typing import Any, Iterable, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -63,7 +63,7 @@ __all__ = [
     "from_scene",
 ]
 
-FieldLike = Union[None, Field, str, dict]
+FieldLike = Union[None, Field, str, Dict[str, Any]]
 
 
 def sample(
@@ -74,7 +74,7 @@ def sample(
     field: FieldLike = None,
     seed: int = 0,
     order: str = "stratified",
-    options: Union[None, dict, str] = None,
+    options: Union[None, Dict[str, Any], str] = None,
     progress: Optional[bool] = None,
 ) -> Samples:
     """Samples ``n`` points on a triangle mesh, exactly ``n``, in one call.
@@ -124,16 +124,23 @@ def interpolate(faces: Any, face_ids: Any, barycentrics: Any, vertex_values: Any
     corners = faces[face_ids]  # (n, 3)
     w = bary.astype(dtype, copy=False)
     v = values.astype(dtype, copy=False)
+    out: np.ndarray
     if v.ndim == 1:
-        return (v[corners] * w).sum(axis=1)
-    return np.einsum("nj,njk->nk", w, v[corners])
+        out = (v[corners] * w).sum(axis=1)
+    else:
+        out = np.einsum("nj,njk->nk", w, v[corners])
+    return out
 
 
-def _field(description: dict) -> Field:
-    return Field.from_json(json.dumps(description))
+def _field(description: Dict[str, Any]) -> Field:
+    try:
+        text = json.dumps(description, allow_nan=False)
+    except ValueError:
+        raise ValueError(f"field values must be finite numbers: {description}") from None
+    return Field.from_json(text)
 
 
-def _vec3(name: str, v: Sequence[float]) -> list:
+def _vec3(name: str, v: Sequence[float]) -> List[float]:
     out = [float(x) for x in v]
     if len(out) != 3:
         raise ValueError(f"{name} must have 3 components, got {len(out)}")
@@ -167,7 +174,7 @@ def curvature(**options: Any) -> Field:
     return _field({"Curvature": options})
 
 
-def _guidance(guidance: Union[str, Sequence[float], dict], smoothing_iterations: Optional[int]) -> Any:
+def _guidance(guidance: Union[str, Sequence[float], Dict[str, Any]], smoothing_iterations: Optional[int]) -> Any:
     if isinstance(guidance, dict):
         return guidance
     if isinstance(guidance, str):
@@ -180,8 +187,9 @@ def _guidance(guidance: Union[str, Sequence[float], dict], smoothing_iterations:
     return {"Direction": _vec3("guidance direction", guidance)}
 
 
-def _constraint(c: Any) -> dict:
+def _constraint(c: Any) -> Dict[str, Any]:
     at, direction = c
+    site: Dict[str, Any]
     if isinstance(at, (int, np.integer)):
         site = {"Vertex": int(at)}
     else:
@@ -196,14 +204,14 @@ def _source(value: Any) -> Any:
 
 
 def designed(
-    guidance: Union[str, Sequence[float], dict] = "curvature",
+    guidance: Union[str, Sequence[float], Dict[str, Any]] = "curvature",
     *,
     weight: float = 1.0,
     smoothness: float = 0.5,
     smoothing: float = 0.3,
     constraints: Iterable[Tuple[Any, Sequence[float]]] = (),
-    anisotropy: Union[float, dict] = 3.0,
-    density: Union[float, dict] = 1.0,
+    anisotropy: Union[float, Dict[str, Any]] = 3.0,
+    density: Union[float, Dict[str, Any]] = 1.0,
     solver: str = "Auto",
     cancel_distance: float = 0.5,
     smoothing_iterations: Optional[int] = None,
