@@ -8,7 +8,7 @@
 //! the arrays, with the GIL released.
 
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -35,14 +35,24 @@ enum Order {
 }
 
 impl Order {
-    fn parse(order: &str) -> PyResult<Self> {
-        match order {
-            "stratified" => Ok(Self::Stratified),
-            "progressive" => Ok(Self::Progressive),
-            other => Err(PyValueError::new_err(format!(
-                "order must be \"stratified\" or \"progressive\", got {other:?}"
-            ))),
+    /// The order named `order`, checked against the count `n` it is to draw.
+    fn for_count(order: &str, n: usize) -> PyResult<Self> {
+        let order = match order {
+            "stratified" => Self::Stratified,
+            "progressive" => Self::Progressive,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "order must be \"stratified\" or \"progressive\", got {other:?}"
+                )));
+            }
+        };
+        if matches!(order, Self::Progressive) && u32::try_from(n).is_err() {
+            return Err(PyValueError::new_err(format!(
+                "progressive order draws at most {} samples, got {n}",
+                u32::MAX
+            )));
         }
+        Ok(order)
     }
 }
 
@@ -75,17 +85,39 @@ impl Sampler {
     /// Draws `n` samples with `seed`, in `order` (`"stratified"` or `"progressive"`).
     #[pyo3(signature = (n, seed = 0, order = "stratified"))]
     fn sample(&self, py: Python<'_>, n: i64, seed: u64, order: &str) -> PyResult<Samples> {
-        let order = Order::parse(order)?;
         let n = usize::try_from(n)
             .map_err(|_| PyValueError::new_err(format!("n must be >= 0, got {n}")))?;
-        if matches!(order, Order::Progressive) && u32::try_from(n).is_err() {
-            return Err(PyValueError::new_err(format!(
-                "progressive order draws at most {} samples, got {n}",
-                u32::MAX
-            )));
-        }
+        let order = Order::for_count(order, n)?;
         let columns = py.detach(|| draw(&self.built, n, seed, order))?;
         columns.into_samples(py)
+    }
+
+    /// Draws `len(out)` samples into the arrays of `out` (from an earlier `sample`
+    /// call), in place: the same values as `sample(len(out), seed, order)`, without
+    /// allocating (the per-frame path, as the engine's `sample_into`).
+    #[pyo3(signature = (out, seed = 0, order = "stratified"))]
+    fn sample_into(&self, py: Python<'_>, out: &Samples, seed: u64, order: &str) -> PyResult<()> {
+        let order = Order::for_count(order, out.len)?;
+        let mut positions = out.positions.bind(py).try_readwrite()?;
+        let mut normals = out.normals.bind(py).try_readwrite()?;
+        let mut face_ids = out.face_ids.bind(py).try_readwrite()?;
+        let mut barycentrics = out.barycentrics.bind(py).try_readwrite()?;
+        let mut major_axes = out.major_axes.bind(py).try_readwrite()?;
+        let mut spacings = out.spacings.bind(py).try_readwrite()?;
+        let mut segments = out.segments.bind(py).try_readwrite()?;
+        let mut ranks = out.ranks.bind(py).try_readwrite()?;
+        let columns = ColumnsMut {
+            positions: positions.as_slice_mut()?,
+            normals: normals.as_slice_mut()?,
+            face_ids: face_ids.as_slice_mut()?,
+            barycentrics: barycentrics.as_slice_mut()?,
+            major_axes: major_axes.as_slice_mut()?,
+            spacings: spacings.as_slice_mut()?,
+            segments: segments.as_slice_mut()?,
+            ranks: ranks.as_slice_mut()?,
+        };
+        py.detach(|| fill(&self.built, seed, order, columns));
+        Ok(())
     }
 
     /// Final segments of the preprocessing.
@@ -199,6 +231,10 @@ impl Samples {
     }
 }
 
+/// Samples per block of the parallel fill: a multiple of the engine's chunk (4096),
+/// 1 MiB of records per worker.
+const BLOCK: usize = 1 << 14;
+
 /// The samples split into columns, before they become numpy arrays.
 struct Columns {
     n: usize,
@@ -212,59 +248,120 @@ struct Columns {
     ranks: Vec<u32>,
 }
 
-/// A `Vec` of `len` default values, or `MemoryError` when it cannot be allocated.
-fn alloc<T: Default + Clone>(len: usize) -> PyResult<Vec<T>> {
-    let mut v = Vec::new();
-    v.try_reserve_exact(len).map_err(|_| {
+/// A zeroed `Vec` of `len` values, or `MemoryError` when `len` values cannot be
+/// allocated. Zeroed memory comes from the allocator untouched (`calloc`), so the
+/// pages are first written by the parallel fill, not by a serial pass here.
+fn zeroed<T: Copy + Default + IsZero>(len: usize) -> PyResult<Vec<T>> {
+    let mut probe: Vec<T> = Vec::new();
+    probe.try_reserve_exact(len).map_err(|_| {
         PyMemoryError::new_err(format!("cannot allocate {len} values for the samples"))
     })?;
-    v.resize(len, T::default());
-    Ok(v)
+    drop(probe);
+    Ok(T::zeroed_vec(len))
 }
 
-/// Samples drawn by the engine in one call and split into columns.
-fn draw(built: &Built, n: usize, seed: u64, order: Order) -> PyResult<Columns> {
-    let mut samples: Vec<Sample> = alloc(n)?;
-    match order {
-        Order::Stratified => built.sampler.sample_into(seed, &mut samples),
-        // n fits in u32 (checked by the caller).
-        Order::Progressive => built.sampler.progressive_into(seed, 0, &mut samples),
+/// Element types whose zeroed vector is allocated as zeroed memory.
+trait IsZero: Sized {
+    fn zeroed_vec(len: usize) -> Vec<Self>;
+}
+
+impl IsZero for f32 {
+    fn zeroed_vec(len: usize) -> Vec<Self> {
+        vec![0.0; len]
     }
+}
+
+impl IsZero for u32 {
+    fn zeroed_vec(len: usize) -> Vec<Self> {
+        vec![0; len]
+    }
+}
+
+/// Samples drawn into new columns (see [`fill`]).
+fn draw(built: &Built, n: usize, seed: u64, order: Order) -> PyResult<Columns> {
     let mut c = Columns {
         n,
-        positions: alloc(3 * n)?,
-        normals: alloc(3 * n)?,
-        face_ids: alloc(n)?,
-        barycentrics: alloc(3 * n)?,
-        major_axes: alloc(3 * n)?,
-        spacings: alloc(2 * n)?,
-        segments: alloc(n)?,
-        ranks: alloc(n)?,
+        positions: zeroed(3 * n)?,
+        normals: zeroed(3 * n)?,
+        face_ids: zeroed(n)?,
+        barycentrics: zeroed(3 * n)?,
+        major_axes: zeroed(3 * n)?,
+        spacings: zeroed(2 * n)?,
+        segments: zeroed(n)?,
+        ranks: zeroed(n)?,
     };
-    const CHUNK: usize = 1 << 14;
-    samples
-        .par_chunks(CHUNK)
-        .zip(c.positions.par_chunks_mut(3 * CHUNK))
-        .zip(c.normals.par_chunks_mut(3 * CHUNK))
-        .zip(c.barycentrics.par_chunks_mut(3 * CHUNK))
-        .zip(c.major_axes.par_chunks_mut(3 * CHUNK))
-        .zip(c.spacings.par_chunks_mut(2 * CHUNK))
-        .zip(c.face_ids.par_chunks_mut(CHUNK))
-        .zip(c.segments.par_chunks_mut(CHUNK))
-        .zip(c.ranks.par_chunks_mut(CHUNK))
-        .for_each(|((((((((s, p), nr), b), m), sp), f), seg), r)| {
-            for (i, x) in s.iter().enumerate() {
-                p[3 * i..3 * i + 3].copy_from_slice(&x.position);
-                nr[3 * i..3 * i + 3].copy_from_slice(&x.normal);
-                m[3 * i..3 * i + 3].copy_from_slice(&x.major_axis);
-                b[3 * i..3 * i + 3].copy_from_slice(&barycentric(x.bary));
-                sp[2 * i..2 * i + 2].copy_from_slice(&x.spacing);
-                f[i] = x.face;
-                seg[i] = x.segment;
-                r[i] = x.index;
-            }
-        });
+    fill(
+        built,
+        seed,
+        order,
+        ColumnsMut {
+            positions: &mut c.positions,
+            normals: &mut c.normals,
+            face_ids: &mut c.face_ids,
+            barycentrics: &mut c.barycentrics,
+            major_axes: &mut c.major_axes,
+            spacings: &mut c.spacings,
+            segments: &mut c.segments,
+            ranks: &mut c.ranks,
+        },
+    );
     Ok(c)
+}
+
+/// The columns of `n` samples to write, `n = face_ids.len()` (the others in
+/// proportion).
+struct ColumnsMut<'a> {
+    positions: &'a mut [f32],
+    normals: &'a mut [f32],
+    face_ids: &'a mut [u32],
+    barycentrics: &'a mut [f32],
+    major_axes: &'a mut [f32],
+    spacings: &'a mut [f32],
+    segments: &'a mut [u32],
+    ranks: &'a mut [u32],
+}
+
+/// Samples drawn by the engine a block at a time (the same bits as one call for all
+/// `n`: `sample_range_into`, `progressive_into` from the block's first rank) and
+/// written straight into the columns, in parallel over blocks; each worker reuses one
+/// block of records, so no `n`-record buffer is made.
+fn fill(built: &Built, seed: u64, order: Order, c: ColumnsMut<'_>) {
+    let n = c.face_ids.len();
+    let sampler = &built.sampler;
+    c.positions
+        .par_chunks_mut(3 * BLOCK)
+        .zip(c.normals.par_chunks_mut(3 * BLOCK))
+        .zip(c.barycentrics.par_chunks_mut(3 * BLOCK))
+        .zip(c.major_axes.par_chunks_mut(3 * BLOCK))
+        .zip(c.spacings.par_chunks_mut(2 * BLOCK))
+        .zip(c.face_ids.par_chunks_mut(BLOCK))
+        .zip(c.segments.par_chunks_mut(BLOCK))
+        .zip(c.ranks.par_chunks_mut(BLOCK))
+        .enumerate()
+        .for_each_init(
+            || vec![Sample::default(); BLOCK],
+            |buf, (k, (((((((p, nr), b), m), sp), f), seg), r))| {
+                let block = &mut buf[..f.len()];
+                let start = k * BLOCK;
+                match order {
+                    Order::Stratified => {
+                        sampler.sample_range_into(seed, n as u64, start as u64, block)
+                    }
+                    // Ranks fit in u32: n does (checked by the caller).
+                    Order::Progressive => sampler.progressive_into(seed, start as u32, block),
+                }
+                for (i, x) in block.iter().enumerate() {
+                    p[3 * i..3 * i + 3].copy_from_slice(&x.position);
+                    nr[3 * i..3 * i + 3].copy_from_slice(&x.normal);
+                    m[3 * i..3 * i + 3].copy_from_slice(&x.major_axis);
+                    b[3 * i..3 * i + 3].copy_from_slice(&barycentric(x.bary));
+                    sp[2 * i..2 * i + 2].copy_from_slice(&x.spacing);
+                    f[i] = x.face;
+                    seg[i] = x.segment;
+                    r[i] = x.index;
+                }
+            },
+        );
 }
 
 /// The three barycentric coordinates from the engine's two (corners 1 and 2).

@@ -68,6 +68,9 @@ class Sampler:
         error for builds over a second (default: when standard error is a terminal)."""
     def sample(self, n: int, seed: int = 0, order: str = "stratified") -> Samples:
         """Draws exactly `n` samples; `order` is "stratified" or "progressive"."""
+    def sample_into(self, out: Samples, seed: int = 0, order: str = "stratified") -> None:
+        """Draws len(out) samples into out's arrays in place (no allocation): the
+        values of sample(len(out), seed, order)."""
     @property
     def segments(self) -> int:
         """Final segments of the preprocessing."""

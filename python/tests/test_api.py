@@ -89,6 +89,22 @@ def test_same_seed_same_samples_other_seed_others(sphere):
     assert_same(sampler.sample(2000, seed=5), sampler.sample(2000, seed=5))
 
 
+def test_sample_into_refills_in_place(sphere):
+    v, f = sphere
+    sampler = ss.Sampler(v, f, ss.constant((1, 0, 0), anisotropy=2.0))
+    out = sampler.sample(3000, seed=1)
+    before = {name: getattr(out, name) for name in COLUMNS}
+    pointers = {name: a.__array_interface__["data"][0] for name, a in before.items()}
+    for seed, order in [(2, "stratified"), (3, "progressive")]:
+        sampler.sample_into(out, seed=seed, order=order)
+        assert_same(out, sampler.sample(3000, seed=seed, order=order))
+        for name, a in before.items():
+            assert getattr(out, name) is a
+            assert a.__array_interface__["data"][0] == pointers[name]
+    with pytest.raises(ValueError, match="order"):
+        sampler.sample_into(out, order="random")
+
+
 def test_progressive_prefixes_are_nested(sphere):
     v, f = sphere
     sampler = ss.Sampler(v, f, ss.constant((0, 0, 1), anisotropy=1.5))
