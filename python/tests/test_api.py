@@ -158,6 +158,16 @@ def test_fortran_order_and_lists_give_the_same_samples(sphere):
     assert_same(ss.sample(v32, f, 300, seed=4), ss.sample(v32.astype(np.float64), f, 300, seed=4))
 
 
+def test_sample_passes_options_on(sphere):
+    v, f = sphere
+    field = ss.constant((0, 0, 1), anisotropy=3.0)
+    options = {"curve": {"max_cell_share": 0.001}, "merge_pieces": False}
+    want = ss.Sampler(v, f, field, options=options).sample(999, seed=8)
+    assert_same(ss.sample(v, f, 999, field=field, seed=8, options=options, progress=False), want)
+    other = ss.sample(v, f, 999, field=field, seed=8)
+    assert other.positions.tobytes() != want.positions.tobytes()
+
+
 def test_sampler_reports_its_preprocessing(sphere, plane):
     v, f = sphere
     s = ss.Sampler(v, f, ss.curvature())
