@@ -36,7 +36,7 @@ fn check_shape(name: &str, arr: &Bound<'_, PyUntypedArray>, cols: &[usize]) -> P
     Ok(char::from(arr.dtype().kind()))
 }
 
-/// Requires a float, integer or boolean-free numeric dtype kind.
+/// Requires a float or integer dtype (numpy kinds `f`, `i`, `u`).
 fn check_numeric(name: &str, kind: char, arr: &Bound<'_, PyUntypedArray>) -> PyResult<()> {
     if matches!(kind, 'f' | 'i' | 'u') {
         Ok(())

@@ -3,9 +3,10 @@
 //!
 //! Input: a preprocessed [`Built`] surface, a count, a seed and an order. Output:
 //! [`Samples`], one numpy array per attribute, each made from a Rust `Vec` by
-//! `into_pyarray` (numpy takes the buffer; nothing is copied at the boundary).
-//! Cost: the engine's sampling (parallel) plus one pass splitting the records into
-//! the arrays, with the GIL released.
+//! `into_pyarray` (numpy takes the buffer; nothing is copied at the boundary), or an
+//! earlier `Samples` refilled in place (`sample_into`). Cost: the engine's sampling,
+//! a block of records per worker at a time, each block written into the columns while
+//! it is in cache; all in parallel, with the GIL released.
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
