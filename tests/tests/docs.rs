@@ -15,7 +15,8 @@
 //! folder. Inputs that exist relative to the workspace (`configs/...`) are made
 //! absolute, and an input an earlier command wrote (`-o torus.ply`, then
 //! `strata analyze torus.ply`) is read from the temporary folder. A line whose comment
-//! says `# not run` is skipped: the docs mark so only the
+//! says `# not run` is skipped, and a redirection (`> scene.ron`) is dropped, the output
+//! going to the test's own: the docs mark so only the
 //! commands that need a window (`strata view`). `render` needs a GPU adapter (a
 //! software one will do); without one it is skipped with a note, unless
 //! `STRATA_REQUIRE_GPU=1`.
@@ -116,7 +117,10 @@ fn commands(block: &Block) -> Vec<(usize, Vec<String>)> {
         if full.contains(NOT_RUN) {
             continue;
         }
-        let code = full.split(" # ").next().unwrap_or_default().trim();
+        // A comment after ` # ` is dropped, and so is a redirection of standard output
+        // (`strata scene mesh.obj > scene.ron` prints to the test's output instead).
+        let code = full.split(" # ").next().unwrap_or_default();
+        let code = code.split(" > ").next().unwrap_or_default().trim();
         let rest = code
             .strip_prefix("strata ")
             .or_else(|| code.strip_prefix("cargo run --release -- "));
@@ -373,7 +377,8 @@ fn numbers_are_whole_tokens() {
 
 /// The CLI reference names every command and every long option that clap defines
 /// in its own section of `docs/cli.md` (`render` and `view` share the camera and look
-/// table), so a new option cannot go undocumented.
+/// table, the commands that take a mesh share its section), so a new option cannot go
+/// undocumented.
 #[test]
 fn the_cli_reference_lists_every_command_and_option() {
     use clap::CommandFactory;
@@ -386,6 +391,7 @@ fn the_cli_reference_lists_every_command_and_option() {
         })
     };
     let camera = section("### Camera and look options");
+    let mesh_input = section("## A mesh as input");
     let mut missing = Vec::new();
     for command in Cli::command().get_subcommands() {
         let name = command.get_name();
@@ -393,7 +399,7 @@ fn the_cli_reference_lists_every_command_and_option() {
         if own.is_empty() {
             missing.push(format!("strata {name}"));
         }
-        let text = format!("{own}{camera}");
+        let text = format!("{own}{camera}{mesh_input}");
         for arg in command.get_arguments() {
             let documented = match (arg.get_long(), arg.get_short()) {
                 (Some(long), _) => text.contains(&format!("`--{long}")),
