@@ -25,7 +25,7 @@ pub struct BenchArgs {
     /// Number of sampling runs (their median is reported).
     #[arg(long, default_value_t = 10)]
     pub repeat: usize,
-    /// Also write the numbers as JSON (keys in the README).
+    /// Also write the numbers as JSON (keys in docs/cli.md).
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Time `Sampler::sample_sites_into` (16-byte sites: face, segment, barycentric

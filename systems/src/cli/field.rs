@@ -22,7 +22,7 @@ pub struct FieldArgs {
     /// density, and per-face singularity index.
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
-    /// JSON report (schema in the README).
+    /// JSON report (schema in docs/cli.md).
     #[arg(long)]
     pub report: Option<PathBuf>,
 }

@@ -26,7 +26,7 @@ pub struct SegmentArgs {
     /// Output mesh (binary PLY) with one colour per segment; singular faces are black.
     #[arg(long, short = 'o')]
     pub out: Option<PathBuf>,
-    /// JSON report (schema in the README).
+    /// JSON report (schema in docs/cli.md).
     #[arg(long)]
     pub report: Option<PathBuf>,
     /// Segmentation seed (overrides the scene's `segment.seed`).

@@ -36,7 +36,7 @@ pub const FIELD_VERTEX_PROPERTIES: [&str; 11] = [
     "density",
 ];
 
-/// The JSON report of `strata field` (schema in the README).
+/// The JSON report of `strata field` (schema in docs/cli.md).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct FieldReport {
     /// Faces of the mesh.

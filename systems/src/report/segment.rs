@@ -1,6 +1,6 @@
 //! The report of `strata segment`: what the segmentation and the parameterization with
 //! splitting produced, per final segment, as serializable data (the JSON schema is in
-//! the README), and the per-face colours of the segment mesh.
+//! docs/cli.md), and the per-face colours of the segment mesh.
 //!
 //! Input: the mesh, its [`Segmentation`] and the final [`SegmentParam`]s (segment id =
 //! index). Output: a [`SegmentReport`]; colours with [`segment_colors`]. Cost:
@@ -10,7 +10,7 @@ use strata_engine::mesh::TriMesh;
 use strata_engine::param::SegmentParam;
 use strata_engine::segment::Segmentation;
 
-/// The JSON report of `strata segment` (schema in the README).
+/// The JSON report of `strata segment` (schema in docs/cli.md).
 #[derive(Debug, serde::Serialize)]
 pub struct SegmentReport {
     /// Faces of the mesh.
