@@ -46,12 +46,13 @@ pub enum FlatError {
     /// A boundary leaf expects more than one sample, where the sequential sampler
     /// descends through its sub-cells (not part of the flat tables).
     #[error(
-        "{count} samples put more than one sample in a boundary leaf (at most {limit} can be drawn from these cells)"
+        "{count} samples put more than one sample in a boundary leaf (about {limit} at most can be drawn from these cells)"
     )]
     BoundaryDescent {
         /// The request.
         count: u64,
-        /// The largest count that needs no descent.
+        /// About the largest count that needs no descent (rounding of the allocation
+        /// may refuse a count slightly below it).
         limit: u64,
     },
     /// The request or the tables exceed 32-bit indices.
@@ -307,5 +308,80 @@ impl FlatSampler {
             return Err(FlatError::BoundaryDescent { count: n, limit });
         }
         Ok(request)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sample::SampleSite;
+
+    fn torus() -> crate::surface::Preprocessed {
+        let (mesh, field) = crate::fixtures::torus_case();
+        crate::surface::Preprocessed::build(mesh, field, &Default::default()).expect("preprocessed")
+    }
+
+    /// The tables hold every leaf once with non-decreasing fixed-point cumulative
+    /// measures, candidates and pieces in range, and a request's groups cover the
+    /// outputs in order with the counts of the sequential sampler's allocation: the
+    /// per-segment counts of its sites.
+    #[test]
+    fn tables_and_requests_follow_the_sampler() {
+        let pre = torus();
+        let sampler = &pre.sampler;
+        let flat = FlatSampler::new(sampler).expect("flat");
+        let cells: usize = sampler
+            .segments()
+            .iter()
+            .map(|s| s.curve.cell_count())
+            .sum();
+        assert_eq!(flat.leaves.len(), cells);
+        assert_eq!(flat.cumulative.len(), cells + 1);
+        assert!(flat.cumulative.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(flat.cumulative[0], 0);
+        for leaf in &flat.leaves {
+            let (first, len) = (leaf[3] as usize, leaf[4] as usize);
+            assert!(len > 0, "{leaf:?}");
+            if leaf[2] & 128 != 0 {
+                assert!(first + len <= flat.candidates.len());
+            } else {
+                assert!(first + len <= flat.pieces.len());
+                let sum: f32 = flat.pieces[first..first + len]
+                    .iter()
+                    .map(|p| f32::from_bits(p[2]))
+                    .sum();
+                assert!((sum - 1.0).abs() < 1e-3, "pieces sum to {sum}");
+            }
+        }
+        assert!(
+            flat.candidates
+                .iter()
+                .all(|&t| (t as usize) < flat.triangles.len())
+        );
+        assert!(flat.bytes() > 0);
+        for n in [1u64, 7, 5000] {
+            let request = flat.request(sampler, n, 3).expect("request");
+            let mut sites = vec![SampleSite::default(); n as usize];
+            sampler.sample_sites_into(3, &mut sites);
+            let mut next = 0u32;
+            for g in &request.groups {
+                assert_eq!(g[0], next, "n {n}: groups in output order");
+                assert!(g[1] > 0 && g[2] < g[3] && g[3] as usize <= cells);
+                next += g[1];
+                // Every sample of the group lies in a segment of its leaves.
+                let slots: Vec<u32> = (g[2]..g[3])
+                    .map(|l| flat.slot_segments[(flat.leaves[l as usize][2] >> 8) as usize])
+                    .collect();
+                for s in &sites[g[0] as usize..(g[0] + g[1]) as usize] {
+                    assert!(slots.contains(&s.segment), "n {n}: {s:?}");
+                }
+            }
+            assert_eq!(u64::from(next), n);
+            assert!(request.levels.iter().all(|&l| l <= 12));
+        }
+        assert!(matches!(
+            flat.request(sampler, 1 << 33, 3),
+            Err(FlatError::TooLarge { .. })
+        ));
     }
 }

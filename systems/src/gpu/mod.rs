@@ -6,7 +6,8 @@
 //! - [`buffers`]: the growable sample (and sites) buffers with their staging rings.
 //! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
 //! - [`sample`]: stratified sampling on the GPU: sites drawn by a compute pass from the
-//!   sampler's flattened cells, then expanded into the sample buffer.
+//!   sampler's flattened cells, then expanded into the sample buffer; [`sample_check`]
+//!   times it and checks it against the CPU (`strata bench --gpu`).
 //! - [`lod`]: GPU-resident progressive pools and the level-of-detail fade pass.
 //! - [`pipeline`]: render and compute pipelines as plain, hashable descriptions, made
 //!   into wgpu pipelines in one place.
@@ -33,6 +34,7 @@ pub mod lod;
 pub mod npr;
 pub mod pipeline;
 pub mod sample;
+pub mod sample_check;
 pub mod shaders;
 pub mod splat;
 pub mod stream;

@@ -469,9 +469,13 @@ mod gpu_tests {
     const DEFAULT: &str = "(mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
          field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))";
 
-    /// A unit square with a 2:1 field along x and a density that varies (planar path).
+    /// A unit square with a 2:1 field along x (planar path).
     const PLANE: &str = "(mesh: Shape(Plane(size: 1.0, resolution: 8)), \
          field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 2.0, density: 1.0))";
+
+    /// A plane whose density varies eightfold (`configs/plane-gaussian.ron`, coarser).
+    const GAUSSIAN: &str = "(mesh: Shape(Plane(size: 1.0, resolution: 16)), \
+         field: Planar(density: Gaussian(center: (0.5, 0.5), sigma: 0.15, peak: 8.0, base: 0.5)))";
 
     /// How the GPU's sites differ from the CPU's for one request.
     #[derive(Debug, Default)]
@@ -519,7 +523,11 @@ mod gpu_tests {
             return;
         };
         let (device, queue) = (&ctx.device, &ctx.queue);
-        for (name, ron) in [("plane", PLANE), ("default", DEFAULT)] {
+        for (name, ron) in [
+            ("plane", PLANE),
+            ("gaussian", GAUSSIAN),
+            ("default", DEFAULT),
+        ] {
             let scene = scene(ron);
             let sampler = &scene.sampler;
             let mut gpu = GpuSampler::new(device, sampler).expect("GPU sampler");
@@ -560,5 +568,54 @@ mod gpu_tests {
                 }
             }
         }
+    }
+
+    /// A count that puts more than one sample in a boundary leaf is refused with the
+    /// largest count that can be drawn, before anything is allocated; half that count
+    /// and zero samples work.
+    #[test]
+    fn counts_needing_the_boundary_descent_are_refused() {
+        let Some(ctx) = gpu("counts_needing_the_boundary_descent_are_refused") else {
+            return;
+        };
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let scene = scene(DEFAULT);
+        let mut gpu = GpuSampler::new(device, &scene.sampler).expect("GPU sampler");
+        let err = gpu
+            .sample_sites(device, queue, 3_000_000, 1)
+            .expect_err("refused");
+        let limit = match &err {
+            crate::gpu::GpuError::Sampling(
+                strata_engine::sample::flat::FlatError::BoundaryDescent { count, limit },
+            ) => {
+                assert_eq!(*count, 3_000_000);
+                *limit
+            }
+            other => panic!("{other}"),
+        };
+        assert!(err.to_string().contains("boundary leaf"), "{err}");
+        assert!(limit > 10_000 && limit < 3_000_000, "{limit}");
+        gpu.sample_sites(device, queue, limit as usize / 2, 1)
+            .expect("half the limit is drawn");
+        gpu.sample_sites(device, queue, 0, 1).expect("nothing");
+        assert!(gpu.read_sites(device, queue).expect("read").is_empty());
+    }
+
+    /// `strata bench --gpu` prints the check and succeeds on a scene within tolerance.
+    #[test]
+    fn bench_gpu_checks_against_the_cpu() {
+        use clap::Parser;
+        if gpu("bench_gpu_checks_against_the_cpu").is_none() {
+            return;
+        }
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("plane.ron");
+        std::fs::write(&path, GAUSSIAN).expect("scene written");
+        let path = path.to_str().expect("utf-8");
+        let args = [
+            "strata", "bench", path, "-n", "3000", "--repeat", "2", "--gpu",
+        ];
+        let cli = crate::cli::Cli::try_parse_from(args).expect("arguments parse");
+        crate::cli::run(cli).expect("bench --gpu succeeds");
     }
 }
