@@ -286,13 +286,21 @@ fn full_leaf_point(leaf: u32, q: vec2<u32>, levels: u32) -> Located {
     return point_location(params.cands_at + table[w + 3u], table[w + 4u], 1u, uv);
 }
 
-// Every second bit of a 24-bit value (bit 2i to bit i).
+// Every second bit of a 32-bit value (bit 2i to bit i).
 fn compact(v0: u32) -> u32 {
-    var v = v0 & 0x555555u;
-    v = (v | (v >> 1u)) & 0x333333u;
-    v = (v | (v >> 2u)) & 0x0f0f0fu;
+    var v = v0 & 0x55555555u;
+    v = (v | (v >> 1u)) & 0x33333333u;
+    v = (v | (v >> 2u)) & 0x0f0f0f0fu;
     v = (v | (v >> 4u)) & 0x00ff00ffu;
     return (v | (v >> 8u)) & 0xffffu;
+}
+
+// The two values of curve/clip.rs `split_fraction` for the 64-bit fraction `f`: the
+// odd and the even bits of its top 52 bits, to 24 bits each.
+fn split_fraction(f: vec2<u32>) -> vec2<f32> {
+    let odd = (compact(f.y >> 1u) << 8u) | compact(f.x >> 17u);
+    let even = (compact(f.y) << 8u) | compact(f.x >> 16u);
+    return vec2<f32>(f32(odd), f32(even)) * exp2(-24.0) + exp2(-27.0);
 }
 
 // The corners of piece `at` (`n` of them) in its leaf's unit square.
@@ -307,9 +315,9 @@ fn y_on(e0: u32, e1: u32, x: f32) -> f32 {
     return v.y;
 }
 
-// The point of the convex polygon `poly` (n corners) at fraction `f`, uniform in area
-// (curve/clip.rs `Poly::point_at`); w = 0 when the polygon has no area.
-fn point_at(n: u32, f: f32) -> vec3<f32> {
+// The point of the convex polygon `poly` (n corners) at the fraction split into `g`,
+// uniform in area (curve/clip.rs `Poly::point_at`); z = 0 when it has no area.
+fn point_at(n: u32, g: vec2<f32>) -> vec3<f32> {
     var a2 = 0.0;
     for (var k = 1u; k + 1u < n; k = k + 1u) {
         a2 = a2 + cross2(poly[k] - poly[0], poly[k + 1u] - poly[0]);
@@ -318,9 +326,8 @@ fn point_at(n: u32, f: f32) -> vec3<f32> {
     if n < 3u || !(total > 0.0) {
         return vec3<f32>(0.0, 0.0, 0.0);
     }
-    let d = min(u32(clamp(f, 0.0, 1.0) * 16777216.0), 16777215u);
-    let g1 = f32(compact(d >> 1u)) * exp2(-12.0) + exp2(-27.0);
-    let g2 = f32(compact(d)) * exp2(-12.0) + exp2(-27.0);
+    let g1 = g.x;
+    let g2 = g.y;
     var lo = 0u;
     var hi = 0u;
     for (var k = 1u; k < n; k = k + 1u) {
@@ -380,31 +387,31 @@ fn point_at(n: u32, f: f32) -> vec3<f32> {
     return vec3<f32>(x, min(ya, yb) + g2 * abs(ya - yb), 1.0);
 }
 
-// A boundary leaf expecting at most one sample: the piece holding the fraction `t`
+// A boundary leaf expecting at most one sample: the piece holding the fraction `q`
 // of the leaf's measure and the point at the rest of it, by area
 // (curve/boundary.rs `place_in_pieces`); the leaf's centre located among the pieces'
-// triangles when no piece has measure.
-fn boundary_leaf_point(leaf: u32, t: f32) -> Located {
+// triangles when no piece has measure. Measures in 2^62 fixed point.
+fn boundary_leaf_point(leaf: u32, q: vec2<u32>) -> Located {
     let w = params.leaves_at + 5u * leaf;
     let level = table[w + 2u] & 31u;
     let size = exp2(-f32(level));
     let origin = vec2<f32>(f32(table[w]), f32(table[w + 1u])) * size;
     let first = params.pieces_at + 20u * table[w + 3u];
     let n = table[w + 4u];
-    var want = t;
+    var want = shr64(q, 2u);
     var chosen = n;
-    var rest = 0.0;
+    var rest = vec2<u32>(0u, 0u);
     for (var i = 0u; i < n; i = i + 1u) {
-        let m = tf(first + 20u * i + 2u);
-        if !(m > 0.0) {
+        let m = t64(first + 20u * i + 2u);
+        if m.x == 0u && m.y == 0u {
             continue;
         }
         chosen = i;
         rest = want;
-        if want < m {
+        if lt64(want, m) {
             break;
         }
-        want = want - m;
+        want = sub64(want, m);
     }
     if chosen < n {
         let at = first + 20u * chosen;
@@ -412,7 +419,12 @@ fn boundary_leaf_point(leaf: u32, t: f32) -> Located {
         for (var k = 0u; k < corners; k = k + 1u) {
             poly[k] = vec2<f32>(tf(at + 4u + 2u * k), tf(at + 5u + 2u * k));
         }
-        let p = point_at(corners, rest / tf(at + 2u));
+        let m = t64(at + 2u);
+        var f = vec2<u32>(0xffffffffu, 0xffffffffu);
+        if lt64(rest, m) {
+            f = fraction64(rest, m);
+        }
+        let p = point_at(corners, split_fraction(f));
         if p.z > 0.0 {
             let tri = table[at];
             return clamped_onto(tri, barycentric(tri, origin + p.xy * size));
@@ -481,7 +493,7 @@ fn cs_sample(@builtin(global_invocation_id) id: vec3<u32>) {
     if (info & 128u) != 0u {
         p = full_leaf_point(leaf, q, request[params.levels_at + slot]);
     } else {
-        p = boundary_leaf_point(leaf, f32(q.y >> 8u) * exp2(-24.0));
+        p = boundary_leaf_point(leaf, q);
     }
     let face = table[params.tris_at + 7u * p.tri + 6u];
     sites[k] = Site(face, table[params.slots_at + slot], p.bary.yz);

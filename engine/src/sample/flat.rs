@@ -26,9 +26,11 @@ use crate::curve::SegmentCurve;
 /// leaf and [`FlatSampler::pieces`] for a boundary leaf.
 pub type FlatLeaf = [u32; 5];
 
-/// A clipped piece of a boundary leaf: `[triangle, corners, measure, 0, x0, y0, ...]`
-/// with the triangle a global domain-triangle index, the measure as an `f32` fraction
-/// of the leaf's measure, and up to 8 corners in the leaf's own unit square (`f32`).
+/// A clipped piece of a boundary leaf: `[triangle, corners, measure lo, measure hi,
+/// x0, y0, ...]` with the triangle a global domain-triangle index, the measure as a
+/// fraction of the leaf's measure in 2^62 fixed point (the pieces' exact measures sum
+/// to the leaf's up to round-off), and up to 8 corners in the leaf's own unit square
+/// (`f32`).
 pub type FlatPiece = [u32; 20];
 
 /// A domain triangle: its corners' `u, v` in the unit square (`f32` bits) and its mesh
@@ -203,7 +205,8 @@ impl FlatSampler {
             row[0] = tri;
             let pts = poly.points();
             row[1] = pts.len().min(8) as u32;
-            row[2] = f32_bits(if node > 0.0 { m / node } else { 0.0 });
+            let share = if node > 0.0 { m / node } else { 0.0 };
+            [row[2], row[3]] = split((share * 4_611_686_018_427_387_904.0) as u64);
             for (k, p) in pts.iter().take(8).enumerate() {
                 let q = (*p - origin) / size;
                 row[4 + 2 * k] = f32_bits(q.x);
@@ -346,9 +349,9 @@ mod tests {
                 assert!(first + len <= flat.candidates.len());
             } else {
                 assert!(first + len <= flat.pieces.len());
-                let sum: f32 = flat.pieces[first..first + len]
+                let sum: f64 = flat.pieces[first..first + len]
                     .iter()
-                    .map(|p| f32::from_bits(p[2]))
+                    .map(|p| (u64::from(p[2]) | u64::from(p[3]) << 32) as f64 / 2f64.powi(62))
                     .sum();
                 assert!((sum - 1.0).abs() < 1e-3, "pieces sum to {sum}");
             }

@@ -309,8 +309,8 @@ impl SiteExpander {
 
 impl SiteExpander {
     /// Records the expansion of the first `n` sites of `sites` (a GPU buffer of
-    /// [`SampleSite`]s of an `n`-sample request, as
-    /// [`GpuSampler`](super::sample::GpuSampler) writes them) into `samples` (at least
+    /// [`SampleSite`]s of an `n`-sample request, as the GPU sampler writes them) into
+    /// `samples` (at least
     /// `n` records), each sample's index its place. The parameters go through the
     /// expander's uniform buffer written with `queue`: submit `encoder` before the next
     /// expansion.
