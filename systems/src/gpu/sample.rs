@@ -548,6 +548,7 @@ mod gpu_tests {
                     d.position
                 );
                 assert!(d.position <= 1e-5, "{at}: {d:?}");
+                // A face that differs is the other side of an edge through the point.
                 assert!(d.faces * 1000 <= n && d.segments * 1000 <= n, "{at}: {d:?}");
                 // Determinism: another run gives the same bits.
                 gpu.sample_sites(device, queue, n, seed).expect("sites");

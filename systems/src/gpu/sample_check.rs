@@ -21,9 +21,11 @@ use super::sample::GpuSampler;
 /// The largest position deviation accepted, over the bounding-box diagonal.
 pub const POSITION_TOLERANCE: f64 = 1e-5;
 
-/// Samples accepted with another face or segment than the CPU's, per sample: points
-/// within `f32` round-off of a triangle edge.
-pub const DIFFERING_TOLERANCE: f64 = 1e-3;
+/// Samples accepted with another face or segment than the CPU's, per sample. Such a
+/// sample lies on an edge the two faces share, up to `f32` round-off (its position is
+/// checked like every other's): on a grid-like plane, sub-cell centres that fall
+/// exactly on a diagonal edge (0.1% of 10^5 samples of `plane-gaussian.ron`).
+pub const DIFFERING_TOLERANCE: f64 = 1e-2;
 
 /// One request timed and checked on the GPU ([module docs](self)).
 #[derive(Clone, Debug)]
