@@ -33,6 +33,7 @@
 mod boundary;
 mod budget;
 mod clip;
+mod flat;
 pub mod hilbert;
 mod key;
 mod locate;

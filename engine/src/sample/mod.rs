@@ -10,6 +10,7 @@
 
 mod chains;
 pub(crate) mod faces;
+pub mod flat;
 pub mod lod;
 pub mod progressive;
 mod sampler;

@@ -36,6 +36,10 @@ pub struct BenchArgs {
     /// memory than is available (by default refused before preprocessing).
     #[arg(long)]
     pub ignore_memory_check: bool,
+    /// Also sample on the GPU (the adapter wgpu opens): time it per stage and check its
+    /// samples against the CPU's; fails past the tolerances.
+    #[arg(long)]
+    pub gpu: bool,
 }
 
 /// The JSON written by `strata bench --json`.
@@ -139,6 +143,21 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         bytes as f64 / (1024.0 * 1024.0),
         report.bytes_per_face,
     );
+    if args.gpu {
+        let ctx = crate::gpu::GpuContext::headless(&Default::default())?;
+        let seed = config.sampling.seed;
+        let check = crate::gpu::sample_check::GpuSampleCheck::run(
+            &ctx,
+            &scene.sampler,
+            count,
+            seed,
+            args.repeat,
+        )?;
+        println!("{check}");
+        if !check.passes() {
+            bail!("{name}: the GPU's samples differ from the CPU's past the tolerances");
+        }
+    }
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&report)?;
         write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;

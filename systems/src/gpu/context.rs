@@ -82,6 +82,9 @@ pub enum GpuError {
         /// The device's limit.
         limit: u64,
     },
+    /// A request the GPU sampler cannot draw from its tables.
+    #[error("GPU sampling: {0}")]
+    Sampling(#[from] strata_engine::sample::flat::FlatError),
 }
 
 /// Which adapter to open.

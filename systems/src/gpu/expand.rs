@@ -308,6 +308,74 @@ impl SiteExpander {
 }
 
 impl SiteExpander {
+    /// Records the expansion of the first `n` sites of `sites` (a GPU buffer of
+    /// [`SampleSite`]s of an `n`-sample request, as the GPU sampler writes them) into
+    /// `samples` (at least
+    /// `n` records), each sample's index its place. The parameters go through the
+    /// expander's uniform buffer written with `queue`: submit `encoder` before the next
+    /// expansion.
+    pub fn expand_resident(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        sites: &wgpu::Buffer,
+        samples: &wgpu::Buffer,
+        n: u32,
+    ) {
+        if n == 0 {
+            return;
+        }
+        let groups = n.div_ceil(WORKGROUP);
+        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
+        let params = ExpandParams {
+            count: n,
+            scale: (self.total_measure / f64::from(n)).sqrt() as f32,
+            row: gx * WORKGROUP,
+            ..self.offsets
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let bytes = |count: u64| wgpu::BufferSize::new(u64::from(n) * count);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("strata expand resident"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: sites,
+                        offset: 0,
+                        size: bytes(SITE_BYTES),
+                    }),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: self.mesh.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: samples,
+                        offset: 0,
+                        size: bytes(std::mem::size_of::<strata_engine::sample::Sample>() as u64),
+                    }),
+                },
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("strata expand resident"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(1, &bind_group, &[]);
+        pass.dispatch_workgroups(gx, gy, 1);
+    }
+
     /// Replaces the positions and normals of the mesh table with those of `mesh`, a
     /// deformation of the sampler's mesh (same vertices and triangles; the field's
     /// face-frame tensors move with the faces): expansions from now on place the sites

@@ -5,6 +5,9 @@
 //! - [`layout`]: the Pod structs shared with WGSL and their vertex layouts.
 //! - [`buffers`]: the growable sample (and sites) buffers with their staging rings.
 //! - [`expand`]: sample sites (16 bytes) expanded into full samples by a compute pass.
+//! - [`sample`]: stratified sampling on the GPU: sites drawn by a compute pass from the
+//!   sampler's flattened cells, then expanded into the sample buffer; [`sample_check`]
+//!   times it and checks it against the CPU (`strata bench --gpu`).
 //! - [`lod`]: GPU-resident progressive pools and the level-of-detail fade pass.
 //! - [`pipeline`]: render and compute pipelines as plain, hashable descriptions, made
 //!   into wgpu pipelines in one place.
@@ -30,6 +33,8 @@ pub mod layout;
 pub mod lod;
 pub mod npr;
 pub mod pipeline;
+pub mod sample;
+pub mod sample_check;
 pub mod shaders;
 pub mod splat;
 pub mod stream;
@@ -49,6 +54,7 @@ pub use headless::{HeadlessTarget, RgbaImage};
 pub use layout::{ColorMode, Footprint, MeshMode};
 pub use lod::{GpuLodPool, LodFades, LodFrame, LodScene};
 pub use npr::{Brush, NprKind, NprRenderer, NprStyle, RenderStyle, StyleChoice, StyledFrame};
+pub use sample::GpuSampler;
 pub use splat::{SplatLod, SplatRenderer, SplatStyle};
 pub use stream::SampleStream;
 pub use upload::{GpuSplats, upload_samples};

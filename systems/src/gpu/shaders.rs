@@ -18,6 +18,9 @@ pub const EXPAND: &str = concat!(
     include_str!("../../../shaders/expand.wgsl")
 );
 
+/// The sampling pass's module: `sample.wgsl` alone (it uses nothing of `common.wgsl`).
+pub const SAMPLE: &str = include_str!("../../../shaders/sample.wgsl");
+
 /// The mesh pipeline's module: `common.wgsl` + `mesh.wgsl`.
 pub const MESH: &str = concat!(
     include_str!("../../../shaders/common.wgsl"),
@@ -49,6 +52,7 @@ mod tests {
             ),
             ("mesh", MESH, &["vs_mesh", "fs_mesh"][..]),
             ("expand", EXPAND, &["cs_expand"][..]),
+            ("sample", SAMPLE, &["cs_sample"][..]),
             (
                 "npr",
                 NPR,

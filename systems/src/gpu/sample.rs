@@ -1,0 +1,622 @@
+//! Stratified sampling on the GPU: a compute pass (`shaders/sample.wgsl`) draws the
+//! sites of an `(n, seed)` request from the sampler's cells, flattened once by the
+//! engine ([`FlatSampler`]), and [`SiteExpander`]'s pass turns them into the records of
+//! the [`GpuSampleBuffer`] the renderers draw.
+//!
+//! Per request the CPU computes the allocation over segments or chains and the levels
+//! of the continuous map per segment (O(segments), [`FlatSampler::request`]) and
+//! uploads them with a 48-byte uniform; every per-sample step (the counter-based
+//! random value, the leaf search over the cumulative measures, the point in the leaf
+//! and its triangle) runs on the GPU, in 32-bit integers (64-bit values as word pairs)
+//! and `f32`. The sites are those of [`Sampler::sample_sites_into`]: the same leaf for
+//! every sample (the stratified value and the cumulative measures are compared in
+//! 64-bit fixed point), the point in it up to `f32` round-off, so a face or segment
+//! can differ only for a point within round-off of a triangle edge. Boundary leaves
+//! expecting more than one sample (counts above about 2^16 per cell budget) need the
+//! sequential sampler's exact descent, which the tables do not hold: such requests are
+//! refused ([`FlatError::BoundaryDescent`]).
+
+use strata_engine::sample::flat::{FlatError, FlatSampler};
+use strata_engine::sample::{SampleSite, Sampler};
+use wgpu::util::DeviceExt;
+
+use super::buffers::{GpuSampleBuffer, read_buffer};
+use super::context::{GpuError, scoped};
+use super::expand::SiteExpander;
+use super::pipeline::{
+    ComputePipelineDesc, buffer_entry, pipeline_layout, shader_module, uniform_buffer,
+};
+use super::shaders;
+
+/// Samples per workgroup of the sampling pass (the shader's `@workgroup_size`).
+const WORKGROUP: u32 = 64;
+
+const SITE_BYTES: u64 = std::mem::size_of::<SampleSite>() as u64;
+
+/// The sampling pass's uniforms; twin of `SampleParams` in `shaders/sample.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleParams {
+    /// Samples requested.
+    pub count: u32,
+    /// Groups in the request table.
+    pub groups: u32,
+    /// Invocations per row of the 2-D dispatch.
+    pub row: u32,
+    /// First word of the per-slot levels in the request table.
+    pub levels_at: u32,
+    /// First word of the cumulative measures in the table.
+    pub cum_at: u32,
+    /// First word of the leaves.
+    pub leaves_at: u32,
+    /// First word of the full leaves' candidates.
+    pub cands_at: u32,
+    /// First word of the boundary leaves' pieces.
+    pub pieces_at: u32,
+    /// First word of the domain triangles.
+    pub tris_at: u32,
+    /// First word of the segment ids per slot.
+    pub slots_at: u32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 2],
+}
+
+/// The flat tables of `flat` as one array of 32-bit words, and where each part starts.
+fn table_words(flat: &FlatSampler) -> (Vec<u32>, SampleParams) {
+    let mut words = Vec::with_capacity(flat.bytes() / 4);
+    let at = |w: &Vec<u32>| w.len() as u32;
+    let cum_at = at(&words);
+    words.extend(
+        flat.cumulative
+            .iter()
+            .flat_map(|&c| [c as u32, (c >> 32) as u32]),
+    );
+    let leaves_at = at(&words);
+    words.extend(flat.leaves.iter().flatten());
+    let cands_at = at(&words);
+    words.extend(&flat.candidates);
+    let pieces_at = at(&words);
+    words.extend(flat.pieces.iter().flatten());
+    let tris_at = at(&words);
+    words.extend(flat.triangles.iter().flatten());
+    let slots_at = at(&words);
+    words.extend(&flat.slot_segments);
+    let offsets = SampleParams {
+        cum_at,
+        leaves_at,
+        cands_at,
+        pieces_at,
+        tris_at,
+        slots_at,
+        ..Default::default()
+    };
+    (words, offsets)
+}
+
+/// A storage buffer that grows (by doubling) to hold what it is asked to.
+#[derive(Debug)]
+struct Growable {
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+    buffer: Option<wgpu::Buffer>,
+}
+
+impl Growable {
+    fn new(label: &'static str, usage: wgpu::BufferUsages) -> Self {
+        Self {
+            label,
+            usage,
+            buffer: None,
+        }
+    }
+
+    /// The buffer, at least `bytes` long (a new one, its contents lost, when it was
+    /// shorter).
+    fn at_least(&mut self, device: &wgpu::Device, bytes: u64) -> Result<&wgpu::Buffer, GpuError> {
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(GpuError::Limit {
+                what: self.label,
+                requested: bytes,
+                limit,
+            });
+        }
+        let size = self.buffer.as_ref().map_or(0, wgpu::Buffer::size);
+        if size < bytes {
+            let size = bytes.max(2 * size).min(limit).max(256);
+            self.buffer = Some(device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(self.label),
+                size,
+                usage: self.usage,
+                mapped_at_creation: false,
+            }));
+        }
+        // Set just above when it was missing or short.
+        self.buffer.as_ref().ok_or(GpuError::Limit {
+            what: self.label,
+            requested: bytes,
+            limit,
+        })
+    }
+}
+
+/// Draws stratified samples of one sampler on the GPU ([module docs](self)).
+///
+/// Bound to the sampler it was built from: for a new sampler (another mesh, field or
+/// preprocessing) build a new one. Any count and seed reuse it.
+#[derive(Debug)]
+pub struct GpuSampler {
+    sampler: Sampler,
+    flat: FlatSampler,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    table: wgpu::Buffer,
+    table_bytes: u64,
+    offsets: SampleParams,
+    request: Growable,
+    sites: Growable,
+    /// Sites written by the last request.
+    count: u32,
+    expander: SiteExpander,
+}
+
+impl GpuSampler {
+    /// Flattens `sampler`'s cells, uploads them and builds the sampling and expansion
+    /// passes (the expander uploads the mesh table).
+    pub fn new(device: &wgpu::Device, sampler: &Sampler) -> Result<Self, GpuError> {
+        let flat = FlatSampler::new(sampler)?;
+        let (words, offsets) = table_words(&flat);
+        let table_bytes = std::mem::size_of_val(words.as_slice()) as u64;
+        let limit = device.limits().max_storage_buffer_binding_size;
+        if table_bytes > limit {
+            return Err(GpuError::Limit {
+                what: "cell table for GPU sampling (bytes)",
+                requested: table_bytes,
+                limit,
+            });
+        }
+        let expander = SiteExpander::new(device, sampler)?;
+        scoped(device, "building the sampling pass", || {
+            let module = shader_module(device, "strata sample", shaders::SAMPLE);
+            let storage = |binding, read_only| {
+                buffer_entry(
+                    binding,
+                    wgpu::ShaderStages::COMPUTE,
+                    wgpu::BufferBindingType::Storage { read_only },
+                    None,
+                )
+            };
+            let uniform = buffer_entry(
+                0,
+                wgpu::ShaderStages::COMPUTE,
+                wgpu::BufferBindingType::Uniform,
+                None,
+            );
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("strata sample"),
+                entries: &[
+                    uniform,
+                    storage(1, true),
+                    storage(2, true),
+                    storage(3, false),
+                ],
+            });
+            let pipeline_layout = pipeline_layout(device, "strata sample", &[Some(&layout)]);
+            let pipeline = ComputePipelineDesc {
+                label: "strata sample",
+                entry: "cs_sample",
+            }
+            .create(device, &pipeline_layout, &module);
+            let table = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("strata sample table"),
+                contents: bytemuck::cast_slice(&words),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            Self {
+                sampler: sampler.clone(),
+                flat,
+                pipeline,
+                layout,
+                params: uniform_buffer(
+                    device,
+                    "strata sample params",
+                    std::mem::size_of::<SampleParams>(),
+                ),
+                table,
+                table_bytes,
+                offsets,
+                request: Growable::new(
+                    "strata sample request",
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                ),
+                sites: Growable::new(
+                    "strata GPU sites",
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                ),
+                count: 0,
+                expander,
+            }
+        })
+    }
+
+    /// Bytes of the cell table on the GPU (the expander's mesh table not counted).
+    pub fn table_bytes(&self) -> u64 {
+        self.table_bytes
+    }
+
+    /// The expander whose mesh table the records are made with.
+    pub fn expander(&self) -> &SiteExpander {
+        &self.expander
+    }
+
+    /// Draws the sites of an `n`-sample stratified request for `seed` on the GPU (kept
+    /// in the sampler's sites buffer): records the pass and submits it; never waits.
+    pub fn sample_sites(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        n: usize,
+        seed: u64,
+    ) -> Result<(), GpuError> {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("strata sample"),
+        });
+        self.encode_sites(device, queue, &mut encoder, n, seed)?;
+        queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// Draws an `n`-sample stratified request for `seed` on the GPU into `samples`
+    /// (resized to `n`): the sites pass, then the expansion into records, one
+    /// submission; never waits.
+    pub fn sample(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        n: usize,
+        seed: u64,
+        samples: &mut GpuSampleBuffer,
+    ) -> Result<(), GpuError> {
+        samples.resize(device, n)?;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("strata sample"),
+        });
+        self.encode_sites(device, queue, &mut encoder, n, seed)?;
+        if let Some(sites) = &self.sites.buffer {
+            self.expander.expand_resident(
+                device,
+                queue,
+                &mut encoder,
+                sites,
+                samples.buffer(),
+                self.count,
+            );
+        }
+        scoped(device, "sampling on the GPU", || {
+            queue.submit([encoder.finish()]);
+        })
+    }
+
+    /// Records the sites pass of an `(n, seed)` request into `encoder`; its uniforms
+    /// and request table are written with `queue` (submit before the next request).
+    fn encode_sites(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        n: usize,
+        seed: u64,
+    ) -> Result<(), GpuError> {
+        let count = u32::try_from(n).map_err(|_| FlatError::TooLarge {
+            what: "samples per request",
+            value: n as u64,
+        })?;
+        self.count = count;
+        if count == 0 {
+            return Ok(());
+        }
+        let request = self.flat.request(&self.sampler, n as u64, seed)?;
+        let mut words: Vec<u32> = request.groups.iter().flatten().copied().collect();
+        let levels_at = words.len() as u32;
+        words.extend(&request.levels);
+        let groups = count.div_ceil(WORKGROUP);
+        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
+        let params = SampleParams {
+            count,
+            groups: request.groups.len() as u32,
+            row: gx * WORKGROUP,
+            levels_at,
+            ..self.offsets
+        };
+        let request_buffer = self
+            .request
+            .at_least(device, std::mem::size_of_val(words.as_slice()) as u64)?;
+        queue.write_buffer(request_buffer, 0, bytemuck::cast_slice(&words));
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let sites = self.sites.at_least(device, u64::from(count) * SITE_BYTES)?;
+        let bind_group = scoped(device, "binding the sampling pass", || {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("strata sample"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: self.table.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: request_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: sites,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(u64::from(count) * SITE_BYTES),
+                        }),
+                    },
+                ],
+            })
+        })?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("strata sample"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(gx, gy, 1);
+        Ok(())
+    }
+
+    /// Copies the sites of the last request back (waits for the device; for tests,
+    /// checks and benchmarks, not for the frame loop).
+    pub fn read_sites(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<SampleSite>, GpuError> {
+        let Some(sites) = &self.sites.buffer else {
+            return Ok(Vec::new());
+        };
+        let bytes = read_buffer(device, queue, sites, u64::from(self.count) * SITE_BYTES)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::{offset_of, size_of};
+
+    use super::super::wgsl_layout::wgsl_layout;
+    use super::*;
+
+    /// `SampleParams` and `Site` in sample.wgsl have the layouts of their Rust twins.
+    #[test]
+    fn wgsl_twins_match_rust_layouts() {
+        let (params, span) = wgsl_layout(shaders::SAMPLE, "SampleParams");
+        assert_eq!(span, size_of::<SampleParams>());
+        let want = [
+            ("count", offset_of!(SampleParams, count)),
+            ("groups", offset_of!(SampleParams, groups)),
+            ("row", offset_of!(SampleParams, row)),
+            ("levels_at", offset_of!(SampleParams, levels_at)),
+            ("cum_at", offset_of!(SampleParams, cum_at)),
+            ("leaves_at", offset_of!(SampleParams, leaves_at)),
+            ("cands_at", offset_of!(SampleParams, cands_at)),
+            ("pieces_at", offset_of!(SampleParams, pieces_at)),
+            ("tris_at", offset_of!(SampleParams, tris_at)),
+            ("slots_at", offset_of!(SampleParams, slots_at)),
+            ("_pad0", offset_of!(SampleParams, _pad)),
+            ("_pad1", offset_of!(SampleParams, _pad) + 4),
+        ];
+        let want: Vec<(String, usize)> = want.iter().map(|(n, o)| (n.to_string(), *o)).collect();
+        assert_eq!(params, want);
+        let (site, span) = wgsl_layout(shaders::SAMPLE, "Site");
+        assert_eq!(span, size_of::<SampleSite>());
+        assert_eq!(
+            site.iter().map(|(_, o)| *o).collect::<Vec<_>>(),
+            [
+                offset_of!(SampleSite, face),
+                offset_of!(SampleSite, segment),
+                offset_of!(SampleSite, bary)
+            ]
+        );
+    }
+}
+
+/// GPU against CPU sampling on whatever adapter wgpu opens (the software adapter in
+/// CI); skipped without one unless `STRATA_REQUIRE_GPU=1`.
+#[cfg(test)]
+mod gpu_tests {
+    use std::io::Write;
+    use std::path::Path;
+
+    use glam::DVec3;
+    use strata_engine::sample::{SampleSite, Sampler};
+
+    use super::GpuSampler;
+    use crate::config::SceneConfig;
+    use crate::gpu::{GpuContext, GpuOptions, GpuSampleBuffer};
+    use crate::scene::Scene;
+
+    fn gpu(test: &str) -> Option<GpuContext> {
+        match GpuContext::headless(&GpuOptions::default()) {
+            Ok(ctx) => Some(ctx),
+            Err(e) => {
+                assert!(
+                    std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
+                    "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
+                );
+                let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
+                None
+            }
+        }
+    }
+
+    fn scene(ron: &str) -> Scene {
+        let config = SceneConfig::from_ron(ron, Path::new("test.ron")).expect("scene parses");
+        Scene::build(&config).expect("scene builds")
+    }
+
+    /// The default scene (`configs/default.ron`): a genus-2 surface, singularities,
+    /// many segments.
+    const DEFAULT: &str = "(mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
+         field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))";
+
+    /// A unit square with a 2:1 field along x (planar path).
+    const PLANE: &str = "(mesh: Shape(Plane(size: 1.0, resolution: 8)), \
+         field: Constant(direction: (1.0, 0.0, 0.0), anisotropy: 2.0, density: 1.0))";
+
+    /// A plane whose density varies eightfold (`configs/plane-gaussian.ron`, coarser).
+    const GAUSSIAN: &str = "(mesh: Shape(Plane(size: 1.0, resolution: 16)), \
+         field: Planar(density: Gaussian(center: (0.5, 0.5), sigma: 0.15, peak: 8.0, base: 0.5)))";
+
+    /// How the GPU's sites differ from the CPU's for one request.
+    #[derive(Debug, Default)]
+    struct Difference {
+        /// Samples whose face differs.
+        faces: usize,
+        /// Samples whose segment differs.
+        segments: usize,
+        /// The largest distance between the two sites' points over the bounding-box
+        /// diagonal.
+        position: f64,
+    }
+
+    fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
+        let mesh = sampler.mesh();
+        let tri = mesh.triangles()[s.face as usize];
+        let b = s.barycentric().map(f64::from);
+        (0..3).fold(DVec3::ZERO, |acc, k| {
+            acc + mesh.positions()[tri[k] as usize] * b[k]
+        })
+    }
+
+    fn compare(sampler: &Sampler, gpu: &[SampleSite], cpu: &[SampleSite]) -> Difference {
+        let (lo, hi) = sampler.mesh().bounds();
+        let diagonal = (hi - lo).length();
+        let mut d = Difference::default();
+        assert_eq!(gpu.len(), cpu.len());
+        for (g, c) in gpu.iter().zip(cpu) {
+            d.faces += usize::from(g.face != c.face);
+            d.segments += usize::from(g.segment != c.segment);
+            let dist = point(sampler, g).distance(point(sampler, c)) / diagonal;
+            d.position = d.position.max(dist);
+        }
+        d
+    }
+
+    /// Sites and records drawn on the GPU are the CPU's: the same face and segment for
+    /// every sample (up to a few points within round-off of an edge, counted and
+    /// printed), positions within 1e-5 of the bounding-box diagonal; on a planar scene
+    /// and the default scene (chains at 1 and 7 samples), at counts that are and are
+    /// not powers of two; the same bits in two runs.
+    #[test]
+    fn gpu_sites_are_the_cpu_sites() {
+        let Some(ctx) = gpu("gpu_sites_are_the_cpu_sites") else {
+            return;
+        };
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        for (name, ron) in [
+            ("plane", PLANE),
+            ("gaussian", GAUSSIAN),
+            ("default", DEFAULT),
+        ] {
+            let scene = scene(ron);
+            let sampler = &scene.sampler;
+            let mut gpu = GpuSampler::new(device, sampler).expect("GPU sampler");
+            let mut buffer = GpuSampleBuffer::new(device).expect("buffer");
+            for (n, seed) in [(1usize, 3u64), (7, 3), (4096, 5), (10_007, 9)] {
+                let at = format!("{name}, n {n}");
+                let mut cpu = vec![SampleSite::default(); n];
+                sampler.sample_sites_into(seed, &mut cpu);
+                gpu.sample_sites(device, queue, n, seed).expect("sites");
+                let sites = gpu.read_sites(device, queue).expect("read back");
+                let d = compare(sampler, &sites, &cpu);
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "{at}: chains {}, {} faces and {} segments differ, largest deviation {:.2e} of the diagonal",
+                    sampler.uses_chains(n),
+                    d.faces,
+                    d.segments,
+                    d.position
+                );
+                assert!(d.position <= 1e-5, "{at}: {d:?}");
+                // A face that differs is the other side of an edge through the point.
+                assert!(d.faces * 1000 <= n && d.segments * 1000 <= n, "{at}: {d:?}");
+                // Determinism: another run gives the same bits.
+                gpu.sample_sites(device, queue, n, seed).expect("sites");
+                let again = gpu.read_sites(device, queue).expect("read back");
+                assert!(again == sites, "{at}: two runs differ");
+                // Records: the sites expanded into the renderer's buffer.
+                gpu.sample(device, queue, n, seed, &mut buffer)
+                    .expect("samples");
+                let records = buffer.read_back(device, queue).expect("read back");
+                let want = sampler.sample(n, seed);
+                let (lo, hi) = sampler.mesh().bounds();
+                let diagonal = (hi - lo).length() as f32;
+                for (k, (r, s)) in records.iter().zip(&want).enumerate() {
+                    assert_eq!(r.index, k as u32, "{at}");
+                    assert_eq!((r.face, r.segment), (sites[k].face, sites[k].segment));
+                    let dist = glam::Vec3::from(r.position).distance(s.position.into());
+                    assert!(dist <= 1e-5 * diagonal, "{at}, sample {k}: {dist}");
+                }
+            }
+        }
+    }
+
+    /// A count that puts more than one sample in a boundary leaf is refused with the
+    /// largest count that can be drawn, before anything is allocated; half that count
+    /// and zero samples work.
+    #[test]
+    fn counts_needing_the_boundary_descent_are_refused() {
+        let Some(ctx) = gpu("counts_needing_the_boundary_descent_are_refused") else {
+            return;
+        };
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let scene = scene(DEFAULT);
+        let mut gpu = GpuSampler::new(device, &scene.sampler).expect("GPU sampler");
+        let err = gpu
+            .sample_sites(device, queue, 3_000_000, 1)
+            .expect_err("refused");
+        let limit = match &err {
+            crate::gpu::GpuError::Sampling(
+                strata_engine::sample::flat::FlatError::BoundaryDescent { count, limit },
+            ) => {
+                assert_eq!(*count, 3_000_000);
+                *limit
+            }
+            other => panic!("{other}"),
+        };
+        assert!(err.to_string().contains("boundary leaf"), "{err}");
+        assert!(limit > 10_000 && limit < 3_000_000, "{limit}");
+        gpu.sample_sites(device, queue, limit as usize / 2, 1)
+            .expect("half the limit is drawn");
+        gpu.sample_sites(device, queue, 0, 1).expect("nothing");
+        assert!(gpu.read_sites(device, queue).expect("read").is_empty());
+    }
+
+    /// `strata bench --gpu` prints the check and succeeds on a scene within tolerance.
+    #[test]
+    fn bench_gpu_checks_against_the_cpu() {
+        use clap::Parser;
+        if gpu("bench_gpu_checks_against_the_cpu").is_none() {
+            return;
+        }
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("plane.ron");
+        std::fs::write(&path, GAUSSIAN).expect("scene written");
+        let path = path.to_str().expect("utf-8");
+        let args = [
+            "strata", "bench", path, "-n", "3000", "--repeat", "2", "--gpu",
+        ];
+        let cli = crate::cli::Cli::try_parse_from(args).expect("arguments parse");
+        crate::cli::run(cli).expect("bench --gpu succeeds");
+    }
+}
