@@ -23,6 +23,8 @@ pub mod ecs;
 pub mod frame_thread;
 pub mod gpu;
 pub mod hot_reload;
+#[cfg(feature = "bevy-mesh")]
+pub mod mesh_asset;
 pub mod plugin;
 pub mod report;
 pub mod scene;

@@ -3,7 +3,8 @@
 //! into the app's `Update` schedule with [`ecs::register`]; the host then spawns mesh
 //! entities ([`MeshBundle`](crate::ecs::MeshBundle)) and reads their
 //! [`SampleBuffer`](crate::ecs::SampleBuffer)s. Nothing else is added: no task pools,
-//! no runner, no other schedules. Non-Bevy hosts call [`ecs::register`] on their own
+//! no runner, no other schedules (with the `bevy-mesh` feature, the samples' `Mesh`
+//! assets of `mesh_asset` too). Non-Bevy hosts call [`ecs::register`] on their own
 //! `World` and `Schedule` instead; both paths run the same systems.
 //!
 //! Cost: one schedule registration at build time; per update, exactly what the
@@ -67,5 +68,9 @@ impl Plugin for StrataPlugin {
         // engine registers through the world, which needs it to exist.
         app.init_schedule(Update);
         app.world_mut().schedule_scope(Update, ecs::register);
+        // With `bevy-mesh`, each mesh entity's samples also become a `Mesh` asset.
+        #[cfg(feature = "bevy-mesh")]
+        app.world_mut()
+            .schedule_scope(Update, crate::mesh_asset::register);
     }
 }
