@@ -27,6 +27,7 @@ mod isotropic;
 mod params;
 mod shading;
 mod spec;
+pub mod tangent_space;
 mod warp;
 
 pub use curvature::{
