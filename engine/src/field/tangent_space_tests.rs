@@ -167,3 +167,43 @@ fn on_a_plane_transport_keeps_world_directions() {
     }
     assert!(checked > mesh.edge_count() / 2);
 }
+
+#[test]
+fn the_cube_smoothest_field_is_singular_only_at_corners_at_every_resolution() {
+    use crate::field::design::{LineFieldOptions, smoothest_line_field};
+    use crate::segment::detect_singularities;
+    let corner = |p: DVec3| (p.abs() - DVec3::ONE).abs().max_element() < 1e-12;
+    let options = LineFieldOptions {
+        cancel_distance: 0.0,
+        ..LineFieldOptions::default()
+    };
+    let mut places: Vec<Vec<[i64; 3]>> = Vec::new();
+    for n in [2, 4] {
+        let mesh = cube(n);
+        let field = smoothest_line_field(&mesh, &options)
+            .expect("field")
+            .to_tensor_field(&mesh, &vec![[4.0, 1.0]; mesh.vertex_count()])
+            .expect("tensor field");
+        let found = detect_singularities(&mesh, &field);
+        let total: f64 = found.iter().map(|s| s.index).sum();
+        assert_eq!(total, 2.0, "cube {n}: {found:?}");
+        assert!(found.iter().all(|s| s.index == 0.5), "cube {n}: {found:?}");
+        let mut at: Vec<[i64; 3]> = Vec::new();
+        for s in &found {
+            let t = mesh.triangles()[s.face as usize];
+            let c = t
+                .iter()
+                .map(|&v| mesh.positions()[v as usize])
+                .find(|&p| corner(p));
+            let c = c.unwrap_or_else(|| panic!("cube {n}: face {} away from the corners", s.face));
+            at.push(c.to_array().map(|x| x.round() as i64));
+        }
+        at.sort_unstable();
+        at.dedup();
+        places.push(at);
+    }
+    // Four corners of +1/2 at both resolutions (which four is a free choice: the
+    // cube's symmetries make several fields equally smooth).
+    assert_eq!(places[0].len(), 4, "{places:?}");
+    assert_eq!(places[1].len(), 4, "{places:?}");
+}
