@@ -27,6 +27,7 @@ mod isotropic;
 mod params;
 mod shading;
 mod spec;
+pub mod tangent_space;
 #[cfg(feature = "serde")]
 mod vec3_serde;
 mod warp;

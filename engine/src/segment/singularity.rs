@@ -18,39 +18,27 @@
 //! route of the paper's section 8, after Zhang et al. 2007).
 //!
 //! # Connection
-//! On a curved mesh the vertices' tangent planes differ, so the angles `theta` of two
-//! vertices are compared through a discrete Levi-Civita-style connection: along edge
-//! `a -> b` with direction `d`, let `psi_v` be the angle of `d` projected into the
-//! tangent plane of `v`, measured in `v`'s frame. Transport keeps the angle to the edge,
-//! so the frames rotate by `rho_ab = psi_b - psi_a`, and the turn of the line field
-//! along the edge is
+//! The vertices' angles are compared through the intrinsic, angle-rescaled discrete
+//! Levi-Civita connection of [`TangentSpaces`] (Knöppel et al. 2013; the convention
+//! of geometry-central), the one field design solves under. A line at `v` has the
+//! doubled intrinsic angle `2 theta_v` (its doubled angle in the vertex-normal
+//! frame mapped by the vertex's line map); along edge `a -> b`, with `phi_v` the
+//! angle of the direction `a -> b` in `v`'s space, the turn of the line field is
 //!
-//! `delta_ab = wrap(2 (theta_b - psi_b) - 2 (theta_a - psi_a))` in `(-pi, pi]`,
+//! `delta_ab = wrap(2 (theta_b - phi_b) - 2 (theta_a - phi_a))` in `(-pi, pi]`,
 //!
 //! the change of the field's angle *relative to the edge* (computed once per edge, so
-//! `delta_ba = -delta_ab` exactly). Around face `(i, j, k)` the frames' rotations sum to
-//! `sum rho = sum_corners gamma_v - pi (mod 2 pi)`, where `gamma_v` is the corner angle
-//! between the two edges projected into `v`'s tangent plane. The face's holonomy is the
-//! real number
-//!
-//! `Omega_f = sum_corners gamma_v - pi`,
-//!
-//! with each `gamma_v` taken as the representative (mod 2 pi) nearest the true corner
-//! angle `beta_v`. Since `sum_corners beta_v = pi`, this is `sum (gamma_v - beta_v)`:
-//! the angle defect of each vertex spread over its corners by how much the projection
-//! into the vertex's plane opens them. Then
+//! `delta_ba = -delta_ab` exactly). The face's holonomy `Omega_f` is the intrinsic
+//! angle defect spread over its corners ([`TangentSpaces::face_holonomy`], a real
+//! number congruent to the sum of the transports around the face), and
 //!
 //! `index_f = (sum_{edges of f} delta + 2 Omega_f) / (4 pi)`,
 //!
-//! exactly a multiple of 1/2 (the congruence `Omega_f = sum rho (mod 2 pi)` makes the
-//! numerator a multiple of 2 pi; it is rounded against float error). Summed over a
-//! closed mesh the `delta` cancel and `sum_f Omega_f = sum_v (sum_corners gamma_v) -
-//! pi F = sum_v (sum_corners gamma_v - 2 pi) + 2 pi chi`. Around an interior vertex the
-//! projected corner angles telescope to a multiple of 2 pi; where the projected one-ring
-//! does not wind exactly once (folded or spiky vertices) one corner, the one whose
-//! projection distorts most, is shifted by a multiple of 2 pi so that the sum is
-//! `2 pi` per closed fan. Hence the indices sum to the Euler characteristic *exactly*
-//! on every closed manifold mesh, whatever the field (Poincare-Hopf).
+//! exactly a multiple of 1/2 (rounded against float error). Summed over a closed
+//! manifold mesh the `delta` cancel and `sum_f Omega_f = 2 pi chi`, so the indices sum
+//! to the Euler characteristic *exactly*, whatever the field (Poincare-Hopf). Creases
+//! do not turn an intrinsic connection, so they invent no singularities, and
+//! subdividing flat faces changes nothing.
 //!
 //! # Isotropic vertices
 //! Where `l1 = l2` the argument of `z_v` is undefined; `atan2(0, 0) = 0` gives such a
@@ -67,9 +55,9 @@ use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
 use super::Singularity;
-use crate::field::{TensorField, frame_angle, vertex_frames};
+use crate::field::tangent_space::TangentSpaces;
+use crate::field::{TensorField, vertex_frames};
 use crate::mesh::TriMesh;
-use crate::mesh::face_set::find;
 
 /// How the line field turns along edges and how the tangent planes turn around faces,
 /// under the discrete connection of the [module docs](self).
@@ -103,176 +91,48 @@ pub(crate) fn wrap_pi(x: f64) -> f64 {
     if y <= -PI { y + TAU } else { y }
 }
 
-/// Builds the [`LineFieldTransport`] of `field` on `mesh`: one pass over edges (the
-/// field's turn) and one over faces (corner angles, holonomies). O(V + E + F).
+/// Builds the [`LineFieldTransport`] of `field` on `mesh`: the mesh's
+/// [`TangentSpaces`], then one pass over vertices (the field's intrinsic angles) and
+/// one over edges (its turns). O(V + E + F).
 pub fn line_field_transport(mesh: &TriMesh, field: &TensorField) -> LineFieldTransport {
-    // Every pass below is a map over vertices, edges or faces: on rayon's threads
-    // (from MIN_PARALLEL items), each item computed as it was sequentially.
-    let frames = vertex_frames(mesh);
-    let psi = edge_angles(mesh, &frames);
-    let edge_turn = edge_turns(mesh, field, &frames, &psi);
-    let (mut gamma, beta) = corner_angles(mesh, &psi);
-    for (f, k, delta) in fan_corrections(mesh, &gamma, &beta) {
-        gamma[f][k] += delta;
-    }
-    let face_holonomy = gamma
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|g| g[0] + g[1] + g[2] - PI)
-        .collect();
-    LineFieldTransport {
-        edge_turn,
-        face_holonomy,
-    }
+    transport_in(mesh, &TangentSpaces::new(mesh), field)
 }
 
-/// Per edge `a -> b`, `psi`: the angle of its direction in the frames of `a` and of `b`.
-fn edge_angles(mesh: &TriMesh, frames: &[(DVec3, DVec3)]) -> Vec<[f64; 2]> {
-    let pos = mesh.positions();
-    mesh.edges()
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .map(|&[a, b]| {
-            let d = pos[b as usize] - pos[a as usize];
-            let (fa, fb) = (frames[a as usize], frames[b as usize]);
-            [frame_angle(d, fa), frame_angle(d, fb)]
-        })
-        .collect()
-}
-
-/// Per edge, the line field's turn `delta_ab` relative to the edge (see
-/// [`LineFieldTransport::edge_turn`]), from the edge angles `psi`.
-fn edge_turns(
+/// [`line_field_transport`] in already built tangent spaces of `mesh`.
+pub(crate) fn transport_in(
     mesh: &TriMesh,
+    spaces: &TangentSpaces,
     field: &TensorField,
-    frames: &[(DVec3, DVec3)],
-    psi: &[[f64; 2]],
-) -> Vec<f64> {
+) -> LineFieldTransport {
+    // Every pass below is a map over vertices or edges: on rayon's threads (from
+    // MIN_PARALLEL items), each item computed as it was sequentially.
+    let frames = vertex_frames(mesh);
     let two_theta: Vec<f64> = field
         .tensors()
         .par_iter()
         .with_min_len(MIN_PARALLEL)
-        .zip(frames)
-        .map(|(t, (e1, e2))| doubled_angle(t, *e1, *e2))
+        .zip(&frames)
+        .enumerate()
+        .map(|(v, (t, (e1, e2)))| spaces.intrinsic(v, doubled_angle(t, *e1, *e2)))
         .collect();
-    mesh.edges()
+    let edge_turn = mesh
+        .edges()
         .par_iter()
         .with_min_len(MIN_PARALLEL)
-        .zip(psi)
+        .zip(spaces.edge_angles())
         .map(|(&[a, b], p)| {
             wrap_pi((two_theta[b as usize] - 2.0 * p[1]) - (two_theta[a as usize] - 2.0 * p[0]))
         })
-        .collect()
-}
-
-/// Per face and corner, the projected corner angle `gamma` (the representative nearest
-/// the true angle) and the true angle `beta`, from the edge angles `psi`.
-fn corner_angles(mesh: &TriMesh, psi: &[[f64; 2]]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
-    let pos = mesh.positions();
-    // Angle of the edge leaving corner `v` of a face towards `w`, in v's frame.
-    let out_angle = |e: u32, v: u32| -> f64 {
-        let [a, _] = mesh.edges()[e as usize];
-        let p = psi[e as usize];
-        // The stored direction is a -> b; seen from b the edge leaves towards a.
-        if v == a { p[0] } else { p[1] + PI }
-    };
-    mesh.triangles()
-        .par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .zip(mesh.face_edges())
-        .map(|(t, fe)| {
-            let (mut gamma, mut beta) = ([0.0f64; 3], [0.0f64; 3]);
-            for k in 0..3 {
-                let v = t[k];
-                // Edge k leaves corner k towards k+1; edge k+2 joins corner k+2 and k.
-                let to_next = out_angle(fe[k], v);
-                let to_prev = out_angle(fe[(k + 2) % 3], v);
-                let p = pos[v as usize];
-                let u = pos[t[(k + 1) % 3] as usize] - p;
-                let w = pos[t[(k + 2) % 3] as usize] - p;
-                let b = u.cross(w).length().atan2(u.dot(w));
-                let mut g = wrap_pi(to_prev - to_next);
-                if g < b - PI {
-                    g += TAU;
-                }
-                gamma[k] = g;
-                beta[k] = b;
-            }
-            (gamma, beta)
-        })
-        .unzip()
-}
-
-/// The shifts `(face, corner, multiple of 2 pi)` that make the corner angles `gamma`
-/// around each interior vertex sum to 2 pi per closed fan: at most one per vertex, on
-/// its corner whose projection distorts most (`|gamma - beta|`). Found per vertex in
-/// parallel (each touches one corner of its own), to be applied after.
-fn fan_corrections(
-    mesh: &TriMesh,
-    gamma: &[[f64; 3]],
-    beta: &[[f64; 3]],
-) -> Vec<(usize, usize, f64)> {
-    (0..mesh.vertex_count() as u32)
-        .into_par_iter()
-        .with_min_len(MIN_PARALLEL)
-        .filter_map(|v| {
-            let fans = closed_fans(mesh, v)?;
-            let mut sum = 0.0;
-            let mut worst: Option<(f64, usize, usize)> = None;
-            for &f in mesh.vertex_faces(v) {
-                let t = mesh.triangles()[f as usize];
-                for k in 0..3 {
-                    if t[k] == v {
-                        let (g, b) = (gamma[f as usize][k], beta[f as usize][k]);
-                        sum += g;
-                        let dev = (g - b).abs();
-                        if worst.is_none_or(|(d, _, _)| dev > d) {
-                            worst = Some((dev, f as usize, k));
-                        }
-                    }
-                }
-            }
-            let turns = (sum / TAU).round() as i64;
-            let (_, f, k) = worst?;
-            (turns != fans as i64).then(|| (f, k, (fans as i64 - turns) as f64 * TAU))
-        })
-        .collect()
-}
-
-/// Items (vertices, edges or faces) below which [`line_field_transport`]'s passes
-/// stay on the calling thread.
-const MIN_PARALLEL: usize = 1 << 14;
-
-/// Number of fans of faces around `v` if every edge at `v` is interior and manifold
-/// (so every fan is closed), `None` otherwise (a boundary or non-manifold vertex).
-fn closed_fans(mesh: &TriMesh, v: u32) -> Option<usize> {
-    let faces = mesh.vertex_faces(v);
-    // Tiny union-find over the faces around v (a handful).
-    let mut parent: Vec<usize> = (0..faces.len()).collect();
-    for (i, &f) in faces.iter().enumerate() {
-        let t = mesh.triangles()[f as usize];
-        for k in 0..3 {
-            if t[k] != v && t[(k + 1) % 3] != v {
-                continue;
-            }
-            let e = mesh.face_edges()[f as usize][k] as usize;
-            if mesh.edge_valence()[e] != 2 {
-                return None;
-            }
-            let [f0, f1] = mesh.edge_faces()[e];
-            let g = if f0 == f { f1 } else { f0 };
-            if let Some(j) = faces.iter().position(|&h| h == g) {
-                let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
-                parent[ri.max(rj)] = ri.min(rj);
-            }
-        }
+        .collect();
+    LineFieldTransport {
+        edge_turn,
+        face_holonomy: spaces.face_holonomy().to_vec(),
     }
-    Some(
-        (0..faces.len())
-            .filter(|&i| find(&mut parent, i) == i)
-            .count(),
-    )
 }
+
+/// Items (vertices or edges) below which [`line_field_transport`]'s passes stay on
+/// the calling thread.
+const MIN_PARALLEL: usize = 1 << 14;
 
 /// Twice the index of every face (an integer), from a [`LineFieldTransport`].
 pub fn face_double_indices(mesh: &TriMesh, transport: &LineFieldTransport) -> Vec<i64> {

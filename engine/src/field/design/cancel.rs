@@ -367,9 +367,15 @@ fn cancel_inside(
         z[v as usize] = value;
     }
     // Every face of the disc: one whose corners are all held keeps its index.
-    let singular_left = faces
-        .iter()
-        .any(|&f| face_double_index(mesh, &system.edges, z, f as usize) != 0);
+    let singular_left = faces.iter().any(|&f| {
+        face_double_index(
+            mesh,
+            &system.edges,
+            system.holonomy.as_deref(),
+            z,
+            f as usize,
+        ) != 0
+    });
     if singular_left {
         for (&v, &old) in free.iter().zip(&before) {
             z[v as usize] = old;

@@ -15,31 +15,38 @@ use crate::segment::detect_singularities;
 fn doubled(system: &Connection, directions: &[DVec3]) -> Vec<c64> {
     directions
         .iter()
-        .zip(&system.frames)
-        .map(|(d, (e1, e2))| {
-            let z = c64::new(d.dot(*e1), d.dot(*e2));
-            z * z
+        .enumerate()
+        .map(|(v, d)| {
+            system
+                .frames
+                .doubled(v, *d)
+                .map_or(c64::new(0.0, 0.0), |(_, u)| u)
         })
         .collect()
 }
 
 /// On the flat square `[0, 2]^2`: a `+1/2` singularity at `p` and a `-1/2` one at `q`, as doubled
-/// angles `(x - p) conj(x - q)` in the plane's frame.
-fn planted_pair(mesh: &TriMesh, p: DVec3, q: DVec3) -> Vec<c64> {
+/// angles `(x - p) conj(x - q)` in the plane's frame, taken to the connection's frames.
+fn planted_pair(mesh: &TriMesh, system: &Connection, p: DVec3, q: DVec3) -> Vec<c64> {
     let (e1, e2) = tangent_frame(mesh.vertex_normals()[0]);
     mesh.positions()
         .iter()
-        .map(|x| {
+        .enumerate()
+        .map(|(v, x)| {
             let a = c64::new((*x - p).dot(e1), (*x - p).dot(e2));
             let b = c64::new((*x - q).dot(e1), (*x - q).dot(e2));
-            a * b.conj()
+            let z = a * b.conj();
+            let (s, c) = (0.5 * z.im.atan2(z.re)).sin_cos();
+            let (_, u) = system.frames.doubled(v, e1 * c + e2 * s).expect("tangent");
+            u * z.norm()
         })
         .collect()
 }
 
-/// A smooth field on `mesh` (angle `3x + 2yz`) with uniform angle noise of width
-/// `noise` radians from a fixed seed: singularities in pairs, close together.
-fn noisy_field(mesh: &TriMesh, seed: u64, noise: f64) -> Vec<c64> {
+/// A smooth field on `mesh` (angle `3x + 2yz` in the vertex-normal frames) with
+/// uniform angle noise of width `noise` radians from a fixed seed, in the
+/// connection's frames: singularities in pairs, close together.
+fn noisy_field(mesh: &TriMesh, system: &Connection, seed: u64, noise: f64) -> Vec<c64> {
     let mut state = seed;
     (0..mesh.vertex_count())
         .map(|v| {
@@ -49,7 +56,10 @@ fn noisy_field(mesh: &TriMesh, seed: u64, noise: f64) -> Vec<c64> {
                 .wrapping_add(1442695040888963407);
             let u = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
             let angle = 3.0 * p.x + 2.0 * p.y * p.z + noise * u;
-            c64::new(angle.cos(), angle.sin())
+            let (e1, e2) = tangent_frame(mesh.vertex_normals()[v]);
+            let (s, c) = (0.5 * angle).sin_cos();
+            let (_, z) = system.frames.doubled(v, e1 * c + e2 * s).expect("tangent");
+            z
         })
         .collect()
 }
@@ -64,7 +74,7 @@ fn planted() -> (TriMesh, Connection, DVec3, Vec<c64>) {
         DVec3::new(0.8487, 1.0217, 0.0),
         DVec3::new(1.1487, 1.0191, 0.0),
     );
-    let z0 = planted_pair(&mesh, p, q);
+    let z0 = planted_pair(&mesh, &system, p, q);
     (mesh, system, p, z0)
 }
 
@@ -160,7 +170,7 @@ fn cancelling_on_a_closed_surface_keeps_the_index_sum() {
     // A noisy field on a sphere: many pairs, whatever is cancelled the sum stays 2 chi.
     let mesh = shapes::sphere(1.0, 12).expect("sphere");
     let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
-    let z0 = noisy_field(&mesh, 7, 1.5);
+    let z0 = noisy_field(&mesh, &system, 7, 1.5);
     let before = singular(&face_double_indices(&mesh, &system, &z0));
     assert!(before.len() > 6, "{} singular faces", before.len());
     let held = vec![false; mesh.vertex_count()];
@@ -187,7 +197,7 @@ fn many_close_singularities_stay_bounded_and_do_not_depend_on_the_thread_count()
     // others; every one is tried with at most MAX_PARTNERS partners.
     let mesh = shapes::sphere(1.0, 24).expect("sphere");
     let system = Connection::build(&mesh, 0.0, LinearSolver::Direct, false).expect("system");
-    let z0 = noisy_field(&mesh, 11, 2.5);
+    let z0 = noisy_field(&mesh, &system, 11, 2.5);
     let before = net_clusters(&mesh, &face_double_indices(&mesh, &system, &z0)).len();
     assert!(before > 40, "{before} net clusters");
     let held = vec![false; mesh.vertex_count()];

@@ -2,29 +2,32 @@
 //! system behind [`design`](super) (see its module docs for the energy).
 //!
 //! Input: a [`TriMesh`] and a smoothing length. Output: a [`Connection`]: per edge the
-//! cotangent weight and the rotation `r_ab = e^(2 i (psi_b - psi_a))`, per vertex the
-//! tangent frame and lumped mass, and Cholesky factors of `A + diag(extra)` restricted
-//! to any subset of vertices. Complex Hermitian `V x V` systems (faer's sparse
+//! cotangent weight and the rotation `r_ab` of the intrinsic connection (with the
+//! smoothing's factor), per vertex the intrinsic frame and lumped mass, and Cholesky
+//! factors of `A + diag(extra)` restricted to any subset of vertices. Complex Hermitian `V x V` systems (faer's sparse
 //! Cholesky over `c64`, sequential); the symbolic factorization of the whole mesh's
 //! pattern is computed once and shared by the normal smoothing and the field solves,
 //! and the buffers of a finished factor are kept for the next ([`Connection::recycle`]).
 //! Cost: O(V + E) assembly, one AMD ordering, one numeric factorization per solve.
 
 use std::cell::{OnceCell, RefCell};
+use std::sync::Arc;
 
 use faer::c64;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, MatMut, traits::ComplexField};
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use rayon::prelude::*;
 
 use super::pattern::VertexPattern;
 use super::vertex_graph::VertexGraph;
 
+use super::frames::Frames;
 use super::line_field::{
     LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
 };
 use crate::field::LineFieldError;
+use crate::field::tangent_space::TangentSpaces;
 use crate::field::{tangent_frame, vertex_frames};
 use crate::linalg::cholesky::{self, Cholesky, Storage, Symbolic};
 use crate::linalg::{Amg, AmgOptions, Csr, Scalar, pcg};
@@ -62,7 +65,10 @@ impl Factor {
 
 /// The discretised energy and mass of a mesh (see the [module docs](self)).
 pub(crate) struct Connection {
-    pub(crate) frames: Vec<(DVec3, DVec3)>,
+    pub(crate) frames: Frames,
+    /// Per face, the doubled holonomy `2 Omega_f` as a real number (intrinsic
+    /// frames only; see [`TangentSpaces::face_holonomy`]).
+    pub(crate) holonomy: Option<Vec<f64>>,
     pub(crate) edges: Vec<EdgeTerm>,
     /// Per vertex, the diagonal `sum w` of `A`.
     pub(crate) diagonal: Vec<f64>,
@@ -254,21 +260,30 @@ impl Connection {
         if !(mass.iter().sum::<f64>() > 0.0) {
             return Err(LineFieldError::EmptyMesh);
         }
-        let (frames, spare) = rayon::join(
-            || -> Result<Vec<(DVec3, DVec3)>, LineFieldError> {
-                Ok(if smoothing > 0.0 {
-                    let solver = match (pattern.as_ref().zip(symbolic.as_ref()), &graph) {
-                        (Some(direct), _) => Normals::Direct(direct),
-                        (None, Some(graph)) => Normals::Multigrid(graph),
-                        (None, None) => Normals::Multigrid(&VertexGraph::new(mesh)),
-                    };
+        let (smoothed, spare) = rayon::join(
+            || -> Result<Option<Vec<(DVec3, DVec3)>>, LineFieldError> {
+                if !(smoothing > 0.0) {
+                    return Ok(None);
+                }
+                let solver = match (pattern.as_ref().zip(symbolic.as_ref()), &graph) {
+                    (Some(direct), _) => Normals::Direct(direct),
+                    (None, Some(graph)) => Normals::Multigrid(graph),
+                    (None, None) => Normals::Multigrid(&VertexGraph::new(mesh)),
+                };
+                // Each vertex frame turned by the least rotation from the mesh's normal
+                // to the smoothed one, so that the two sets of frames differ by no
+                // gauge, only by the smoothing.
+                Ok(Some(
                     smoothed_normals(mesh, &weights, &mass, smoothing, solver)?
                         .into_iter()
-                        .map(tangent_frame)
-                        .collect()
-                } else {
-                    vertex_frames(mesh)
-                })
+                        .zip(mesh.vertex_normals())
+                        .map(|(smooth, n)| {
+                            let (e1, _) = tangent_frame(*n);
+                            let e1 = DQuat::from_rotation_arc(*n, smooth) * e1;
+                            (e1, smooth.cross(e1))
+                        })
+                        .collect(),
+                ))
             },
             || {
                 symbolic
@@ -277,8 +292,22 @@ impl Connection {
                     .and_then(Storage::<c64>::allocate)
             },
         );
-        let frames = frames?;
-        let edges = edge_terms(mesh, &frames, weights.iter().copied());
+        let frames = Frames::Intrinsic(Arc::new(TangentSpaces::new(mesh)));
+        let (mut edges, mut holonomy) = edge_terms(mesh, &frames, weights.iter().copied());
+        if let Some(planes) = smoothed? {
+            // The smoothing's change of the projected connection, carried over to the
+            // intrinsic one: `r = r_intrinsic r_smoothed conj(r_projected)`.
+            let (smooth, _) = edge_terms(mesh, &Frames::Planes(planes), weights.iter().copied());
+            let (raw, _) = edge_terms(
+                mesh,
+                &Frames::Planes(vertex_frames(mesh)),
+                weights.iter().copied(),
+            );
+            for ((e, s), r) in edges.iter_mut().zip(&smooth).zip(&raw) {
+                e.rotation *= s.rotation * r.rotation.conj();
+            }
+            holonomy = None;
+        }
         let mut diagonal = vec![0.0; n];
         for e in &edges {
             diagonal[e.a] += e.weight;
@@ -286,6 +315,7 @@ impl Connection {
         }
         Ok(Self {
             frames,
+            holonomy,
             edges,
             diagonal,
             mass,
@@ -298,17 +328,14 @@ impl Connection {
     }
 
     /// The same weights and masses with the connection measured in the mesh's own
-    /// vertex frames (no smoothing), for evaluation only (no factorization is
-    /// prepared): where a field is compared with the segmentation's view of it.
+    /// intrinsic tangent spaces (no smoothing), for evaluation only (no factorization
+    /// is prepared): where a field is compared with the segmentation's view of it.
     pub(crate) fn unsmoothed(&self, mesh: &TriMesh) -> Self {
-        let frames: Vec<(DVec3, DVec3)> = mesh
-            .vertex_normals()
-            .par_iter()
-            .map(|n| tangent_frame(*n))
-            .collect();
-        let edges = edge_terms(mesh, &frames, self.edges.iter().map(|e| e.weight));
+        let frames = Frames::Intrinsic(Arc::new(TangentSpaces::new(mesh)));
+        let (edges, holonomy) = edge_terms(mesh, &frames, self.edges.iter().map(|e| e.weight));
         Self {
             frames,
+            holonomy,
             edges,
             diagonal: self.diagonal.clone(),
             mass: self.mass.clone(),
@@ -321,21 +348,16 @@ impl Connection {
     }
 
     /// The doubled-angle values `z` of this system's frames in `to`'s: each line
-    /// projected into `to`'s tangent plane, with the same magnitude (0 where the line
-    /// is normal to that plane).
+    /// taken to `to`'s frame through its world direction, with the same magnitude (0
+    /// where the line is normal to `to`'s plane).
     pub(crate) fn transfer(&self, z: &[c64], to: &Connection) -> Vec<c64> {
         z.iter()
-            .zip(self.frames.iter().zip(&to.frames))
-            .map(|(z, ((e1, e2), (f1, f2)))| {
-                let (s, c) = (0.5 * z.im.atan2(z.re)).sin_cos();
-                let d = *e1 * c + *e2 * s;
-                let (c, s) = (d.dot(*f1), d.dot(*f2));
-                let len2 = c * c + s * s;
-                if len2 > 0.0 {
-                    c64::new(c * c - s * s, 2.0 * c * s) * (z.norm() / len2)
-                } else {
-                    c64::new(0.0, 0.0)
-                }
+            .enumerate()
+            .map(|(v, z)| {
+                let d = self.frames.direction(v, *z);
+                to.frames
+                    .doubled(v, d)
+                    .map_or(c64::new(0.0, 0.0), |(_, u)| u * z.norm())
             })
             .collect()
     }
@@ -495,11 +517,8 @@ impl Connection {
     pub(crate) fn output(&self, z: &[c64], iterations: usize) -> LineField {
         let (directions, magnitudes) = z
             .iter()
-            .zip(&self.frames)
-            .map(|(z, (e1, e2))| {
-                let (s, c) = (0.5 * z.im.atan2(z.re)).sin_cos();
-                (*e1 * c + *e2 * s, z.norm())
-            })
+            .enumerate()
+            .map(|(v, z)| (self.frames.direction(v, *z), z.norm()))
             .unzip();
         let energy = self.energy(z);
         let norm2 = self.mass_norm2(z);
@@ -513,30 +532,50 @@ impl Connection {
     }
 }
 
-/// Per edge the term `w |z_b - r z_a|^2`: `e^(i psi)` at both ends by arithmetic
-/// rather than angles, the rotation `(u_b conj(u_a))^2` (the doubled angle difference).
+/// Per edge the term `w |z_b - r z_a|^2` in `frames`, and per face the doubled
+/// holonomy where the frames are intrinsic. Intrinsic: `r = e^(2 i rho)` with the
+/// transport angle `rho` of [`TangentSpaces::transport`]. Planes: `e^(i psi)` at both
+/// ends by arithmetic rather than angles, the rotation `(u_b conj(u_a))^2` (the doubled
+/// angle difference of the edge projected into the two planes).
 fn edge_terms(
     mesh: &TriMesh,
-    frames: &[(DVec3, DVec3)],
+    frames: &Frames,
     weights: impl IntoIterator<Item = f64>,
-) -> Vec<EdgeTerm> {
+) -> (Vec<EdgeTerm>, Option<Vec<f64>>) {
     let pos = mesh.positions();
     let weights: Vec<f64> = weights.into_iter().collect();
-    mesh.edges()
+    let term = |e: usize, [a, b]: [u32; 2], weight: f64| {
+        let (a, b) = (a as usize, b as usize);
+        let rotation = match frames {
+            Frames::Intrinsic(spaces) => {
+                let (s, c) = (2.0 * spaces.transport(e)).sin_cos();
+                c64::new(c, s)
+            }
+            Frames::Planes(planes) => {
+                let d = pos[b] - pos[a];
+                let r = unit_direction(d, planes[b]) * unit_direction(d, planes[a]).conj();
+                r * r
+            }
+        };
+        EdgeTerm {
+            a,
+            b,
+            weight,
+            rotation,
+        }
+    };
+    let edges = mesh
+        .edges()
         .par_iter()
         .zip(&weights)
-        .map(|(&[a, b], &weight)| {
-            let (a, b) = (a as usize, b as usize);
-            let d = pos[b] - pos[a];
-            let r = unit_direction(d, frames[b]) * unit_direction(d, frames[a]).conj();
-            EdgeTerm {
-                a,
-                b,
-                weight,
-                rotation: r * r,
-            }
-        })
-        .collect()
+        .enumerate()
+        .map(|(e, (&ab, &weight))| term(e, ab, weight))
+        .collect();
+    let holonomy = match frames {
+        Frames::Intrinsic(spaces) => Some(spaces.face_holonomy().iter().map(|h| 2.0 * h).collect()),
+        Frames::Planes(_) => None,
+    };
+    (edges, holonomy)
 }
 
 /// Solves in place with `llt`, checking the result is finite.

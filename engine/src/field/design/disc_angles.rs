@@ -53,7 +53,15 @@ pub(super) fn angles_inside(
     }
     let index_sum: i32 = faces
         .iter()
-        .map(|&f| face_double_index(mesh, &system.edges, z, f as usize))
+        .map(|&f| {
+            face_double_index(
+                mesh,
+                &system.edges,
+                system.holonomy.as_deref(),
+                z,
+                f as usize,
+            )
+        })
         .sum();
     if index_sum != 0 {
         return Ok(None);
@@ -198,7 +206,8 @@ fn solve_inside(
 /// Per edge of the disc `faces` (`edges`, ascending), the connection's rotation angle
 /// from its first vertex to its second as a real number: `arg r` plus a multiple of
 /// `2 pi`, chosen so that around every face the angles sum to the face's holonomy
-/// (`arg` of the product of its rotations). Near the pole of the tangent frames (where
+/// (the connection's real one where it has one, else `arg` of the product of its
+/// rotations). Near the pole of the tangent frames (where
 /// they spin) `arg r` alone does not. A dual spanning tree from a face on the disc's
 /// boundary sets each face's edge toward its parent, leaves first. `None` where the
 /// disc's faces are not joined through edges or none lies on its boundary.
@@ -266,7 +275,13 @@ fn lifted_rotations(
                 own = sign;
             }
         }
-        let turns = ((angle(holonomy) - sum) / TAU).round();
+        let turns = ((system
+            .holonomy
+            .as_ref()
+            .map_or_else(|| angle(holonomy), |h| h[f as usize])
+            - sum)
+            / TAU)
+            .round();
         lifted[slot(parent[i])] += own * turns * TAU;
     }
     Some(lifted)

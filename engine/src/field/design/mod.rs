@@ -3,17 +3,22 @@
 //! direction fields" (SIGGRAPH 2013).
 //!
 //! # Representation
-//! Each vertex `v` has the tangent frame `(e1, e2)` of [`tangent_frame`](crate::field::tangent_frame) of its vertex
-//! normal. A line field is a complex number per vertex, `z_v = r_v e^(2 i theta_v)`, in
-//! that frame: the doubled angle makes `theta` and `theta + pi` the same line, so no sign
-//! has to be chosen anywhere.
+//! Each vertex `v` has the intrinsic, angle-rescaled tangent space of
+//! [`TangentSpaces`](crate::field::tangent_space::TangentSpaces) (Knöppel, Crane,
+//! Pinkall and Schröder 2013, section 6.1; the conventions of geometry-central's
+//! `IntrinsicGeometryInterface`, except at boundary vertices, see there). A line field
+//! is a complex number per vertex, `z_v = r_v e^(2 i theta_v)`, with `theta_v` the
+//! intrinsic angle: the doubled angle makes `theta` and `theta + pi` the same line, so
+//! no sign has to be chosen anywhere. World directions come in and go out through each
+//! vertex's exact line map (`design/frames.rs`).
 //!
 //! # Connection and energy
-//! Along edge `a -> b` with direction `d`, let `psi_v` be the angle of `d` projected into
-//! the tangent plane of `v`, in `v`'s frame (the discrete Levi-Civita connection of the
-//! paper: transport keeps the angle to the edge). A line at doubled angle `alpha` at `a`
-//! arrives at `b` as `alpha + 2 (psi_b - psi_a)`, i.e. multiplied by
-//! `r_ab = e^(2 i (psi_b - psi_a))`. This is the same connection as the singularity
+//! The discrete Levi-Civita connection of the paper: along edge `a -> b`, with
+//! `phi_v` the intrinsic angle of the direction `a -> b` at `v`, a line at doubled
+//! angle `alpha` at `a` arrives at `b` as `alpha + 2 (phi_b - phi_a)`, i.e. multiplied
+//! by `r_ab = e^(2 i (phi_b - phi_a))`. Its holonomy around a face is the vertices'
+//! intrinsic angle defect spread over their corners, so creases and the resolution of
+//! flat regions do not turn it. This is the same connection as the singularity
 //! detector's ([`line_field_transport`](crate::segment::line_field_transport)), so a
 //! field that is smooth here turns little there. The energy is
 //!
@@ -35,14 +40,18 @@
 //! eigen-solves then take one V-cycle on the eigen-residual per step instead of a
 //! solve (the Davidson method, Rayleigh-Ritz on the space of those corrections).
 //!
-//! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the frames and
-//! the rotations `r_ab` are measured in the tangent planes of the vertex normals after
-//! one implicit heat step `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the
-//! clamped cotangent Laplacian): bumps smaller than about `l` no longer turn the
-//! connection, so they no longer attract singularities (Ray, Vallet, Alonso and Lévy
-//! 2009 make fields ignore small details in the same spirit). Output directions lie in
-//! the smoothed planes; [`TensorField::from_frames`](crate::field::TensorField::from_frames)
-//! projects them into the mesh's.
+//! **Smoothed connection.** With [`LineFieldOptions::smoothing`] `> 0` the rotations
+//! `r_ab` are those of the intrinsic connection times the change that smoothing the
+//! vertex normals makes to the projected connection: `r_ab = r_intrinsic
+//! r_smoothed conj(r_projected)`, where `r_projected` rotates by the difference of the
+//! edge's angles projected into the two vertices' normal planes and `r_smoothed` the
+//! same in the planes of the normals after one implicit heat step
+//! `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the clamped cotangent
+//! Laplacian; each smoothed frame is the mesh's turned by the least rotation between
+//! the two normals, so the factor carries no gauge). Bumps smaller than about `l` no
+//! longer turn the connection, so they no longer attract singularities (Ray, Vallet,
+//! Alonso and Lévy 2009 make fields ignore small details in the same spirit), and the
+//! field stays in the intrinsic frames where the segmentation measures it.
 //! - Smoothest field ([`smoothest_line_field`]): the eigenvector of the smallest
 //!   eigenvalue of `A z = lambda M z`, with one factorization of `A + sigma M`
 //!   (`sigma` = [`SHIFT`] times the ratio of the traces of `A` and `M`), from a fixed
@@ -66,8 +75,8 @@
 //! - Pair cancellation ([`LineFieldOptions::cancel_distance`], `design/cancel.rs`): after
 //!   either solve, opposite singularities closer than a distance are removed together
 //!   by re-solving the field's angle on a disc around both (Zhang, Hays and Turk 2007).
-//!   It works in the mesh's own vertex frames, where the segmentation measures
-//!   singularities, and the field is then returned in those frames.
+//!   It measures indices under the unsmoothed intrinsic connection, where the
+//!   segmentation measures singularities.
 //!
 //! Input: a [`TriMesh`](crate::mesh::TriMesh) (and a guidance per vertex). Output: a [`LineField`], a unit
 //! world-space direction and a magnitude per vertex, which [`LineField::to_tensor_field`]
@@ -95,6 +104,8 @@
 //!   constants, below the solver and its system.
 //! - `connection.rs`: the connection Laplacian, its factors and multigrid solves, on
 //!   the vertex pattern (`pattern.rs`) or the vertex graph (`vertex_graph.rs`).
+//! - `frames.rs`: doubled angles to world directions and back, in the intrinsic
+//!   tangent spaces (or, for the smoothing's factor, in vertex-normal planes).
 //! - `eigenpair.rs`: the smallest eigenpair of the connection Laplacian (the
 //!   eigensolver itself is `linalg::lanczos`).
 //! - `index.rs`, `disc_angles.rs`, `cancel.rs`: face indices of a field, the angle
@@ -107,6 +118,7 @@ mod connection;
 mod designed;
 mod disc_angles;
 mod eigenpair;
+mod frames;
 mod index;
 mod line_field;
 mod pattern;

@@ -559,19 +559,6 @@ pub(crate) fn reuse_condition(extra: &[f64], mass: &[f64], shift: f64, lambda: f
     if lo > 0.0 { hi / lo } else { f64::INFINITY }
 }
 
-/// `t` in the frame `(e1, e2)` as a unit doubled-angle complex number, with its
-/// tangent length; `None` where `t` has no tangent part.
-fn doubled_unit(t: DVec3, (e1, e2): (DVec3, DVec3)) -> Option<(f64, c64)> {
-    let (c, s) = (t.dot(e1), t.dot(e2));
-    let len2 = c * c + s * s;
-    (len2 > 0.0).then(|| {
-        (
-            len2.sqrt(),
-            c64::new((c * c - s * s) / len2, 2.0 * c * s / len2),
-        )
-    })
-}
-
 /// Per vertex, the guidance's confidence and unit doubled-angle line in the vertex
 /// frame; `None` where there is no guidance.
 fn guidance_lines(
@@ -582,8 +569,8 @@ fn guidance_lines(
     guidance
         .iter()
         .zip(mesh.vertex_normals())
-        .zip(&system.frames)
-        .map(|((d, nv), frame)| doubled_unit(*d - *nv * d.dot(*nv), *frame))
+        .enumerate()
+        .map(|(v, (d, nv))| system.frames.doubled(v, *d - *nv * d.dot(*nv)))
         .collect()
 }
 
@@ -616,7 +603,7 @@ fn fixed_values(
         let d = c.direction;
         let tangent = d - nv * d.dot(nv);
         let usable = d.is_finite() && tangent.length_squared() > 1e-12 * d.length_squared();
-        let Some((_, z)) = doubled_unit(tangent, system.frames[v]).filter(|_| usable) else {
+        let Some((_, z)) = system.frames.doubled(v, tangent).filter(|_| usable) else {
             return Err(LineFieldError::ConstraintDirection {
                 index,
                 vertex: c.vertex,
