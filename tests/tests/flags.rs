@@ -282,6 +282,43 @@ const ROWS: &[Row] = &[
         },
     },
     Row {
+        covers: &["bench --gpu"],
+        check: |d| {
+            let folder = d.to_str().expect("utf-8 temp path");
+            let argv = [
+                "strata",
+                "bench",
+                "{dir}/scene.ron",
+                "-n",
+                "77",
+                "--repeat",
+                "1",
+            ];
+            let argv = argv.iter().map(|a| a.replace("{dir}", folder)).chain([
+                "--gpu".to_owned(),
+                "--json".to_owned(),
+                format!("{folder}/g.json"),
+            ]);
+            let result = Cli::try_parse_from(argv)
+                .map_err(anyhow::Error::from)
+                .and_then(run);
+            let required = std::env::var("STRATA_REQUIRE_GPU").as_deref() == Ok("1");
+            match result {
+                Err(e) if !required && one_line(&e).contains("adapter") => {
+                    eprintln!("no GPU adapter: bench --gpu not checked ({})", one_line(&e));
+                }
+                Err(e) => panic!("bench --gpu: {}", one_line(&e)),
+                Ok(()) => {
+                    let gpu = &json(d, "g.json")["gpu"];
+                    assert_eq!(gpu["count"].as_u64(), Some(77), "{gpu}");
+                    assert_eq!(gpu["segments_differ"].as_u64(), Some(0), "{gpu}");
+                    assert!(gpu["deviation"].as_f64().is_some_and(|x| x < 1e-5), "{gpu}");
+                    assert!(gpu["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+                }
+            }
+        },
+    },
+    Row {
         covers: &["watch --out", "watch -o", "watch --updates"],
         check: |d| {
             strata(

@@ -390,8 +390,9 @@ fn strata_watch_writes_the_samples_file() {
     assert_eq!(names.len(), 2, "{names:?}");
 }
 
-/// Issue 22: `strata watch` whose output folder is missing reports the failed write,
-/// keeps running, and writes after the next change (it exited with status 1).
+/// `strata watch` refuses an output folder that is missing at the start (before any
+/// work), but one that goes missing while it runs costs only that write: it reports
+/// the failed write, keeps running, and writes after the next change.
 #[test]
 fn strata_watch_survives_a_missing_output_folder() {
     let dir = tempfile::tempdir().expect("tempdir");
@@ -399,25 +400,49 @@ fn strata_watch_survives_a_missing_output_folder() {
     save_in_place(&scene, &sphere_scene(1000));
     let folder = dir.path().join("out");
     let out = folder.join("samples.ply");
-    let argv: Vec<String> = [
-        "strata",
-        "watch",
-        scene.to_str().expect("utf-8 path"),
-        "--out",
-        out.to_str().expect("utf-8 path"),
-        "--updates",
-        "2",
-    ]
-    .map(str::to_owned)
-    .into();
-    // The first update's write fails: the folder does not exist yet.
+    let argv = |updates: &str| -> Vec<String> {
+        let words = [
+            "strata",
+            "watch",
+            scene.to_str().expect("utf-8 path"),
+            "--out",
+        ];
+        let mut argv: Vec<String> = words.map(str::to_owned).into();
+        argv.extend([
+            out.to_string_lossy().into_owned(),
+            "--updates".into(),
+            updates.into(),
+        ]);
+        argv
+    };
+    // Missing at the start: refused before any work, naming the folder.
+    let cli = <strata_systems::cli::Cli as clap::Parser>::try_parse_from(argv("1")).expect("args");
+    let error = strata_systems::cli::run(cli).expect_err("a missing folder is refused");
+    assert!(error.to_string().contains("does not exist"), "{error}");
+
+    std::fs::create_dir(&folder).expect("create the output folder");
+    let argv = argv("3");
     let watch = std::thread::spawn(move || {
         let cli = <strata_systems::cli::Cli as clap::Parser>::try_parse_from(argv)?;
         strata_systems::cli::run(cli)
     });
+    let wait_for = |len: usize| {
+        let start = Instant::now();
+        while start.elapsed() < LIMIT {
+            if strata_engine::io::read_samples_ply(&out).is_ok_and(|s| s.len() == len) {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        false
+    };
+    assert!(wait_for(1000), "the first update was not written");
+    // The folder goes away: the next update's write fails, and watch keeps running.
+    std::fs::remove_dir_all(&folder).expect("remove the output folder");
+    save_in_place(&scene, &sphere_scene(1100));
     std::thread::sleep(Duration::from_secs(2));
     assert!(!watch.is_finished(), "watch stopped after a failed write");
-    std::fs::create_dir(&folder).expect("create the output folder");
+    std::fs::create_dir(&folder).expect("create the output folder again");
     save_in_place(&scene, &sphere_scene(1300));
     let start = Instant::now();
     while !watch.is_finished() && start.elapsed() < LIMIT {

@@ -18,9 +18,13 @@
 //!   geometry-central instead scales a boundary fan to a half plane (`s_v = pi /
 //!   Theta_v`), which pairs with its fields that align to the boundary (Dirichlet
 //!   conditions) but puts a half-index at every boundary corner of a free field like
-//!   strata's. A vertex whose faces form several fans (a non-manifold vertex) lays
-//!   them end to end and is treated as a boundary vertex; an edge shared by more than
-//!   two faces keeps the angle of the first fan that reaches it.
+//!   strata's. A vertex whose faces form several fans lays them end to end. Where
+//!   every fan is closed (a pinched vertex: the tips of `n` cones meeting in one
+//!   point) the connection scales them to `n` turns, so that each cone's defect counts
+//!   and the indices sum to the Euler characteristic of the surface with the pinch
+//!   split (the world-direction map below treats it as an open fan); where one is
+//!   open the vertex is treated as a boundary vertex. An edge shared by more than two
+//!   faces keeps the angle of the first fan that reaches it.
 //! - **Transport.** Along edge `a -> b` a tangent vector at angle `theta` at `a`
 //!   arrives at `b` at `theta + rho_ab`, `rho_ab = phi_b(b -> a) + pi - phi_a(a -> b)`
 //!   (it keeps its angle to the edge); a line field's doubled angle turns by
@@ -215,9 +219,19 @@ fn wrap_pi(x: f64) -> f64 {
     if y <= -PI { y + TAU } else { y }
 }
 
-/// The corners at `v` in fan order (counter-clockwise), and whether the faces form
-/// one closed fan (an interior manifold vertex).
-fn fans(mesh: &TriMesh, v: u32) -> (Vec<Corner>, bool) {
+/// How the faces around a vertex close up.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum FanKind {
+    /// One closed fan: an interior manifold vertex.
+    Interior,
+    /// `n > 1` fans, every one closed: a pinched vertex, the tips of `n` cones.
+    Pinched(usize),
+    /// At least one open fan: a boundary (or non-manifold open) vertex.
+    Open,
+}
+
+/// The corners at `v` in fan order (counter-clockwise), and how its fans close.
+fn fans(mesh: &TriMesh, v: u32) -> (Vec<Corner>, FanKind) {
     let pos = mesh.positions();
     let faces = mesh.vertex_faces(v);
     let corner_of = |f: u32| -> (usize, [u32; 3]) {
@@ -287,20 +301,34 @@ fn fans(mesh: &TriMesh, v: u32) -> (Vec<Corner>, bool) {
             }
         })
         .collect();
-    (corners, fan_count == 1 && !open)
+    let kind = match (open, fan_count) {
+        (false, 1) => FanKind::Interior,
+        (false, n) if n > 1 => FanKind::Pinched(n),
+        _ => FanKind::Open,
+    };
+    (corners, kind)
 }
 
 /// The tangent space of vertex `v` (see [`VertexSpace`]).
 fn vertex_space(mesh: &TriMesh, v: u32, frame: (DVec3, DVec3)) -> VertexSpace {
-    let (corners, interior) = fans(mesh, v);
+    let (corners, kind) = fans(mesh, v);
+    let interior = kind == FanKind::Interior;
     let pos = mesh.positions();
     let total: f64 = corners.iter().map(|c| c.alpha).sum();
-    let scale = if !(total > 0.0) {
+    // The scale of the world-direction map: one turn, or an open fan's.
+    let map_scale = if !(total > 0.0) {
         1.0
     } else if interior {
         TAU / total
     } else {
         (OPEN_TURN / total).min(1.0)
+    };
+    // The scale of the connection: a pinched vertex is the tip of `n` cones, each a
+    // whole turn, so its fans (laid end to end) are scaled to `n` turns: each cone's
+    // angle defect counts and Poincare-Hopf holds on the surface with the pinch split.
+    let scale = match kind {
+        FanKind::Pinched(n) if total > 0.0 => TAU * n as f64 / total,
+        _ => map_scale,
     };
     // The projected angle of the edge `e` leaving v.
     let projected = |e: u32| {
@@ -331,18 +359,18 @@ fn vertex_space(mesh: &TriMesh, v: u32, frame: (DVec3, DVec3)) -> VertexSpace {
         (true, true) => TAU / span,
         (false, true) => (OPEN_TURN / span).min(1.0),
         // The projection collapsed: the intrinsic angles stand in for it.
-        (_, false) => scale,
+        (_, false) => map_scale,
     };
     let mut scaled: Vec<(f64, f64)> = knots
         .iter()
         .map(|&(x, y)| {
             let x = if span > 0.0 { x } else { y };
-            (x * x_scale, y * scale)
+            (x * x_scale, y * map_scale)
         })
         .collect();
     if !interior && total > 0.0 {
         let x = if span > 0.0 { span } else { total };
-        scaled.push((x * x_scale, total * scale));
+        scaled.push((x * x_scale, total * map_scale));
     }
     let map = line_map(&scaled, start);
     VertexSpace { edges, scale, map }

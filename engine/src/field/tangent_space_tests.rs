@@ -207,3 +207,61 @@ fn the_cube_smoothest_field_is_singular_only_at_corners_at_every_resolution() {
     assert_eq!(places[0].len(), 4, "{places:?}");
     assert_eq!(places[1].len(), 4, "{places:?}");
 }
+
+/// Two octahedra touching at one vertex (a pinch: two closed fans there). Their
+/// surface with the pinch split is two spheres, so the holonomy sums to `2 pi * 4`,
+/// not `2 pi` times the mesh's `V - E + F = 3`, and every face's holonomy is its
+/// defect.
+#[test]
+fn a_pinched_vertex_counts_the_defect_of_each_cone() {
+    let octahedron = |c: DVec3| -> (Vec<DVec3>, Vec<[usize; 3]>) {
+        let p = [
+            DVec3::X,
+            -DVec3::X,
+            DVec3::Y,
+            -DVec3::Y,
+            DVec3::Z,
+            -DVec3::Z,
+        ]
+        .map(|d| c + d);
+        let mut faces = Vec::new();
+        for (x, y, z) in [0, 1].into_iter().flat_map(|x| {
+            [2, 3]
+                .into_iter()
+                .flat_map(move |y| [4, 5].into_iter().map(move |z| (x, y, z)))
+        }) {
+            // Outward: the normal points away from the centre.
+            let n = (p[y] - p[x]).cross(p[z] - p[x]);
+            faces.push(if n.dot(p[x] - c) > 0.0 {
+                [x, y, z]
+            } else {
+                [x, z, y]
+            });
+        }
+        (p.to_vec(), faces)
+    };
+    let (a, fa) = octahedron(DVec3::ZERO);
+    let (b, fb) = octahedron(DVec3::new(0.0, 0.0, 2.0));
+    // b's -z vertex (index 5) is a's +z vertex (index 4).
+    let mut positions = a.clone();
+    let remap: Vec<u32> = (0..6)
+        .map(|i| {
+            if i == 5 {
+                4
+            } else {
+                positions.push(b[i]);
+                (positions.len() - 1) as u32
+            }
+        })
+        .collect();
+    let mut triangles: Vec<[u32; 3]> = fa.iter().map(|t| t.map(|i| i as u32)).collect();
+    triangles.extend(fb.iter().map(|t| t.map(|i| remap[i])));
+    let mesh = TriMesh::new(positions, triangles).expect("two octahedra");
+    assert_eq!(mesh.euler_characteristic(), 3);
+    let spaces = TangentSpaces::new(&mesh);
+    let total: f64 = spaces.face_holonomy().iter().sum();
+    assert!((total - TAU * 4.0).abs() < 1e-9, "total holonomy {total}");
+    for (h, d) in spaces.face_holonomy().iter().zip(spaces.face_defect()) {
+        assert!((h - d).abs() < 1e-12, "holonomy {h} defect {d}");
+    }
+}

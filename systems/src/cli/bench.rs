@@ -143,6 +143,7 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         bytes as f64 / (1024.0 * 1024.0),
         report.bytes_per_face,
     );
+    let mut gpu = None;
     if args.gpu {
         let ctx = crate::gpu::GpuContext::headless(&Default::default())?;
         let seed = config.sampling.seed;
@@ -157,9 +158,15 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         if !check.passes() {
             bail!("{name}: the GPU's samples differ from the CPU's past the tolerances");
         }
+        gpu = Some(check);
     }
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&report)?;
+        // With `--gpu`, the check's numbers under `gpu`.
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(check), Some(object)) = (&gpu, value.as_object_mut()) {
+            object.insert("gpu".to_owned(), serde_json::to_value(check)?);
+        }
+        let text = serde_json::to_string_pretty(&value)?;
         write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }

@@ -28,7 +28,7 @@ pub const POSITION_TOLERANCE: f64 = 1e-5;
 pub const DIFFERING_TOLERANCE: f64 = 1e-2;
 
 /// One request timed and checked on the GPU ([module docs](self)).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct GpuSampleCheck {
     /// The adapter, as [`GpuContext::adapter_summary`] names it.
     pub adapter: String,
