@@ -30,8 +30,19 @@ use crate::field::Field;
 
 /// How often the waiting thread checks for signals and redraws the progress line.
 const POLL: Duration = Duration::from_millis(50);
-/// Builds shorter than this show no progress line.
+/// Builds shorter than this show no progress line, unless the environment variable
+/// `STRATA_PROGRESS_AFTER` gives another delay in seconds (0: from the start).
 const QUIET: Duration = Duration::from_secs(1);
+
+/// The delay before the progress line: [`QUIET`], or `STRATA_PROGRESS_AFTER` seconds
+/// where that is a finite number of at least 0.
+fn quiet() -> Duration {
+    std::env::var("STRATA_PROGRESS_AFTER")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .map_or(QUIET, Duration::from_secs_f64)
+}
 
 /// A preprocessed surface and what the preprocessing did.
 pub struct Built {
@@ -77,6 +88,7 @@ pub fn preprocess(
         std::thread::scope(|s| {
             let worker = s.spawn(|| build(positions, triangles, &field, &options, &control));
             let started = Instant::now();
+            let quiet = quiet();
             let mut interrupt = None;
             let mut drawn = false;
             while !worker.is_finished() {
@@ -87,7 +99,7 @@ pub fn preprocess(
                     control.cancel();
                     interrupt = Some(e);
                 }
-                if progress && started.elapsed() >= QUIET {
+                if progress && started.elapsed() >= quiet {
                     draw(&control, started.elapsed());
                     drawn = true;
                 }

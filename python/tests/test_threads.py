@@ -77,7 +77,12 @@ def run_child(tmp_path, body: str) -> subprocess.CompletedProcess:
     path = tmp_path / "child.py"
     path.write_text(script)
     here = os.path.dirname(__file__)
-    out = subprocess.run([sys.executable, str(path), here], capture_output=True, text=True, timeout=600)
+    # The progress line from the start (not after a second), so that what it shows
+    # does not depend on how fast this machine builds.
+    env = dict(os.environ, STRATA_PROGRESS_AFTER="0")
+    out = subprocess.run(
+        [sys.executable, str(path), here], capture_output=True, text=True, timeout=600, env=env
+    )
     assert out.returncode == 0, out.stderr
     return out
 
@@ -85,8 +90,8 @@ def run_child(tmp_path, body: str) -> subprocess.CompletedProcess:
 def test_ctrl_c_cancels_preprocessing(tmp_path):
     # SIGINT 0.3 s into a build, during its segmentation (about 2 s here): the build
     # stops before its next stage and raises KeyboardInterrupt. Its progress line (on,
-    # every 50 ms after the first second) shows that parameterization and cells, over
-    # a second each when the build runs through, were never entered.
+    # every 50 ms from the start) shows that parameterization and cells were never
+    # entered.
     out = run_child(
         tmp_path,
         """
@@ -110,7 +115,7 @@ def test_progress_line_shows_the_stages(tmp_path):
         print(sum(s.stage_times.values()))
         """,
     )
-    assert float(out.stdout) > 1.0
+    assert float(out.stdout) > 0.0
     assert out.stderr.count("strata: preprocessing: ") >= 1, out.stderr
     assert "segmentation" in out.stderr and "parameterization" in out.stderr, out.stderr
     # The line is cleared at the end (a carriage return, read as a newline here, and
