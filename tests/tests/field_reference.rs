@@ -10,8 +10,8 @@
 //! subdivision (each triangle into four at its edge midpoints: the same flat surface)
 //! its singular faces (index not 0) must number within 20% of the paper's method
 //! (cotangent weights as they are), and equal the reference's exactly where the
-//! reference floors the weights as strata does (which checks strata's connection and
-//! index face by face count). Subdivision must not move strata's count wherever it
+//! reference floors the weights as strata does (a check of strata's connection,
+//! solve and index by code that shares nothing with them). Subdivision must not move strata's count wherever it
 //! does not move the method's (all meshes but the cow; homer is the one exception,
 //! an ignored test says why). Skips where `../shared/meshes` is absent. About 40 s
 //! in release (the bunny subdivided has 278k faces).
