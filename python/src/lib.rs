@@ -17,6 +17,7 @@ mod analysis;
 mod args;
 mod arrays;
 mod field;
+mod pool;
 mod preprocess;
 mod sampler;
 mod scene_ron;
@@ -71,5 +72,6 @@ fn _strata(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::star_discrepancy, m)?)?;
     m.add_function(wrap_pyfunction!(analysis::radial_spectrum, m)?)?;
+    m.add_function(wrap_pyfunction!(analysis::surface_spectrum, m)?)?;
     Ok(())
 }

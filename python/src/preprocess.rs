@@ -10,10 +10,11 @@
 //! [`incremental::rebuild`] from nothing, which is bit for bit
 //! [`Preprocessed::build_surface`], the path `Preprocessed::build` takes for it, and
 //! can be cancelled. Cost: that of the engine's preprocessing, plus a wake-up of the
-//! waiting thread every 50 ms.
+//! waiting thread every 50 ms (it wakes at once when the build ends).
 
 use std::io::Write;
 use std::sync::Arc;
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
@@ -86,13 +87,20 @@ pub fn preprocess(
     let control = BuildControl::new();
     let (result, interrupt) = py.detach(|| {
         std::thread::scope(|s| {
-            let worker = s.spawn(|| build(positions, triangles, &field, &options, &control));
+            // The worker says when it is done, so the build's result is taken at once,
+            // not at the next poll.
+            let (done, finished) = mpsc::channel::<()>();
+            let (field, options, building) = (&field, &options, &control);
+            let worker = s.spawn(move || {
+                let result = build(positions, triangles, field, options, building);
+                let _ = done.send(());
+                result
+            });
             let started = Instant::now();
             let quiet = quiet();
             let mut interrupt = None;
             let mut drawn = false;
-            while !worker.is_finished() {
-                std::thread::sleep(POLL);
+            while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(POLL) {
                 if interrupt.is_none()
                     && let Err(e) = Python::attach(|py| py.check_signals())
                 {

@@ -2,15 +2,18 @@
 //! of samples, and the drawn samples as numpy arrays handed over without a copy.
 //!
 //! Input: a preprocessed [`Built`] surface, a count, a seed and an order. Output:
-//! [`Samples`], one numpy array per attribute, each made from a Rust `Vec` by
-//! `into_pyarray` (numpy takes the buffer; nothing is copied at the boundary), or an
-//! earlier `Samples` refilled in place (`sample_into`). Cost: the engine's sampling,
-//! a block of records per worker at a time, each block written into the columns while
-//! it is in cache; all in parallel, with the GIL released.
+//! [`Samples`], one numpy array per attribute over the Rust `Vec` the samples were
+//! written into (nothing is copied at the boundary; the memory of freed `Samples` is
+//! reused, see [`pool`](crate::pool)), or an earlier `Samples` refilled in place
+//! (`sample_into`). Cost: the engine's sampling, a block of records per worker at a
+//! time, each block written into the columns while it is in cache; all in parallel,
+//! with the GIL released.
 
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
-use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
+use std::sync::Arc;
+
+use numpy::ndarray::{Ix1, Ix2};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
@@ -18,12 +21,15 @@ use strata_engine::sample::Sample;
 
 use crate::args::{field_arg, options_arg, stderr_is_terminal};
 use crate::arrays;
+use crate::pool::{self, Pool};
 use crate::preprocess::{Built, Failure, preprocess};
 
 /// A preprocessed mesh and field, ready to draw samples.
 #[pyclass(module = "strata_sampling._strata", frozen)]
 pub struct Sampler {
     built: Built,
+    /// Buffers of freed `Samples`, reused by the next draw.
+    pool: Arc<Pool>,
 }
 
 /// How samples are drawn.
@@ -77,7 +83,10 @@ impl Sampler {
         let options = options_arg(options)?;
         let progress = progress.unwrap_or_else(|| stderr_is_terminal(py));
         match preprocess(py, positions, triangles, field, options, progress) {
-            Ok(built) => Ok(Sampler { built }),
+            Ok(built) => Ok(Sampler {
+                built,
+                pool: Arc::default(),
+            }),
             Err(Failure::Interrupted(e)) => Err(e),
             Err(Failure::Input(message)) => Err(PyValueError::new_err(message)),
         }
@@ -89,8 +98,9 @@ impl Sampler {
         let n = usize::try_from(n)
             .map_err(|_| PyValueError::new_err(format!("n must be >= 0, got {n}")))?;
         let order = Order::for_count(order, n)?;
-        let columns = py.detach(|| draw(&self.built, n, seed, order))?;
-        columns.into_samples(py)
+        let columns = Columns::take(&self.pool, n)?;
+        let columns = py.detach(|| columns.drawn(&self.built, seed, order));
+        columns.into_samples(py, &self.pool)
     }
 
     /// Draws `len(out)` samples into the arrays of `out` (from an earlier `sample`
@@ -249,64 +259,41 @@ struct Columns {
     ranks: Vec<u32>,
 }
 
-/// A zeroed `Vec` of `len` values, or `MemoryError` when `len` values cannot be
-/// allocated. Zeroed memory comes from the allocator untouched (`calloc`), so the
-/// pages are first written by the parallel fill, not by a serial pass here.
-fn zeroed<T: Copy + Default + IsZero>(len: usize) -> PyResult<Vec<T>> {
-    let mut probe: Vec<T> = Vec::new();
-    probe.try_reserve_exact(len).map_err(|_| {
-        PyMemoryError::new_err(format!("cannot allocate {len} values for the samples"))
-    })?;
-    drop(probe);
-    Ok(T::zeroed_vec(len))
-}
-
-/// Element types whose zeroed vector is allocated as zeroed memory.
-trait IsZero: Sized {
-    fn zeroed_vec(len: usize) -> Vec<Self>;
-}
-
-impl IsZero for f32 {
-    fn zeroed_vec(len: usize) -> Vec<Self> {
-        vec![0.0; len]
+impl Columns {
+    /// Buffers for `n` samples, from `pool` where it has them.
+    fn take(pool: &Pool, n: usize) -> PyResult<Self> {
+        Ok(Columns {
+            n,
+            positions: pool.take(3 * n)?,
+            normals: pool.take(3 * n)?,
+            face_ids: pool.take(n)?,
+            barycentrics: pool.take(3 * n)?,
+            major_axes: pool.take(3 * n)?,
+            spacings: pool.take(2 * n)?,
+            segments: pool.take(n)?,
+            ranks: pool.take(n)?,
+        })
     }
-}
 
-impl IsZero for u32 {
-    fn zeroed_vec(len: usize) -> Vec<Self> {
-        vec![0; len]
+    /// The columns with the samples drawn into them (see [`fill`]).
+    fn drawn(mut self, built: &Built, seed: u64, order: Order) -> Self {
+        fill(
+            built,
+            seed,
+            order,
+            ColumnsMut {
+                positions: &mut self.positions,
+                normals: &mut self.normals,
+                face_ids: &mut self.face_ids,
+                barycentrics: &mut self.barycentrics,
+                major_axes: &mut self.major_axes,
+                spacings: &mut self.spacings,
+                segments: &mut self.segments,
+                ranks: &mut self.ranks,
+            },
+        );
+        self
     }
-}
-
-/// Samples drawn into new columns (see [`fill`]).
-fn draw(built: &Built, n: usize, seed: u64, order: Order) -> PyResult<Columns> {
-    let mut c = Columns {
-        n,
-        positions: zeroed(3 * n)?,
-        normals: zeroed(3 * n)?,
-        face_ids: zeroed(n)?,
-        barycentrics: zeroed(3 * n)?,
-        major_axes: zeroed(3 * n)?,
-        spacings: zeroed(2 * n)?,
-        segments: zeroed(n)?,
-        ranks: zeroed(n)?,
-    };
-    fill(
-        built,
-        seed,
-        order,
-        ColumnsMut {
-            positions: &mut c.positions,
-            normals: &mut c.normals,
-            face_ids: &mut c.face_ids,
-            barycentrics: &mut c.barycentrics,
-            major_axes: &mut c.major_axes,
-            spacings: &mut c.spacings,
-            segments: &mut c.segments,
-            ranks: &mut c.ranks,
-        },
-    );
-    Ok(c)
 }
 
 /// The columns of `n` samples to write, `n = face_ids.len()` (the others in
@@ -371,13 +358,15 @@ fn barycentric(b: [f32; 2]) -> [f32; 3] {
 }
 
 impl Columns {
-    fn into_samples(self, py: Python<'_>) -> PyResult<Samples> {
+    /// The columns as numpy arrays over the same buffers, each handed back to `pool`
+    /// when numpy frees it.
+    fn into_samples(self, py: Python<'_>, pool: &Arc<Pool>) -> PyResult<Samples> {
         let n = self.n;
         let mat = |v: Vec<f32>, cols: usize| -> PyResult<Py<PyArray2<f32>>> {
-            // The length is n * cols by construction.
-            Array2::from_shape_vec((n, cols), v)
-                .map(|a| a.into_pyarray(py).unbind())
-                .map_err(|e| PyRuntimeError::new_err(format!("sample columns: {e}")))
+            Ok(pool::array(py, v, Ix2(n, cols), pool)?.unbind())
+        };
+        let vec = |v: Vec<u32>| -> PyResult<Py<PyArray1<u32>>> {
+            Ok(pool::array(py, v, Ix1(n), pool)?.unbind())
         };
         Ok(Samples {
             positions: mat(self.positions, 3)?,
@@ -385,9 +374,9 @@ impl Columns {
             barycentrics: mat(self.barycentrics, 3)?,
             major_axes: mat(self.major_axes, 3)?,
             spacings: mat(self.spacings, 2)?,
-            face_ids: self.face_ids.into_pyarray(py).unbind(),
-            segments: self.segments.into_pyarray(py).unbind(),
-            ranks: self.ranks.into_pyarray(py).unbind(),
+            face_ids: vec(self.face_ids)?,
+            segments: vec(self.segments)?,
+            ranks: vec(self.ranks)?,
             len: n,
         })
     }

@@ -13,7 +13,8 @@ are denser and in which direction they are closer: see ``constant``, ``curvature
 ``designed``, ``isotropic``, ``frames`` and ``tensors``, or pass a scene file's field
 description (RON text) directly.
 
-Sample arrays (all C-contiguous, owned by numpy, no copy made on return):
+Sample arrays (all C-contiguous and writable, over the buffers the engine wrote, no
+copy made on return; a freed result's memory is reused by the sampler's next draw):
 
 ================  =======  ========  =================================================
 attribute         shape    dtype     meaning
@@ -43,6 +44,7 @@ from ._strata import (
     load_mesh,
     radial_spectrum,
     star_discrepancy,
+    surface_spectrum,
 )
 
 __all__ = [
@@ -54,6 +56,7 @@ __all__ = [
     "load_mesh",
     "star_discrepancy",
     "radial_spectrum",
+    "surface_spectrum",
     "constant",
     "curvature",
     "designed",

@@ -113,3 +113,16 @@ def radial_spectrum(
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """(frequency, power, anisotropy_db) per annulus of the radially averaged
     power spectrum of point sets (each (N, 2)) in the unit square."""
+
+def surface_spectrum(
+    positions: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    spacing: float,
+    *,
+    epsilon: float = 10.0,
+    max_frequency: float = 2.5,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """(frequency, power, anisotropy_db) per annulus of the differential-domain
+    spectrum of points (N, 3) with unit normals (N, 3) on a surface of uniform
+    density, differences measured in units of ``spacing`` (``sqrt(area / N)``) within
+    ``epsilon`` spacings. Blue noise has little power below frequency 1."""

@@ -58,3 +58,42 @@ def test_bad_points_raise_value_error():
         ss.star_discrepancy(np.array([[0.5, 0.5]]), kind="linf")
     with pytest.raises(ValueError):
         ss.radial_spectrum(np.zeros((0, 2)))
+
+
+def test_surface_spectrum_tells_blue_noise_from_white_on_a_sphere():
+    from conftest import icosphere
+
+    v, f = icosphere(3)
+    n = 3000
+    area = 4.0 * np.pi
+    s = ss.sample(v, f, n, seed=3)
+    rng = np.random.default_rng(4)
+    white = rng.normal(size=(n, 3))
+    white /= np.linalg.norm(white, axis=1)[:, None]
+
+    def low(points, normals):
+        freq, power, aniso = ss.surface_spectrum(points, normals, np.sqrt(area / n))
+        assert freq.shape == power.shape == aniso.shape and freq.dtype == np.float64
+        assert np.all(np.diff(freq) > 0) and freq[-1] <= 2.5 + 1e-9
+        band = (freq >= 0.2) & (freq < 0.5)
+        return power[band].mean(), power[freq > 1.5].mean()
+
+    ours_low, ours_high = low(s.positions, s.normals)
+    white_low, white_high = low(white, white)
+    # White noise: about 1 at every frequency past the kernel's bump.
+    assert 0.7 < white_low < 1.3 and 0.8 < white_high < 1.2
+    # strata's samples: far less power at low frequencies, the same far out.
+    assert ours_low < 0.5 * white_low
+    assert 0.7 < ours_high < 1.3
+
+
+def test_surface_spectrum_refuses_bad_input():
+    p = np.zeros((4, 3))
+    with pytest.raises(ValueError, match="differ in length"):
+        ss.surface_spectrum(p, np.ones((3, 3)), 1.0)
+    with pytest.raises(ValueError, match="spacing"):
+        ss.surface_spectrum(p, np.ones((4, 3)), 0.0)
+    with pytest.raises(ValueError, match="shape"):
+        ss.surface_spectrum(np.zeros((4, 2)), np.ones((4, 3)), 1.0)
+    with pytest.raises(ValueError, match="epsilon"):
+        ss.surface_spectrum(p, np.ones((4, 3)), 1.0, epsilon=-1.0)

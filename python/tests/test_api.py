@@ -135,6 +135,41 @@ def test_arrays_are_handed_over_without_copy(sphere):
         assert a.flags.writeable, name
 
 
+def test_freed_arrays_are_reused_and_kept_views_are_not(sphere):
+    v, f = sphere
+    sampler = ss.Sampler(v, f)
+    fresh = sampler.sample(2000, seed=5)
+    want = {name: getattr(fresh, name).tobytes() for name in COLUMNS}
+    def addresses(s):
+        return {getattr(s, name).__array_interface__["data"][0] for name in COLUMNS}
+
+    old = addresses(fresh)
+    del fresh
+    # The freed buffers are written again by the next draw, with the same samples.
+    again = sampler.sample(2000, seed=5)
+    assert addresses(again) == old
+    for name in COLUMNS:
+        assert getattr(again, name).tobytes() == want[name], name
+    # A view kept alive keeps its buffer: a later draw neither reuses nor changes it.
+    kept = again.positions[::2]
+    kept_bytes = kept.tobytes()
+    kept_address = again.positions.__array_interface__["data"][0]
+    del again
+    other = sampler.sample(2000, seed=6)
+    assert kept_address not in addresses(other)
+    assert len(addresses(other) & old) == len(COLUMNS) - 1
+    assert kept.tobytes() == kept_bytes
+    # Smaller and larger counts draw into fitting buffers or new ones, correctly.
+    del other
+    for n in (1500, 900, 2500):
+        got = sampler.sample(n, seed=5)
+        assert got.positions.shape == (n, 3) and got.face_ids.shape == (n,)
+        ref = ss.Sampler(v, f).sample(n, seed=5)
+        for name in COLUMNS:
+            assert getattr(got, name).tobytes() == getattr(ref, name).tobytes(), (n, name)
+        del got
+
+
 @pytest.mark.parametrize("vdtype", [np.float32, np.float64, np.int64])
 @pytest.mark.parametrize("fdtype", [np.int32, np.int64, np.uint32, np.uint64, np.uint16])
 def test_input_dtypes_give_the_same_samples(vdtype, fdtype):
