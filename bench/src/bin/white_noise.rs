@@ -11,8 +11,11 @@
 //!
 //! ```text
 //! cargo build --release -p strata-bench --bin white_noise
-//! taskset -c 0 ./target/release/white_noise [repeats]
+//! taskset -c 0 ./target/release/white_noise [repeats] [bevy|sites|records]
 //! ```
+//!
+//! A path named after the repeats runs that path alone (to profile it, say under
+//! `valgrind --tool=callgrind`); the ratios then compare against nothing and read 0.
 //!
 //! Prints a Markdown table of medians and, per strata path, the median over rounds of
 //! its time over Bevy's in the same round; then an FNV-1a hash of strata's records and
@@ -42,7 +45,7 @@ const PATHS: [&str; 3] = [
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// 64-bit FNV-1a over bytes.
@@ -84,6 +87,14 @@ fn run(path: usize, bevy: &UniformMeshSampler, scene: &Scene, out: &mut Outputs)
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(11)?.max(1);
+    let only = match std::env::args().nth(2).as_deref() {
+        None => None,
+        Some("bevy") => Some(0),
+        Some("sites") => Some(1),
+        Some("records") => Some(2),
+        Some(other) => return Err(format!("{other}: expected bevy, sites or records").into()),
+    };
+    let chosen = |path: usize| only.is_none_or(|o| o == path);
     let mesh_file = strata_bench::shared_mesh_dir()?.join("stanford-bunny.obj");
     if !mesh_file.is_file() {
         return Err(format!("{}: the bunny mesh is missing", mesh_file.display()).into());
@@ -110,12 +121,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut times = [vec![], vec![], vec![]];
     pool.install(|| {
-        for path in 0..3 {
+        for path in (0..3).filter(|&p| chosen(p)) {
             run(path, &bevy, &scene, &mut out); // warm-up: pages touched
         }
         for round in 0..repeats {
-            for k in 0..3 {
-                let path = (round + k) % 3;
+            for path in (0..3).map(|k| (round + k) % 3).filter(|&p| chosen(p)) {
                 times[path].push(run(path, &bevy, &scene, &mut out));
             }
         }
@@ -128,7 +138,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("| path | ms | M samples/s | time / Bevy's |");
     println!("| --- | --- | --- | --- |");
-    for (path, name) in PATHS.iter().enumerate() {
+    for (path, name) in PATHS.iter().enumerate().filter(|&(p, _)| chosen(p)) {
         let ms = median(times[path].clone());
         let ratio = median(
             times[path]
