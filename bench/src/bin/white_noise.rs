@@ -147,10 +147,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map(|(t, b)| t / b)
                 .collect(),
         );
-        println!("| {name} | {ms:.1} | {:.1} | {ratio:.2} |", N as f64 / ms / 1e3);
+        println!(
+            "| {name} | {ms:.1} | {:.1} | {ratio:.2} |",
+            N as f64 / ms / 1e3
+        );
     }
     println!(
-        "\nrecords {:016x}, sites {:016x} (FNV-1a, seed {SEED})",
+        "\nstrata's preprocessed data: {:.1} MB (`Sampler::heap_bytes`)",
+        scene.sampler.heap_bytes() as f64 / 1e6
+    );
+    println!(
+        "records {:016x}, sites {:016x} (FNV-1a, seed {SEED})",
         fnv(bytemuck::cast_slice(&out.records)),
         fnv(bytemuck::cast_slice(&out.sites))
     );
