@@ -195,7 +195,13 @@ pub struct GpuSampler {
     /// Sites written by the last request.
     count: u32,
     expander: SiteExpander,
+    /// Where the device has timestamp queries: the begin and end of the sites pass and
+    /// of the expansion, and the buffer they resolve into.
+    timer: Option<(wgpu::QuerySet, wgpu::Buffer)>,
 }
+
+/// Timestamps per request: the sites pass's begin and end, the expansion's.
+const STAMPS: u32 = 4;
 
 impl GpuSampler {
     /// Flattens `sampler`'s cells, uploads them and builds the sampling and expansion
@@ -258,6 +264,23 @@ impl GpuSampler {
                 ),
                 count: 0,
                 expander,
+                timer: device
+                    .features()
+                    .contains(wgpu::Features::TIMESTAMP_QUERY)
+                    .then(|| {
+                        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                            label: Some("strata sample timestamps"),
+                            ty: wgpu::QueryType::Timestamp,
+                            count: STAMPS,
+                        });
+                        let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("strata sample timestamps"),
+                            size: u64::from(STAMPS) * 8,
+                            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                            mapped_at_creation: false,
+                        });
+                        (set, resolve)
+                    }),
             }
         })
     }
@@ -312,6 +335,14 @@ impl GpuSampler {
         });
         self.encode_sites(device, queue, &mut encoder, n, seed)?;
         if let Some(sites) = &self.sites.buffer {
+            let stamps = self
+                .timer
+                .as_ref()
+                .map(|(set, _)| wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(2),
+                    end_of_pass_write_index: Some(3),
+                });
             self.expander.expand_resident(
                 device,
                 queue,
@@ -319,7 +350,13 @@ impl GpuSampler {
                 sites,
                 samples.buffer(),
                 self.count,
+                stamps,
             );
+            if let Some((set, resolve)) = &self.timer
+                && self.count > 0
+            {
+                encoder.resolve_query_set(set, 0..STAMPS, resolve, 0);
+            }
         }
         scoped(device, "sampling on the GPU", || {
             queue.submit([encoder.finish()]);
@@ -411,12 +448,37 @@ impl GpuSampler {
         })?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("strata sample"),
-            timestamp_writes: None,
+            timestamp_writes: self.timer.as_ref().map(|(set, _)| {
+                wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }
+            }),
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups(gx, gy, 1);
         Ok(())
+    }
+
+    /// The GPU times in seconds of the last [`sample`](Self::sample)'s sites pass (the
+    /// stratified values, the leaf search and the points, one pass) and its expansion
+    /// into records, from timestamp queries (waits for the device); `None` where the
+    /// device has no timestamp queries.
+    pub fn pass_times(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<[f64; 2]>, GpuError> {
+        let Some((_, resolve)) = &self.timer else {
+            return Ok(None);
+        };
+        let bytes = read_buffer(device, queue, resolve, u64::from(STAMPS) * 8)?;
+        let t: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let period = f64::from(queue.get_timestamp_period()) * 1e-9;
+        let span = |a: usize| t[a + 1].saturating_sub(t[a]) as f64 * period;
+        Ok(Some([span(0), span(2)]))
     }
 
     /// Copies the sites of the last request back (waits for the device; for tests,

@@ -55,6 +55,11 @@ pub struct GpuSampleCheck {
     pub sites_s: f64,
     /// Median wall time of the sites pass and the expansion into records, seconds.
     pub samples_s: f64,
+    /// Median GPU times from timestamp queries of the sites pass (values, leaf search
+    /// and points, fused in one pass) and of the expansion into records, seconds;
+    /// `None` where the adapter has no timestamp queries (then only the wall times
+    /// above, submit and wait, are measured).
+    pub pass_s: Option<[f64; 2]>,
     /// Median CPU time of [`Sampler::sample_sites_into`] for the same request, seconds.
     pub cpu_sites_s: f64,
     /// Samples whose face differs from the CPU's.
@@ -97,6 +102,7 @@ impl GpuSampleCheck {
         let mut buffer = GpuSampleBuffer::new(device)?;
         let (mut request, mut sites, mut samples, mut cpu_sites) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut gpu_sites, mut gpu_records) = (Vec::new(), Vec::new());
         let mut cpu = vec![SampleSite::default(); n];
         // One request untimed: the first dispatch of a pipeline may compile it.
         gpu.sample(device, queue, n, seed, &mut buffer)?;
@@ -115,6 +121,10 @@ impl GpuSampleCheck {
             gpu.sample(device, queue, n, seed, &mut buffer)?;
             ctx.wait_idle("sampling on the GPU")?;
             samples.push(t.elapsed().as_secs_f64());
+            if let Some([a, b]) = gpu.pass_times(device, queue)? {
+                gpu_sites.push(a);
+                gpu_records.push(b);
+            }
             let t = Instant::now();
             sampler.sample_sites_into(seed, &mut cpu);
             cpu_sites.push(t.elapsed().as_secs_f64());
@@ -131,6 +141,7 @@ impl GpuSampleCheck {
             request_s: median(request),
             sites_s: median(sites),
             samples_s: median(samples),
+            pass_s: (!gpu_sites.is_empty()).then(|| [median(gpu_sites), median(gpu_records)]),
             cpu_sites_s: median(cpu_sites),
             faces_differ: 0,
             segments_differ: 0,
@@ -174,13 +185,25 @@ impl std::fmt::Display for GpuSampleCheck {
         )?;
         writeln!(
             f,
-            "{} samples, medians: request table (CPU) {:.3} ms, sites pass {:.3} ms, sites and records {:.3} ms (wall, device idle after each); CPU sites {:.3} ms",
+            "{} samples, medians: counts (request table, CPU) {:.3} ms, sites pass {:.3} ms, sites and records {:.3} ms (wall: submit and wait for the device); CPU sites {:.3} ms",
             self.count,
             self.request_s * 1e3,
             self.sites_s * 1e3,
             self.samples_s * 1e3,
             self.cpu_sites_s * 1e3,
         )?;
+        match self.pass_s {
+            Some([sites, records]) => writeln!(
+                f,
+                "GPU time (timestamp queries): values, search and point (one pass) {:.3} ms, record {:.3} ms",
+                sites * 1e3,
+                records * 1e3
+            )?,
+            None => writeln!(
+                f,
+                "GPU time: not measured (the adapter has no timestamp queries; the wall times above include submission and waiting)"
+            )?,
+        }
         write!(
             f,
             "against the CPU: {} faces and {} segments differ, largest deviation {:.2e} of the bounding-box diagonal, {} samples beyond {:.0e} ({})",
