@@ -13,12 +13,13 @@ struct Site {
     bary: vec2<f32>,
 }
 
-// Twin of strata_systems::gpu::sample::SampleParams (48 bytes). The table holds, as
+// Twin of strata_systems::gpu::sample::SampleParams (64 bytes). The table holds, as
 // 32-bit words: cumulative measures (2 words per leaf, and one more) from `cum_at`,
 // leaves (5 words) from `leaves_at`, candidates (1) from `cands_at`, pieces (20) from
-// `pieces_at`, triangles (7) from `tris_at`, segment ids per slot from `slots_at`.
-// The request holds its groups (10 words each) from word 0 and the levels per slot
-// from `levels_at`.
+// `pieces_at`, triangles (7) from `tris_at`, segment ids per slot from `slots_at`,
+// descent-tree nodes (13) from `nodes_at`. The request holds its groups (10 words
+// each) from word 0, the levels per slot from `levels_at` and `depth` descent
+// thresholds per group (2 words each) from `thresholds_at`.
 struct SampleParams {
     count: u32,
     groups: u32,
@@ -30,8 +31,12 @@ struct SampleParams {
     pieces_at: u32,
     tris_at: u32,
     slots_at: u32,
+    nodes_at: u32,
+    thresholds_at: u32,
+    depth: u32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SampleParams;
@@ -387,15 +392,15 @@ fn point_at(n: u32, g: vec2<f32>) -> vec3<f32> {
     return vec3<f32>(x, min(ya, yb) + g2 * abs(ya - yb), 1.0);
 }
 
-// A boundary leaf expecting at most one sample: the piece holding the fraction `q`
-// of the leaf's measure and the point at the rest of it, by area
-// (curve/boundary.rs `place_in_pieces`); the leaf's centre located among the pieces'
-// triangles when no piece has measure. Measures in 2^62 fixed point.
-fn boundary_leaf_point(leaf: u32, q: vec2<u32>) -> Located {
-    let w = params.leaves_at + 5u * leaf;
-    let level = table[w + 2u] & 31u;
+// The point at the fraction `q` of descent-tree node `node`'s measure in its pieces:
+// the piece holding it and the point at the rest of it, by area
+// (curve/boundary.rs `place_in_pieces`); the square's centre located among the
+// pieces' triangles when no piece has measure. Measures in 2^62 fixed point.
+fn node_pieces_point(node: u32, q: vec2<u32>) -> Located {
+    let w = params.nodes_at + 13u * node;
+    let level = table[w] & 31u;
     let size = exp2(-f32(level));
-    let origin = vec2<f32>(f32(table[w]), f32(table[w + 1u])) * size;
+    let origin = vec2<f32>(f32(table[w + 1u]), f32(table[w + 2u])) * size;
     let first = params.pieces_at + 20u * table[w + 3u];
     let n = table[w + 4u];
     var want = shr64(q, 2u);
@@ -431,6 +436,92 @@ fn boundary_leaf_point(leaf: u32, q: vec2<u32>) -> Located {
         }
     }
     return point_location(first, max(n, 1u), 20u, origin + vec2<f32>(0.5 * size));
+}
+
+// A full quarter of a descent: the centre of the sub-cell `levels` levels down that
+// the continuous Hilbert map reaches at the fraction `q`, located among the node's
+// pieces' triangles (curve/boundary.rs, `point_in_node` in a full sub-cell).
+fn full_node_point(node: u32, q: vec2<u32>, levels: u32) -> Located {
+    let w = params.nodes_at + 13u * node;
+    let info = table[w];
+    let level = info & 31u;
+    var state = (info >> 5u) & 3u;
+    var x = 0u;
+    var y = 0u;
+    for (var i = 0u; i < levels; i = i + 1u) {
+        let p = 62u - 2u * i;
+        var rank: u32;
+        if p >= 32u {
+            rank = (q.y >> (p - 32u)) & 3u;
+        } else {
+            rank = (q.x >> p) & 3u;
+        }
+        let c = hilbert_child(state, rank);
+        x = 2u * x + c.x;
+        y = 2u * y + c.y;
+        state = c.z;
+    }
+    let local = (vec2<f32>(f32(x), f32(y)) + 0.5) * exp2(-f32(levels));
+    let uv = (vec2<f32>(f32(table[w + 1u]), f32(table[w + 2u])) + local) * exp2(-f32(level));
+    return point_location(params.pieces_at + 20u * table[w + 3u], table[w + 4u], 20u, uv);
+}
+
+// A boundary leaf: the sequential descent (curve/boundary.rs `descend_pieces`)
+// replayed over the leaf's tree from node `root` for `levels` levels of quarters.
+// `q` is carried as a 64-bit fraction of the current node's measure; each node holds
+// its two children's measures as fractions of its own, so a step is a comparison and
+// one division, with the sequential `pick`'s clamping.
+fn boundary_leaf_point(root: u32, q0: vec2<u32>, levels: u32) -> Located {
+    var node = root;
+    var q = q0;
+    var depth = 0u;
+    let ones = vec2<u32>(0xffffffffu, 0xffffffffu);
+    // Two steps (a half, then a quarter) per level.
+    for (var step = 0u; step < 2u * levels; step = step + 1u) {
+        let w = params.nodes_at + 13u * node;
+        let a = t64(w + 5u);
+        let b = t64(w + 7u);
+        let a_empty = a.x == 0u && a.y == 0u;
+        let b_empty = b.x == 0u && b.y == 0u;
+        var child: u32;
+        if !a_empty && (lt64(q, a) || b_empty) {
+            child = table[w + 9u];
+            q = select(ones, fraction64(q, a), lt64(q, a));
+        } else if !b_empty {
+            child = table[w + 10u];
+            let r = sub64(q, a);
+            q = select(ones, fraction64(r, b), lt64(r, b));
+        } else {
+            break;
+        }
+        if child == 0xffffffffu {
+            break;
+        }
+        node = child;
+        let kind = table[params.nodes_at + 13u * node];
+        if (kind & 256u) != 0u {
+            depth = depth + 1u;
+            if (kind & 128u) != 0u {
+                return full_node_point(node, q, levels - depth);
+            }
+        }
+    }
+    return node_pieces_point(node, q);
+}
+
+// The levels of descent through a boundary leaf whose tree starts at node `root`, in
+// group `group`: how many of the group's thresholds its measure (`f64` bits, compared
+// as integers) reaches.
+fn descent_levels(root: u32, group: u32) -> u32 {
+    let w = t64(params.nodes_at + 13u * root + 11u);
+    var levels = 0u;
+    for (var k = 0u; k < params.depth; k = k + 1u) {
+        let at = params.thresholds_at + 2u * (params.depth * group + k);
+        if !lt64(w, vec2<u32>(request[at], request[at + 1u])) {
+            levels = k + 1u;
+        }
+    }
+    return levels;
 }
 
 // ---- the pass ----
@@ -493,7 +584,8 @@ fn cs_sample(@builtin(global_invocation_id) id: vec3<u32>) {
     if (info & 128u) != 0u {
         p = full_leaf_point(leaf, q, request[params.levels_at + slot]);
     } else {
-        p = boundary_leaf_point(leaf, q);
+        let root = table[params.leaves_at + 5u * leaf + 3u];
+        p = boundary_leaf_point(root, q, descent_levels(root, lo));
     }
     let face = table[params.tris_at + 7u * p.tri + 6u];
     sites[k] = Site(face, table[params.slots_at + slot], p.bary.yz);

@@ -38,3 +38,237 @@ impl SegmentCurve {
         }
     }
 }
+
+/// A part of a candidate triangle inside a node of the descent: what
+/// `pieces::PieceSet` holds, in a vector (no candidate limit).
+#[derive(Clone, Copy)]
+struct Part {
+    tri: u32,
+    poly: Poly,
+    area: f64,
+    measure: f64,
+}
+
+/// The parts of one node with their summed area and measure, summed in the order of
+/// `PieceSet` so the sums are the same bits.
+#[derive(Clone, Default)]
+struct Parts {
+    parts: Vec<Part>,
+    measure: f64,
+    area: f64,
+}
+
+impl Parts {
+    fn push(&mut self, part: Part) {
+        self.measure += part.measure;
+        self.area += part.area;
+        self.parts.push(part);
+    }
+}
+
+/// One node of a boundary leaf's descent tree ([`SegmentCurve::descent_tree`]): a
+/// square of the quadtree below the leaf (a quarter) or one half of such a square
+/// (the descent's first cut), with the measure the sequential descent carries into
+/// it, its children in curve order and the triangle parts inside it.
+#[derive(Clone, Debug)]
+pub struct DescentNode {
+    /// The square's corner on the grid of its level.
+    pub x: u32,
+    /// See `x`.
+    pub y: u32,
+    /// The square's level (a half has its parent square's).
+    pub level: u8,
+    /// The square's Hilbert state.
+    pub state: u8,
+    /// Whether the node is a square (the leaf or a quarter), not a half.
+    pub square: bool,
+    /// Whether the domain covers the square (a quarter placed by the continuous map).
+    pub full: bool,
+    /// The measure the descent carries into the node.
+    pub measure: f64,
+    /// The two children in curve order: their measures (zero: never chosen) and
+    /// indices into the tree (`None` when not built: zero measure, a full quarter's
+    /// children, or past the depth).
+    pub children: [(f64, Option<u32>); 2],
+    /// The triangle parts inside the node: `(triangle, part, measure of the part)`.
+    pub parts: Vec<(u32, Poly, f64)>,
+}
+
+impl SegmentCurve {
+    /// The polygon-splitting descent through boundary leaf `leaf` (a leaf the domain
+    /// does not cover) unrolled into a tree, `depth` levels of quarters deep: every
+    /// node the sequential descent may visit with its exact measures (the same
+    /// operations in the same order, so the same bits as the descent for leaves of at
+    /// most six candidates; more take the general descent there, which this equals up
+    /// to round-off). Node 0 is the leaf, with the parts of
+    /// [`leaf_pieces`](Self::leaf_pieces). Cost: two polygon splits per part and
+    /// level, over about `2^depth` boundary squares per level.
+    pub fn descent_tree(&self, leaf: usize, depth: u32) -> Vec<DescentNode> {
+        let key = self.keys[leaf];
+        let (lo, size) = (key.origin(), key.size());
+        let mut root = Parts::default();
+        let mut all = Vec::new();
+        self.leaf_pieces(leaf, |tri, poly, m| all.push((tri, *poly, m)));
+        for &(tri, poly, _) in &all {
+            let (area, moment) = poly.area_moment();
+            if area > 0.0 {
+                let measure = self.part_measure(tri, area, moment);
+                root.push(Part {
+                    tri,
+                    poly,
+                    area,
+                    measure,
+                });
+            }
+        }
+        let mut nodes = vec![DescentNode {
+            x: key.x(),
+            y: key.y(),
+            level: key.level(),
+            state: key.state().0,
+            square: true,
+            full: false,
+            measure: self.cumulative[leaf + 1] - self.cumulative[leaf],
+            children: [(0.0, None); 2],
+            parts: all,
+        }];
+        self.expand(&mut nodes, 0, &root, (lo, size), depth);
+        nodes
+    }
+
+    /// Adds the halves and quarters below square node `at` (its parts `parts`, its
+    /// square `lo, size`), `depth` levels of quarters.
+    fn expand(
+        &self,
+        nodes: &mut Vec<DescentNode>,
+        at: usize,
+        parts: &Parts,
+        (lo, size): (glam::DVec2, f64),
+        depth: u32,
+    ) {
+        if depth == 0 {
+            return;
+        }
+        let (x, y, level) = (nodes[at].x, nodes[at].y, nodes[at].level);
+        let state = super::hilbert::State(nodes[at].state);
+        let half = 0.5 * size;
+        let (x0, y0, _) = state.child(0);
+        let (x1, _, _) = state.child(1);
+        // The cuts of `descend_pieces`, in its order.
+        let first_along_x = x0 == x1;
+        let cut_at = |along_x: bool| if along_x { lo.x } else { lo.y } + half;
+        let upper_first = if first_along_x { x0 == 1 } else { y0 == 1 };
+        let (below, above) = self.split_parts(parts, first_along_x, cut_at(first_along_x));
+        let halves = if upper_first {
+            [above, below]
+        } else {
+            [below, above]
+        };
+        for (h, half_parts) in halves.iter().enumerate() {
+            nodes[at].children[h].0 = half_parts.measure;
+            if !(half_parts.measure > 0.0) {
+                continue;
+            }
+            let hi = nodes.len();
+            nodes[at].children[h].1 = Some(hi as u32);
+            nodes.push(DescentNode {
+                square: false,
+                full: false,
+                measure: half_parts.measure,
+                children: [(0.0, None); 2],
+                parts: Self::listed(half_parts),
+                ..nodes[at].clone()
+            });
+            let rank0 = if h == 0 { 0 } else { 2 };
+            let (qx, qy, _) = state.child(rank0);
+            let upper = if first_along_x { qy == 1 } else { qx == 1 };
+            let (b, a) = self.split_parts(half_parts, !first_along_x, cut_at(!first_along_x));
+            let quarters = if upper { [a, b] } else { [b, a] };
+            for (q, quarter) in quarters.iter().enumerate() {
+                nodes[hi].children[q].0 = quarter.measure;
+                if !(quarter.measure > 0.0) {
+                    continue;
+                }
+                let (qx, qy, child_state) = state.child(rank0 + q as u8);
+                let q_lo = lo + glam::DVec2::new(qx as f64, qy as f64) * half;
+                let full = quarter.area >= half * half * (1.0 - 1e-9);
+                let qi = nodes.len();
+                nodes[hi].children[q].1 = Some(qi as u32);
+                nodes.push(DescentNode {
+                    x: 2 * x + u32::from(qx),
+                    y: 2 * y + u32::from(qy),
+                    level: level + 1,
+                    state: child_state.0,
+                    square: true,
+                    full,
+                    measure: quarter.measure,
+                    children: [(0.0, None); 2],
+                    parts: Self::listed(quarter),
+                });
+                if !full {
+                    self.expand(nodes, qi, quarter, (q_lo, half), depth - 1);
+                }
+            }
+        }
+    }
+
+    fn listed(parts: &Parts) -> Vec<(u32, Poly, f64)> {
+        parts
+            .parts
+            .iter()
+            .map(|p| (p.tri, p.poly, p.measure))
+            .collect()
+    }
+
+    /// `pieces::PieceSet::split` on [`Parts`]: the same operations in the same order.
+    fn split_parts(&self, from: &Parts, along_x: bool, at: f64) -> (Parts, Parts) {
+        let (mut below, mut above) = (Parts::default(), Parts::default());
+        for piece in &from.parts {
+            let coord = |p: &glam::DVec2| if along_x { p.x } else { p.y };
+            let (mut mn, mut mx) = (f64::INFINITY, f64::NEG_INFINITY);
+            for p in piece.poly.points() {
+                let c = coord(p);
+                if c < mn {
+                    mn = c;
+                }
+                if c > mx {
+                    mx = c;
+                }
+            }
+            if mx <= at {
+                below.push(*piece);
+            } else if mn >= at {
+                above.push(*piece);
+            } else {
+                let (mut b, mut a) = (Poly::EMPTY, Poly::EMPTY);
+                if along_x {
+                    piece.poly.split_into::<0>(at, &mut b, &mut a);
+                } else {
+                    piece.poly.split_into::<1>(at, &mut b, &mut a);
+                }
+                let (area_b, moment) = b.area_moment();
+                let (mut kept_area, mut kept_measure) = (0.0, 0.0);
+                if area_b > 0.0 {
+                    let measure = self.part_measure(piece.tri, area_b, moment);
+                    below.push(Part {
+                        tri: piece.tri,
+                        poly: b,
+                        area: area_b,
+                        measure,
+                    });
+                    (kept_area, kept_measure) = (area_b, measure);
+                }
+                let (area_a, measure_a) = (piece.area - kept_area, piece.measure - kept_measure);
+                if area_a > 0.0 && a.points().len() >= 3 {
+                    above.push(Part {
+                        tri: piece.tri,
+                        poly: a,
+                        area: area_a,
+                        measure: measure_a.max(0.0),
+                    });
+                }
+            }
+        }
+        (below, above)
+    }
+}

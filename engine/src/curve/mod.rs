@@ -43,6 +43,7 @@ mod segment_curve;
 
 pub use budget::{CellInput, budget_cells, budget_options};
 pub use clip::{Poly, barycentric, clip_triangle};
+pub use flat::DescentNode;
 pub use key::CellKey;
 pub use pieces::LeafScratch;
 pub use refine::CurveDomain;

@@ -4,12 +4,17 @@
 //!
 //! Input: a built [`Sampler`]. Output: [`FlatSampler`] (built once per preprocessing):
 //! every segment's leaves in chain order with their cumulative measures as 64-bit
-//! fixed-point fractions of the total, their keys, candidate triangles, the clipped
-//! pieces of boundary leaves, the domain triangles' corners and faces; and per request
-//! ([`FlatSampler::request`]) the groups that receive samples with their counts, first
-//! outputs, leaf ranges, random-stream keys and fixed-point extents, and the levels of
-//! the continuous map per segment. Cost: O(cells + candidates) once; O(segments) per
-//! request. The engine stays GPU-free: these are plain vectors.
+//! fixed-point fractions of the total, their keys, candidate triangles, the domain
+//! triangles' corners and faces, and per boundary leaf its descent unrolled into a
+//! tree ([`SegmentCurve::descent_tree`](crate::curve::SegmentCurve::descent_tree):
+//! the sub-cells' exact measures and clipped pieces), as deep as the largest request
+//! so far needs ([`FlatSampler::deepen`]); and per request ([`FlatSampler::request`])
+//! the groups that receive samples with their counts, first outputs, leaf ranges,
+//! random-stream keys and fixed-point extents, the levels of the continuous map per
+//! segment, and per group the leaf measures from which a boundary leaf descends one
+//! more level. Cost: O(cells + candidates) once, O(boundary leaves 2^depth) per
+//! deepening; O(segments) per request. The engine stays GPU-free: these are plain
+//! vectors.
 //!
 //! Fixed point: the measure before leaf `l` in chain order, over the total `T`, is
 //! stored as `floor(C_l / T 2^64)`. A group's value `v` in `[0, 1)` then maps to
@@ -18,19 +23,32 @@
 
 use super::sampler::Sampler;
 use super::stratified::Allocation;
-use crate::curve::SegmentCurve;
+use crate::curve::DescentNode;
 
 /// One leaf: `[x, y, meta, first, len]` where `meta` holds the level (bits 0..5), the
 /// Hilbert state (5..7), whether the leaf is full (bit 7) and the segment's slot in
 /// chain order (8..32); `first`/`len` index [`FlatSampler::candidates`] for a full
-/// leaf and [`FlatSampler::pieces`] for a boundary leaf.
+/// leaf and [`FlatSampler::nodes`] (its descent tree, the leaf first) for a boundary
+/// leaf.
 pub type FlatLeaf = [u32; 5];
 
-/// A clipped piece of a boundary leaf: `[triangle, corners, measure lo, measure hi,
-/// x0, y0, ...]` with the triangle a global domain-triangle index, the measure as a
-/// fraction of the leaf's measure in 2^62 fixed point (the pieces' exact measures sum
-/// to the leaf's up to round-off), and up to 8 corners in the leaf's own unit square
-/// (`f32`).
+/// A node of a boundary leaf's descent tree ([`DescentNode`]): `[meta, x, y, first
+/// piece, pieces, share lo, share hi, share lo, share hi, child, child, measure lo,
+/// measure hi]`. `meta` holds the square's level (bits 0..5) and Hilbert state
+/// (5..7), whether it is full (bit 7) and whether it is a square rather than a half
+/// (bit 8); the pieces ([`FlatSampler::pieces`], in the square's unit square, their
+/// measures as fractions of the node's) are where a descent that ends in the node
+/// places its point; the children in curve order have their measures as 64-bit
+/// fractions of the node's (0: never chosen) and their node indices (`u32::MAX`: not
+/// built); the measure is the node's as `f64` bits (read for a leaf's root: the
+/// levels of its descent).
+pub type FlatNode = [u32; 13];
+
+/// A clipped piece of a node of a boundary leaf's descent tree: `[triangle, corners,
+/// measure lo, measure hi, x0, y0, ...]` with the triangle a global domain-triangle
+/// index, the measure as a fraction of the node's measure in 2^62 fixed point (the
+/// pieces' exact measures sum to the node's up to round-off), and up to 8 corners in
+/// the node's own unit square (`f32`).
 pub type FlatPiece = [u32; 20];
 
 /// A domain triangle: its corners' `u, v` in the unit square (`f32` bits) and its mesh
@@ -45,17 +63,12 @@ pub type FlatGroup = [u32; 10];
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum FlatError {
-    /// A boundary leaf expects more than one sample, where the sequential sampler
-    /// descends through its sub-cells (not part of the flat tables).
-    #[error(
-        "{count} samples put more than one sample in a boundary leaf (about {limit} at most can be drawn from these cells)"
-    )]
-    BoundaryDescent {
+    /// The descent trees of the boundary leaves are not deep enough for the request
+    /// ([`FlatSampler::deepen`] makes them so).
+    #[error("{count} samples need boundary descent trees deeper than the tables hold")]
+    Shallow {
         /// The request.
         count: u64,
-        /// About the largest count that needs no descent (rounding of the allocation
-        /// may refuse a count slightly below it).
-        limit: u64,
     },
     /// The request or the tables exceed 32-bit indices.
     #[error("{what} ({value}) exceeds 32-bit indices")]
@@ -73,9 +86,14 @@ struct Slot {
     segment_index: usize,
     leaf_lo: u32,
     leaf_hi: u32,
-    /// The largest measure of a boundary leaf (as `cum[l + 1] - cum[l]`).
-    max_boundary: f64,
+    /// Per descent depth `k` (index `k - 1`), the largest measure of a boundary leaf
+    /// whose tree is shallower than `k` (0 when none).
+    shallow: [f64; MAX_DEPTH],
 }
+
+/// The deepest descent tree the tables hold (the sampler caps descents at its
+/// `leaf_levels`, at most 24).
+const MAX_DEPTH: usize = 24;
 
 /// The sampler's cells as flat tables ([module docs](self)).
 #[derive(Clone, Debug, Default)]
@@ -87,13 +105,17 @@ pub struct FlatSampler {
     pub leaves: Vec<FlatLeaf>,
     /// Candidate triangles of full leaves (global domain-triangle indices).
     pub candidates: Vec<u32>,
-    /// Clipped pieces of boundary leaves ([`FlatPiece`]).
+    /// The descent trees of boundary leaves ([`FlatNode`]), each leaf's in one run.
+    pub nodes: Vec<FlatNode>,
+    /// Clipped pieces of the descent trees' nodes ([`FlatPiece`]).
     pub pieces: Vec<FlatPiece>,
     /// Domain triangles of every segment ([`FlatTriangle`]).
     pub triangles: Vec<FlatTriangle>,
     /// Per slot, the segment id written into samples.
     pub slot_segments: Vec<u32>,
     slots: Vec<Slot>,
+    /// Per leaf, the depth of its descent tree (0 for full leaves).
+    depths: Vec<u8>,
 }
 
 /// One request's groups and levels ([`FlatSampler::request`]).
@@ -103,6 +125,12 @@ pub struct FlatRequest {
     pub groups: Vec<FlatGroup>,
     /// Per slot, the levels of the continuous map in its full leaves.
     pub levels: Vec<u32>,
+    /// How many descent levels the thresholds give (`depth`).
+    pub depth: u32,
+    /// Per group, `depth` thresholds as `f64` bits: a boundary leaf of measure `w`
+    /// descends through as many levels as there are thresholds at most `w` (the
+    /// sequential sampler's levels, exactly; compare the bits as integers).
+    pub thresholds: Vec<u64>,
 }
 
 fn split(v: u64) -> [u32; 2] {
@@ -113,8 +141,52 @@ fn f32_bits(x: f64) -> u32 {
     (x as f32).to_bits()
 }
 
+/// The 64-bit fraction `m / whole` (0 for no measure, at least 1 for some; saturated).
+fn share64(m: f64, whole: f64) -> u64 {
+    if !(m > 0.0) {
+        return 0;
+    }
+    ((m / whole * 18_446_744_073_709_551_616.0) as u64).max(1)
+}
+
+/// The sequential sampler's levels of descent through a boundary leaf expecting
+/// `expected` samples (`sampler.rs`'s `boundary_levels`; the tests compare the two
+/// samplers, so a change there shows here).
+fn descent_levels(expected: f64) -> u32 {
+    (expected.max(1.0).log2() * 0.5).ceil() as u32
+}
+
+/// The smallest leaf measure `w` whose descent has at least `k` levels at `per_sample`
+/// samples per unit measure (at most `cap` levels), as `f64` bits; `u64::MAX` for
+/// none.
+fn threshold(per_sample: f64, k: u32, cap: u32) -> u64 {
+    if k > cap || !(per_sample > 0.0) {
+        return u64::MAX;
+    }
+    let levels = |w: f64| descent_levels(w * per_sample);
+    let mut w = 4f64.powi(k as i32 - 1) / per_sample;
+    if !w.is_finite() {
+        return u64::MAX;
+    }
+    // The estimate is within a few ulps of the answer: step to it.
+    for _ in 0..256 {
+        if levels(w) >= k {
+            let down = w.next_down();
+            if down >= 0.0 && levels(down) >= k {
+                w = down;
+            } else {
+                break;
+            }
+        } else {
+            w = w.next_up();
+        }
+    }
+    w.to_bits()
+}
+
 impl FlatSampler {
-    /// Flattens `sampler`'s cells.
+    /// Flattens `sampler`'s cells, with descent trees of depth 0 (requests that put at
+    /// most one sample in a boundary leaf; [`deepen`](Self::deepen) for more).
     pub fn new(sampler: &Sampler) -> Result<Self, FlatError> {
         let mut flat = FlatSampler::default();
         let total = sampler.chain_cumulative.last().copied().unwrap_or(0.0);
@@ -124,6 +196,12 @@ impl FlatSampler {
             let curve = &seg.curve;
             let base = sampler.chain_cumulative[slot];
             let tri_base = flat.triangles.len() as u64;
+            if tri_base + curve.triangle_count() as u64 > u64::from(u32::MAX) {
+                return Err(FlatError::TooLarge {
+                    what: "domain triangles",
+                    value: tri_base + curve.triangle_count() as u64,
+                });
+            }
             for t in 0..curve.triangle_count() {
                 let c = curve.triangle_uv(t);
                 let mut row = [0u32; 7];
@@ -135,7 +213,6 @@ impl FlatSampler {
                 flat.triangles.push(row);
             }
             let leaf_lo = flat.leaves.len() as u32;
-            let mut max_boundary = 0.0f64;
             let cum = curve.cumulative();
             for (l, key) in curve.cells().iter().enumerate() {
                 flat.cumulative.push(fixed(base + cum[l]));
@@ -143,23 +220,14 @@ impl FlatSampler {
                     | u32::from(key.state().0) << 5
                     | u32::from(key.full()) << 7
                     | (slot as u32) << 8;
-                let global = |t: u32| -> Result<u32, FlatError> {
-                    u32::try_from(tri_base + u64::from(t)).map_err(|_| FlatError::TooLarge {
-                        what: "domain triangles",
-                        value: tri_base + u64::from(t),
-                    })
-                };
                 let (first, len) = if key.full() {
                     let first = flat.candidates.len() as u32;
                     for &t in curve.leaf_triangles(l) {
-                        flat.candidates.push(global(t)?);
+                        flat.candidates.push((tri_base + u64::from(t)) as u32);
                     }
                     (first, flat.candidates.len() as u32 - first)
                 } else {
-                    max_boundary = max_boundary.max(cum[l + 1] - cum[l]);
-                    let first = flat.pieces.len() as u32;
-                    flat.push_pieces(curve, l, global)?;
-                    (first, flat.pieces.len() as u32 - first)
+                    (0, 0)
                 };
                 flat.leaves.push([key.x(), key.y(), meta, first, len]);
             }
@@ -168,7 +236,7 @@ impl FlatSampler {
                 segment_index: si as usize,
                 leaf_lo,
                 leaf_hi: flat.leaves.len() as u32,
-                max_boundary,
+                shallow: [0.0; MAX_DEPTH],
             });
         }
         flat.cumulative.push(u64::MAX);
@@ -178,34 +246,69 @@ impl FlatSampler {
                 value: flat.leaves.len() as u64,
             });
         }
+        flat.depths = vec![0; flat.leaves.len()];
+        flat.build_trees(sampler)?;
         Ok(flat)
     }
 
-    /// Appends the pieces of boundary leaf `l` of `curve`.
-    fn push_pieces(
-        &mut self,
-        curve: &SegmentCurve,
-        l: usize,
-        global: impl Fn(u32) -> Result<u32, FlatError>,
-    ) -> Result<(), FlatError> {
-        let key = curve.cells()[l];
-        let (origin, size) = (key.origin(), key.size());
-        let cum = curve.cumulative();
-        let node = cum[l + 1] - cum[l];
-        let mut result = Ok(());
-        curve.leaf_pieces(l, |t, poly, m| {
-            let tri = match global(t) {
-                Ok(t) => t,
-                Err(e) => {
-                    result = Err(e);
-                    return;
+    /// Rebuilds the descent trees of every boundary leaf to its depth in `depths`,
+    /// and the slots' shallowness.
+    fn build_trees(&mut self, sampler: &Sampler) -> Result<(), FlatError> {
+        self.nodes.clear();
+        self.pieces.clear();
+        let mut tri_base = 0u32;
+        for s in 0..self.slots.len() {
+            let slot = &self.slots[s];
+            let curve = &sampler.segments[slot.segment_index].curve;
+            let (leaf_lo, leaf_hi) = (slot.leaf_lo as usize, slot.leaf_hi as usize);
+            let cum = curve.cumulative();
+            let mut shallow = [0.0f64; MAX_DEPTH];
+            for l in leaf_lo..leaf_hi {
+                if self.leaves[l][2] & 128 != 0 {
+                    continue;
                 }
-            };
+                let local = l - leaf_lo;
+                let depth = self.depths[l];
+                let w = cum[local + 1] - cum[local];
+                for s in &mut shallow[depth as usize..] {
+                    *s = s.max(w);
+                }
+                let root = self.nodes.len() as u32;
+                let tree = curve.descent_tree(local, u32::from(depth));
+                for node in &tree {
+                    self.push_node(node, root, tri_base);
+                }
+                self.leaves[l][3] = root;
+                self.leaves[l][4] = tree.len() as u32;
+            }
+            self.slots[s].shallow = shallow;
+            tri_base += curve.triangle_count() as u32;
+        }
+        if self.nodes.len() as u64 >= u64::from(u32::MAX) || self.pieces.len() >= 1 << 31 {
+            return Err(FlatError::TooLarge {
+                what: "descent tree nodes",
+                value: self.nodes.len() as u64,
+            });
+        }
+        Ok(())
+    }
+
+    /// Appends `node` of a tree whose root is node `root`, with its pieces; domain
+    /// triangles are numbered from `tri_base`.
+    fn push_node(&mut self, node: &DescentNode, root: u32, tri_base: u32) {
+        let size = (-f64::from(node.level)).exp2();
+        let origin = glam::DVec2::new(f64::from(node.x), f64::from(node.y)) * size;
+        let first = self.pieces.len() as u32;
+        for (tri, poly, m) in &node.parts {
             let mut row = [0u32; 20];
-            row[0] = tri;
+            row[0] = tri_base + tri;
             let pts = poly.points();
             row[1] = pts.len().min(8) as u32;
-            let share = if node > 0.0 { m / node } else { 0.0 };
+            let share = if node.measure > 0.0 {
+                m / node.measure
+            } else {
+                0.0
+            };
             [row[2], row[3]] = split((share * 4_611_686_018_427_387_904.0) as u64);
             for (k, p) in pts.iter().take(8).enumerate() {
                 let q = (*p - origin) / size;
@@ -213,35 +316,75 @@ impl FlatSampler {
                 row[5 + 2 * k] = f32_bits(q.y);
             }
             self.pieces.push(row);
-        });
-        result
-    }
-
-    /// Bytes of the tables (what a GPU holds of them).
-    pub fn bytes(&self) -> usize {
-        self.cumulative.len() * 8
-            + self.leaves.len() * 20
-            + self.candidates.len() * 4
-            + self.pieces.len() * 80
-            + self.triangles.len() * 28
-            + self.slot_segments.len() * 4
-    }
-
-    /// The groups and levels of an `n`-sample stratified request for `seed` of
-    /// `sampler` (the one these tables were built from): the allocation of
-    /// [`Sampler::sample_sites_into`] over segments or chains, O(segments).
-    pub fn request(&self, sampler: &Sampler, n: u64, seed: u64) -> Result<FlatRequest, FlatError> {
-        if n > u64::from(u32::MAX) {
-            return Err(FlatError::TooLarge {
-                what: "samples per request",
-                value: n,
-            });
         }
+        let meta = u32::from(node.level)
+            | u32::from(node.state) << 5
+            | u32::from(node.full) << 7
+            | u32::from(node.square) << 8;
+        let [(m0, c0), (m1, c1)] = node.children;
+        let child = |c: Option<u32>| c.map_or(u32::MAX, |c| root + c);
+        let (a, b) = (
+            split(share64(m0, node.measure)),
+            split(share64(m1, node.measure)),
+        );
+        let w = split(node.measure.to_bits());
+        let len = self.pieces.len() as u32 - first;
+        self.nodes.push([
+            meta,
+            node.x,
+            node.y,
+            first,
+            len,
+            a[0],
+            a[1],
+            b[0],
+            b[1],
+            child(c0),
+            child(c1),
+            w[0],
+            w[1],
+        ]);
+    }
+
+    /// Deepens the descent trees so that an `n`-sample request of `sampler` (the one
+    /// these tables were built from) can be drawn: each boundary leaf's tree as deep as
+    /// the sequential sampler descends in it for `n` samples. `true` when the tables
+    /// changed (upload them again). Cost: O(cells) to check, and the trees of every
+    /// boundary leaf rebuilt when any must grow.
+    pub fn deepen(&mut self, sampler: &Sampler, n: u64) -> Result<bool, FlatError> {
+        let mut changed = false;
+        for (slot_lo, slot_hi, count, group_measure) in self.runs(sampler, n) {
+            let per_sample = count as f64 / group_measure;
+            for slot in &self.slots[slot_lo as usize..slot_hi as usize] {
+                let curve = &sampler.segments[slot.segment_index].curve;
+                let cap = u32::from(curve.options().leaf_levels).min(MAX_DEPTH as u32);
+                let cum = curve.cumulative();
+                for l in slot.leaf_lo as usize..slot.leaf_hi as usize {
+                    if self.leaves[l][2] & 128 != 0 {
+                        continue;
+                    }
+                    let local = l - slot.leaf_lo as usize;
+                    let w = cum[local + 1] - cum[local];
+                    let need = descent_levels(w * per_sample).min(cap) as u8;
+                    if need > self.depths[l] {
+                        self.depths[l] = need;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if changed {
+            self.build_trees(sampler)?;
+        }
+        Ok(changed)
+    }
+
+    /// The groups of an `n`-sample request with samples: `(first slot, slot end,
+    /// count, measure)`, the measures summed as the sampler sums them.
+    fn runs(&self, sampler: &Sampler, n: u64) -> Vec<(u32, u32, u64, f64)> {
         let linked = sampler.uses_chains(n as usize);
         let segments = sampler.segments();
         let measure = |i: u32| segments[i as usize].curve.measure();
-        // The groups as runs of slots in chain order, with their measures summed as
-        // the sampler sums them.
         let groups: Vec<(u32, u32, f64)> = if linked {
             let mut at = 0u32;
             sampler
@@ -260,14 +403,45 @@ impl FlatSampler {
                 })
                 .collect()
         };
+        Allocation::new(n, groups.iter().map(|g| g.2))
+            .map(|(i, count)| (groups[i].0, groups[i].1, count, groups[i].2))
+            .collect()
+    }
+
+    /// Bytes of the tables (what a GPU holds of them).
+    pub fn bytes(&self) -> usize {
+        self.cumulative.len() * 8
+            + self.leaves.len() * 20
+            + self.candidates.len() * 4
+            + self.nodes.len() * 52
+            + self.pieces.len() * 80
+            + self.triangles.len() * 28
+            + self.slot_segments.len() * 4
+    }
+
+    /// The groups, levels and descent thresholds of an `n`-sample stratified request
+    /// for `seed` of `sampler` (the one these tables were built from): the allocation
+    /// of [`Sampler::sample_sites_into`] over segments or chains, O(segments).
+    /// [`FlatError::Shallow`] when a boundary leaf's tree is shallower than the
+    /// request's descent in it ([`deepen`](Self::deepen) first).
+    pub fn request(&self, sampler: &Sampler, n: u64, seed: u64) -> Result<FlatRequest, FlatError> {
+        if n > u64::from(u32::MAX) {
+            return Err(FlatError::TooLarge {
+                what: "samples per request",
+                value: n,
+            });
+        }
+        let segments = sampler.segments();
+        let depth = u32::from(self.depths.iter().copied().max().unwrap_or(0));
         let mut request = FlatRequest {
             groups: Vec::new(),
             levels: vec![0; self.slots.len()],
+            depth,
+            thresholds: Vec::new(),
         };
         let mut first = 0u64;
-        let mut limit = u64::MAX;
-        for (i, count) in Allocation::new(n, groups.iter().map(|g| g.2)) {
-            let (slot_lo, slot_hi, group_measure) = groups[i];
+        let runs = self.runs(sampler, n);
+        for (i, &(slot_lo, slot_hi, count, group_measure)) in runs.iter().enumerate() {
             let start = first;
             first += count;
             if count == 0 {
@@ -277,15 +451,22 @@ impl FlatSampler {
             for slot in slot_lo..slot_hi {
                 let s = &self.slots[slot as usize];
                 let curve = &segments[s.segment_index].curve;
-                if s.max_boundary * per_sample > 1.0 {
-                    let scaled = (n as f64 / (s.max_boundary * per_sample)).floor() as u64;
-                    limit = limit.min(scaled);
+                let cap = u32::from(curve.options().leaf_levels).min(MAX_DEPTH as u32);
+                for (k, &w) in s.shallow.iter().enumerate() {
+                    if w > 0.0 && descent_levels(w * per_sample).min(cap) > k as u32 {
+                        return Err(FlatError::Shallow { count: n });
+                    }
                 }
                 let share = curve.measure() / group_measure;
                 let per_leaf = count as f64 * share / curve.cell_count() as f64;
                 let levels = (per_leaf.max(1.0).log2() * 0.5).ceil() as u32 + 5;
                 request.levels[slot as usize] = levels.min(u32::from(curve.options().leaf_levels));
             }
+            let curve = &segments[self.slots[slot_lo as usize].segment_index].curve;
+            let cap = u32::from(curve.options().leaf_levels).min(MAX_DEPTH as u32);
+            request
+                .thresholds
+                .extend((1..=depth).map(|k| threshold(per_sample, k, cap)));
             let (lo, hi) = (
                 self.slots[slot_lo as usize].leaf_lo,
                 self.slots[slot_hi as usize - 1].leaf_hi,
@@ -306,9 +487,6 @@ impl FlatSampler {
                 g_len[0],
                 g_len[1],
             ]);
-        }
-        if limit != u64::MAX {
-            return Err(FlatError::BoundaryDescent { count: n, limit });
         }
         Ok(request)
     }
@@ -348,8 +526,11 @@ mod tests {
             if leaf[2] & 128 != 0 {
                 assert!(first + len <= flat.candidates.len());
             } else {
-                assert!(first + len <= flat.pieces.len());
-                let sum: f64 = flat.pieces[first..first + len]
+                assert!(first + len <= flat.nodes.len());
+                let root = flat.nodes[first];
+                let (p0, pn) = (root[3] as usize, root[4] as usize);
+                assert!(p0 + pn <= flat.pieces.len());
+                let sum: f64 = flat.pieces[p0..p0 + pn]
                     .iter()
                     .map(|p| (u64::from(p[2]) | u64::from(p[3]) << 32) as f64 / 2f64.powi(62))
                     .sum();
@@ -386,5 +567,52 @@ mod tests {
             flat.request(sampler, 1 << 33, 3),
             Err(FlatError::TooLarge { .. })
         ));
+    }
+
+    /// A request that descends into boundary leaves is refused until the trees are
+    /// deepened; the deepened trees' children carry shares of their node's measure
+    /// that sum to about one, and the thresholds give every boundary leaf the
+    /// sequential sampler's levels.
+    #[test]
+    fn deepened_trees_serve_large_requests() {
+        let pre = torus();
+        let sampler = &pre.sampler;
+        let mut flat = FlatSampler::new(sampler).expect("flat");
+        let n = 400_000;
+        assert!(matches!(
+            flat.request(sampler, n, 1),
+            Err(FlatError::Shallow { .. })
+        ));
+        assert!(flat.deepen(sampler, n).expect("deepen"));
+        assert!(!flat.deepen(sampler, n).expect("again"));
+        let request = flat.request(sampler, n, 1).expect("request");
+        assert!(request.depth >= 1);
+        assert_eq!(
+            request.thresholds.len(),
+            request.groups.len() * request.depth as usize
+        );
+        let inner: Vec<&FlatNode> = flat
+            .nodes
+            .iter()
+            .filter(|n| n[9] != u32::MAX || n[10] != u32::MAX)
+            .collect();
+        assert!(!inner.is_empty());
+        for node in inner {
+            let share =
+                |lo: u32, hi: u32| (u64::from(lo) | u64::from(hi) << 32) as f64 / 2f64.powi(64);
+            let sum = share(node[5], node[6]) + share(node[7], node[8]);
+            assert!((sum - 1.0).abs() < 1e-6, "children share {sum}");
+        }
+        // Thresholds: a leaf of measure w descends through the levels the sampler's
+        // formula gives.
+        let per_sample = request.groups[0][1] as f64 / sampler.segments()[0].curve.measure();
+        for (k, &t) in request.thresholds[..request.depth as usize]
+            .iter()
+            .enumerate()
+        {
+            let w = f64::from_bits(t);
+            assert!(descent_levels(w * per_sample) > k as u32);
+            assert!(descent_levels(w.next_down() * per_sample) <= k as u32);
+        }
     }
 }

@@ -313,7 +313,9 @@ impl SiteExpander {
     /// `samples` (at least
     /// `n` records), each sample's index its place. The parameters go through the
     /// expander's uniform buffer written with `queue`: submit `encoder` before the next
-    /// expansion.
+    /// expansion. `timestamps`, where the device has timestamp queries, times the
+    /// pass.
+    #[allow(clippy::too_many_arguments)]
     pub fn expand_resident(
         &self,
         device: &wgpu::Device,
@@ -322,6 +324,7 @@ impl SiteExpander {
         sites: &wgpu::Buffer,
         samples: &wgpu::Buffer,
         n: u32,
+        timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
         if n == 0 {
             return;
@@ -369,7 +372,7 @@ impl SiteExpander {
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("strata expand resident"),
-            timestamp_writes: None,
+            timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(1, &bind_group, &[]);

@@ -11,10 +11,12 @@
 //! and `f32`. The sites are those of [`Sampler::sample_sites_into`]: the same leaf for
 //! every sample (the stratified value and the cumulative measures are compared in
 //! 64-bit fixed point), the point in it up to `f32` round-off, so a face or segment
-//! can differ only for a point within round-off of a triangle edge. Boundary leaves
-//! expecting more than one sample (counts above about 2^16 per cell budget) need the
-//! sequential sampler's exact descent, which the tables do not hold: such requests are
-//! refused ([`FlatError::BoundaryDescent`]).
+//! can differ only for a point within round-off of a triangle edge. A boundary leaf
+//! that expects several samples is descended as the sequential sampler descends it,
+//! over a tree of its sub-cells' exact measures that the engine unrolls from that
+//! descent ([`FlatSampler::deepen`]) the first time a count needs it; the table is
+//! then uploaded again (larger counts need deeper trees, about `2^depth` nodes per
+//! boundary leaf).
 
 use strata_engine::sample::flat::{FlatError, FlatSampler};
 use strata_engine::sample::{SampleSite, Sampler};
@@ -57,8 +59,14 @@ pub struct SampleParams {
     pub tris_at: u32,
     /// First word of the segment ids per slot.
     pub slots_at: u32,
+    /// First word of the descent-tree nodes.
+    pub nodes_at: u32,
+    /// First word of the descent thresholds in the request table.
+    pub thresholds_at: u32,
+    /// Descent thresholds per group.
+    pub depth: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
 }
 
 /// The flat tables of `flat` as one array of 32-bit words, and where each part starts.
@@ -81,7 +89,10 @@ fn table_words(flat: &FlatSampler) -> (Vec<u32>, SampleParams) {
     words.extend(flat.triangles.iter().flatten());
     let slots_at = at(&words);
     words.extend(&flat.slot_segments);
+    let nodes_at = at(&words);
+    words.extend(flat.nodes.iter().flatten());
     let offsets = SampleParams {
+        nodes_at,
         cum_at,
         leaves_at,
         cands_at,
@@ -91,6 +102,31 @@ fn table_words(flat: &FlatSampler) -> (Vec<u32>, SampleParams) {
         ..Default::default()
     };
     (words, offsets)
+}
+
+/// The tables of `flat` uploaded: the buffer, its bytes and where each part starts.
+fn upload_table(
+    device: &wgpu::Device,
+    flat: &FlatSampler,
+) -> Result<(wgpu::Buffer, u64, SampleParams), GpuError> {
+    let (words, offsets) = table_words(flat);
+    let table_bytes = std::mem::size_of_val(words.as_slice()) as u64;
+    let limit = device.limits().max_storage_buffer_binding_size;
+    if table_bytes > limit {
+        return Err(GpuError::Limit {
+            what: "cell table for GPU sampling (bytes)",
+            requested: table_bytes,
+            limit,
+        });
+    }
+    let table = scoped(device, "uploading the sampling tables", || {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("strata sample table"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    })?;
+    Ok((table, table_bytes, offsets))
 }
 
 /// A storage buffer that grows (by doubling) to hold what it is asked to.
@@ -159,23 +195,20 @@ pub struct GpuSampler {
     /// Sites written by the last request.
     count: u32,
     expander: SiteExpander,
+    /// Where the device has timestamp queries: the begin and end of the sites pass and
+    /// of the expansion, and the buffer they resolve into.
+    timer: Option<(wgpu::QuerySet, wgpu::Buffer)>,
 }
+
+/// Timestamps per request: the sites pass's begin and end, the expansion's.
+const STAMPS: u32 = 4;
 
 impl GpuSampler {
     /// Flattens `sampler`'s cells, uploads them and builds the sampling and expansion
     /// passes (the expander uploads the mesh table).
     pub fn new(device: &wgpu::Device, sampler: &Sampler) -> Result<Self, GpuError> {
         let flat = FlatSampler::new(sampler)?;
-        let (words, offsets) = table_words(&flat);
-        let table_bytes = std::mem::size_of_val(words.as_slice()) as u64;
-        let limit = device.limits().max_storage_buffer_binding_size;
-        if table_bytes > limit {
-            return Err(GpuError::Limit {
-                what: "cell table for GPU sampling (bytes)",
-                requested: table_bytes,
-                limit,
-            });
-        }
+        let (table, table_bytes, offsets) = upload_table(device, &flat)?;
         let expander = SiteExpander::new(device, sampler)?;
         scoped(device, "building the sampling pass", || {
             let module = shader_module(device, "strata sample", shaders::SAMPLE);
@@ -208,11 +241,6 @@ impl GpuSampler {
                 entry: "cs_sample",
             }
             .create(device, &pipeline_layout, &module);
-            let table = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("strata sample table"),
-                contents: bytemuck::cast_slice(&words),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
             Self {
                 sampler: sampler.clone(),
                 flat,
@@ -236,8 +264,31 @@ impl GpuSampler {
                 ),
                 count: 0,
                 expander,
+                timer: device
+                    .features()
+                    .contains(wgpu::Features::TIMESTAMP_QUERY)
+                    .then(|| {
+                        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                            label: Some("strata sample timestamps"),
+                            ty: wgpu::QueryType::Timestamp,
+                            count: STAMPS,
+                        });
+                        let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some("strata sample timestamps"),
+                            size: u64::from(STAMPS) * 8,
+                            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                            mapped_at_creation: false,
+                        });
+                        (set, resolve)
+                    }),
             }
         })
+    }
+
+    /// The flat tables this sampler draws from (as deep as the largest request so far
+    /// needed).
+    pub fn flat(&self) -> &FlatSampler {
+        &self.flat
     }
 
     /// Bytes of the cell table on the GPU (the expander's mesh table not counted).
@@ -284,6 +335,14 @@ impl GpuSampler {
         });
         self.encode_sites(device, queue, &mut encoder, n, seed)?;
         if let Some(sites) = &self.sites.buffer {
+            let stamps = self
+                .timer
+                .as_ref()
+                .map(|(set, _)| wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(2),
+                    end_of_pass_write_index: Some(3),
+                });
             self.expander.expand_resident(
                 device,
                 queue,
@@ -291,7 +350,13 @@ impl GpuSampler {
                 sites,
                 samples.buffer(),
                 self.count,
+                stamps,
             );
+            if let Some((set, resolve)) = &self.timer
+                && self.count > 0
+            {
+                encoder.resolve_query_set(set, 0..STAMPS, resolve, 0);
+            }
         }
         scoped(device, "sampling on the GPU", || {
             queue.submit([encoder.finish()]);
@@ -316,10 +381,25 @@ impl GpuSampler {
         if count == 0 {
             return Ok(());
         }
-        let request = self.flat.request(&self.sampler, n as u64, seed)?;
+        let request = match self.flat.request(&self.sampler, n as u64, seed) {
+            Err(FlatError::Shallow { .. }) => {
+                // Deeper descent trees for this count: built once, uploaded again.
+                self.flat.deepen(&self.sampler, n as u64)?;
+                (self.table, self.table_bytes, self.offsets) = upload_table(device, &self.flat)?;
+                self.flat.request(&self.sampler, n as u64, seed)?
+            }
+            other => other?,
+        };
         let mut words: Vec<u32> = request.groups.iter().flatten().copied().collect();
         let levels_at = words.len() as u32;
         words.extend(&request.levels);
+        let thresholds_at = words.len() as u32;
+        words.extend(
+            request
+                .thresholds
+                .iter()
+                .flat_map(|&t| [t as u32, (t >> 32) as u32]),
+        );
         let groups = count.div_ceil(WORKGROUP);
         let max = device.limits().max_compute_workgroups_per_dimension.max(1);
         let (gx, gy) = (groups.min(max), groups.div_ceil(max));
@@ -328,6 +408,8 @@ impl GpuSampler {
             groups: request.groups.len() as u32,
             row: gx * WORKGROUP,
             levels_at,
+            thresholds_at,
+            depth: request.depth,
             ..self.offsets
         };
         let request_buffer = self
@@ -366,12 +448,37 @@ impl GpuSampler {
         })?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("strata sample"),
-            timestamp_writes: None,
+            timestamp_writes: self.timer.as_ref().map(|(set, _)| {
+                wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }
+            }),
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups(gx, gy, 1);
         Ok(())
+    }
+
+    /// The GPU times in seconds of the last [`sample`](Self::sample)'s sites pass (the
+    /// stratified values, the leaf search and the points, one pass) and its expansion
+    /// into records, from timestamp queries (waits for the device); `None` where the
+    /// device has no timestamp queries.
+    pub fn pass_times(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<[f64; 2]>, GpuError> {
+        let Some((_, resolve)) = &self.timer else {
+            return Ok(None);
+        };
+        let bytes = read_buffer(device, queue, resolve, u64::from(STAMPS) * 8)?;
+        let t: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let period = f64::from(queue.get_timestamp_period()) * 1e-9;
+        let span = |a: usize| t[a + 1].saturating_sub(t[a]) as f64 * period;
+        Ok(Some([span(0), span(2)]))
     }
 
     /// Copies the sites of the last request back (waits for the device; for tests,
@@ -412,8 +519,12 @@ mod tests {
             ("pieces_at", offset_of!(SampleParams, pieces_at)),
             ("tris_at", offset_of!(SampleParams, tris_at)),
             ("slots_at", offset_of!(SampleParams, slots_at)),
+            ("nodes_at", offset_of!(SampleParams, nodes_at)),
+            ("thresholds_at", offset_of!(SampleParams, thresholds_at)),
+            ("depth", offset_of!(SampleParams, depth)),
             ("_pad0", offset_of!(SampleParams, _pad)),
             ("_pad1", offset_of!(SampleParams, _pad) + 4),
+            ("_pad2", offset_of!(SampleParams, _pad) + 8),
         ];
         let want: Vec<(String, usize)> = want.iter().map(|(n, o)| (n.to_string(), *o)).collect();
         assert_eq!(params, want);
@@ -487,6 +598,8 @@ mod gpu_tests {
         /// The largest distance between the two sites' points over the bounding-box
         /// diagonal.
         position: f64,
+        /// Samples farther apart than 1e-5 of the diagonal.
+        beyond: usize,
     }
 
     fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
@@ -508,6 +621,7 @@ mod gpu_tests {
             d.segments += usize::from(g.segment != c.segment);
             let dist = point(sampler, g).distance(point(sampler, c)) / diagonal;
             d.position = d.position.max(dist);
+            d.beyond += usize::from(dist > 1e-5);
         }
         d
     }
@@ -571,35 +685,112 @@ mod gpu_tests {
         }
     }
 
-    /// A count that puts more than one sample in a boundary leaf is refused with the
-    /// largest count that can be drawn, before anything is allocated; half that count
-    /// and zero samples work.
+    /// The default scene with coarse cells: boundary leaves receive many samples even
+    /// at counts where segments are linked into chains.
+    const COARSE: &str = "(mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
+         field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0), \
+         curve: (max_cell_share: 0.02, boundary_level: 3))";
+
+    /// Draws `n` samples for `seed` on both sides and checks them as
+    /// `gpu_sites_are_the_cpu_sites` does; returns the difference.
+    fn check(
+        ctx: &GpuContext,
+        gpu: &mut GpuSampler,
+        sampler: &Sampler,
+        n: usize,
+        seed: u64,
+        at: &str,
+    ) -> Difference {
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let mut cpu = vec![SampleSite::default(); n];
+        sampler.sample_sites_into(seed, &mut cpu);
+        gpu.sample_sites(device, queue, n, seed).expect("sites");
+        let sites = gpu.read_sites(device, queue).expect("read back");
+        let d = compare(sampler, &sites, &cpu);
+        let _ = writeln!(
+            std::io::stderr(),
+            "{at}: chains {}, descent depth {}, {} faces and {} segments differ, largest deviation {:.2e} of the diagonal ({} beyond 1e-5)",
+            sampler.uses_chains(n),
+            gpu.flat()
+                .request(sampler, n as u64, seed)
+                .map_or(0, |r| r.depth),
+            d.faces,
+            d.segments,
+            d.position,
+            d.beyond
+        );
+        // Within 1e-5 of the diagonal but for points in triangles that are slivers in
+        // the parameterization, where f32 coordinates of the point resolve the
+        // triangle's width only to a few percent (on the bunny at 10^5: one sample, in
+        // a uv triangle 5e-7 wide, at 2.1e-5).
+        assert!(d.beyond * 10_000 <= n && d.position <= 1e-4, "{at}: {d:?}");
+        assert!(d.faces * 1000 <= n && d.segments * 1000 <= n, "{at}: {d:?}");
+        gpu.sample_sites(device, queue, n, seed).expect("sites");
+        assert!(
+            gpu.read_sites(device, queue).expect("read back") == sites,
+            "{at}: two runs differ"
+        );
+        d
+    }
+
+    /// Counts that put several samples in boundary leaves descend through them as the
+    /// CPU does (the trees deepened on the way): the same faces and segments, positions
+    /// within 1e-5 of the diagonal, with chains on a many-segment scene, at 10^5 on the
+    /// default scene and on the bunny (shared mesh, skipped without it).
     #[test]
-    fn counts_needing_the_boundary_descent_are_refused() {
-        let Some(ctx) = gpu("counts_needing_the_boundary_descent_are_refused") else {
+    fn boundary_descent_matches_the_cpu() {
+        let Some(ctx) = gpu("boundary_descent_matches_the_cpu") else {
             return;
         };
-        let (device, queue) = (&ctx.device, &ctx.queue);
-        let scene = scene(DEFAULT);
-        let mut gpu = GpuSampler::new(device, &scene.sampler).expect("GPU sampler");
-        let err = gpu
-            .sample_sites(device, queue, 3_000_000, 1)
-            .expect_err("refused");
-        let limit = match &err {
-            crate::gpu::GpuError::Sampling(
-                strata_engine::sample::flat::FlatError::BoundaryDescent { count, limit },
-            ) => {
-                assert_eq!(*count, 3_000_000);
-                *limit
-            }
-            other => panic!("{other}"),
+        let device = &ctx.device;
+        let coarse = scene(COARSE);
+        let sampler = &coarse.sampler;
+        let mut gpu = GpuSampler::new(device, sampler).expect("GPU sampler");
+        let chained = 3 * sampler.segments().len();
+        assert!(
+            sampler.uses_chains(chained),
+            "the coarse scene links segments"
+        );
+        for (n, seed) in [(chained, 2u64), (chained / 2 + 1, 4), (50_000, 6)] {
+            check(&ctx, &mut gpu, sampler, n, seed, &format!("coarse, n {n}"));
+            let depth = gpu
+                .flat()
+                .request(sampler, n as u64, seed)
+                .expect("request")
+                .depth;
+            assert!(depth >= 1, "coarse, n {n}: no descent exercised");
+        }
+        let default = scene(DEFAULT);
+        let mut gpu = GpuSampler::new(device, &default.sampler).expect("GPU sampler");
+        check(
+            &ctx,
+            &mut gpu,
+            &default.sampler,
+            100_000,
+            1,
+            "default, n 100000",
+        );
+        gpu.sample_sites(device, &ctx.queue, 0, 1).expect("nothing");
+        assert!(gpu.read_sites(device, &ctx.queue).expect("read").is_empty());
+        let Some(dir) = strata_engine::io::shared_mesh_dir() else {
+            let _ = writeln!(std::io::stderr(), "bunny skipped: no shared meshes");
+            return;
         };
-        assert!(err.to_string().contains("boundary leaf"), "{err}");
-        assert!(limit > 10_000 && limit < 3_000_000, "{limit}");
-        gpu.sample_sites(device, queue, limit as usize / 2, 1)
-            .expect("half the limit is drawn");
-        gpu.sample_sites(device, queue, 0, 1).expect("nothing");
-        assert!(gpu.read_sites(device, queue).expect("read").is_empty());
+        let bunny = dir.join("stanford-bunny.obj");
+        let ron = format!(
+            "(mesh: File({:?}), field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))",
+            bunny.display().to_string()
+        );
+        let bunny = scene(&ron);
+        let mut gpu = GpuSampler::new(device, &bunny.sampler).expect("GPU sampler");
+        check(
+            &ctx,
+            &mut gpu,
+            &bunny.sampler,
+            100_000,
+            1,
+            "bunny, n 100000",
+        );
     }
 
     /// `strata bench --gpu` prints the check and succeeds on a scene within tolerance.
