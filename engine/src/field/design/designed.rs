@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::line_field::{LineField, LinearSolver};
-use super::solve::{LineConstraint, LineFieldOptions, constrained_line_field_with};
+use super::pieces::constrained_line_field_with;
+use super::solve::{LineConstraint, LineFieldOptions};
 use crate::field::curvature::{self, CurvatureMeasure, CurvatureNormalization};
 use crate::field::guidance::{curvature_guidance, direction_guidance};
 use crate::field::params::{

@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use super::*;
 use crate::field::design::eigenpair::start_value;
+use crate::field::design::{constrained_line_field, guided_line_field, smoothest_line_field};
 use crate::field::{TensorField, tangent_frame};
 use crate::mesh::shapes;
 use crate::segment::detect_singularities;
