@@ -38,7 +38,8 @@ pub const SOLVE_TOLERANCE: f64 = 1e-6;
 #[non_exhaustive]
 pub enum LinearSolver {
     /// [`Direct`](Self::Direct) below [`MULTIGRID_VERTICES`] vertices,
-    /// [`Multigrid`](Self::Multigrid) from there.
+    /// [`Multigrid`](Self::Multigrid) from there (chosen per connected piece, by the
+    /// piece's vertices: a scan's crumbs are factored).
     #[default]
     Auto,
     /// faer's sparse Cholesky: exact, but its fill and time grow faster than the mesh.

@@ -435,7 +435,11 @@ struct Unknowns<'a> {
 /// hierarchy `reuse` when given and it converges. An estimate of `lambda_1` slightly
 /// too high could leave the shifted system indefinite (a failed factorization, or
 /// conjugate gradients meeting negative curvature): then the shift is halved (three
-/// times at most, then none).
+/// times at most, then none). Last, where even that fails, the tiny shift
+/// `sigma M` that keeps an unguided piece definite is added everywhere: a piece whose
+/// guidance is almost zero (a nearly flat crumb of a scan, whose curvature guidance is
+/// round-off) is nearly singular without it, which a multigrid hierarchy's dense
+/// coarsest factor can find not positive definite.
 fn solve_shifted(
     mesh: &TriMesh,
     system: &Connection,
@@ -448,20 +452,17 @@ fn solve_shifted(
     let shift = system.shift();
     let mut attempt = 0;
     loop {
-        let shifted: Vec<f64> = if attempt < 4 {
-            let back = pull * (1.0 - 0.5f64.powi(attempt));
-            extra
-                .iter()
-                .zip(&system.mass)
-                .map(|(d, m)| d + back * m)
-                .collect()
-        } else {
-            extra
-                .iter()
-                .zip(&system.mass)
-                .map(|(d, m)| d + pull * m)
-                .collect()
+        // The mass multiple added to `extra` at this attempt.
+        let back = match attempt {
+            0..=3 => pull * (1.0 - 0.5f64.powi(attempt)),
+            4 => pull,
+            _ => pull + shift,
         };
+        let shifted: Vec<f64> = extra
+            .iter()
+            .zip(&system.mass)
+            .map(|(d, m)| d + back * m)
+            .collect();
         if let Some(amg) = reuse.take()
             && let Some(z) = system.solve_with_hierarchy(&amg, shift, &shifted, &rhs)
         {
@@ -473,7 +474,8 @@ fn solve_shifted(
             .and_then(|mut factor| factor.solve(&mut z));
         match solved {
             Ok(()) => return Ok(z),
-            Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
+            Err(e) if attempt >= 5 => return Err(e),
+            Err(_) if pull == 0.0 => attempt = 5,
             Err(_) => attempt += 1,
         }
     }
