@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::line_field::{LineField, LinearSolver};
-use super::solve::{LineConstraint, LineFieldOptions, constrained_line_field_with};
+use super::pieces::constrained_line_field_with;
+use super::solve::{LineConstraint, LineFieldOptions};
 use crate::field::curvature::{self, CurvatureMeasure, CurvatureNormalization};
 use crate::field::guidance::{curvature_guidance, direction_guidance};
 use crate::field::params::{
@@ -210,7 +211,7 @@ pub struct Design {
     /// [`LineFieldOptions::smoothness`]). Default 0.5.
     pub smoothness: f64,
     /// Length over which the surface is smoothed for the field's connection, as a
-    /// fraction of the area radius, >= 0 (see [`LineFieldOptions::smoothing`]).
+    /// fraction of the area radius (of each connected piece, solved on its own), >= 0 (see [`LineFieldOptions::smoothing`]).
     /// Default 0.3.
     pub smoothing: f64,
     /// Hard constraints (for example strokes along feature lines). Default none.
@@ -223,7 +224,7 @@ pub struct Design {
     /// `Direct` or `Multigrid`. Results agree to the solver tolerance.
     pub solver: LinearSolver,
     /// Opposite singularity pairs (`+1/2` beside `-1/2`) closer than this fraction of
-    /// the area radius are cancelled (see [`LineFieldOptions::cancel_distance`]); at
+    /// the area radius (of each connected piece) are cancelled (see [`LineFieldOptions::cancel_distance`]); at
     /// least 0, and 0 cancels none. Default 0.5: on the bunny the curvature-aligned
     /// field's 10 singularities become 6 (the pairs 0.35 and 0.46 area radii apart,
     /// between the eyes and the nose), on the bunny Loop-subdivided once too.

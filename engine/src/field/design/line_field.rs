@@ -38,7 +38,8 @@ pub const SOLVE_TOLERANCE: f64 = 1e-6;
 #[non_exhaustive]
 pub enum LinearSolver {
     /// [`Direct`](Self::Direct) below [`MULTIGRID_VERTICES`] vertices,
-    /// [`Multigrid`](Self::Multigrid) from there.
+    /// [`Multigrid`](Self::Multigrid) from there (chosen per connected piece, by the
+    /// piece's vertices: a scan's crumbs are factored).
     #[default]
     Auto,
     /// faer's sparse Cholesky: exact, but its fill and time grow faster than the mesh.
@@ -59,7 +60,8 @@ pub struct LineField {
     /// mesh's own with pair cancellation
     /// ([`LineFieldOptions::cancel_distance`](crate::field::design::LineFieldOptions::cancel_distance)).
     pub directions: Vec<DVec3>,
-    /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1`; for a
+    /// `|z_v|` per vertex: for the smoothest field with `sum_v m_v |z_v|^2 = 1` over
+    /// each connected piece (each is normalised on its own); for a
     /// guided field about 1 where it follows confident guidance or a constraint, smaller
     /// where guidance is contradictory (near singularities).
     pub magnitudes: Vec<f64>,
@@ -67,10 +69,12 @@ pub struct LineField {
     /// the frames its directions are given in.
     pub energy: f64,
     /// The Rayleigh quotient `E(z) / (z^H M z)` (0 for a zero field); for the smoothest
-    /// field, the estimate of the smallest eigenvalue.
+    /// field of a mesh of one piece, the estimate of the smallest eigenvalue (of
+    /// several pieces, the quotient of the whole field, between the pieces' smallest
+    /// eigenvalues).
     pub rayleigh: f64,
     /// Solves (direct) or V-cycles (multigrid, one per Davidson step) done for the
-    /// smoothest field (0 for a guided field).
+    /// smoothest field, summed over the connected pieces (0 for a guided field).
     pub iterations: usize,
 }
 

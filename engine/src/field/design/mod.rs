@@ -30,10 +30,25 @@
 //! would break positivity; the floor also keeps every edge coupled). The mass `M` is
 //! lumped: a third of the adjacent face areas per vertex.
 //!
+//! # One solve per connected piece
+//! Each connected piece of the mesh ([`TriMesh::face_components`](crate::mesh::TriMesh::face_components):
+//! faces joined through manifold edges) is solved on its own, as a mesh of its own
+//! (`design/pieces.rs`): its own smoothest, guided or constrained field, its own
+//! `lambda_1`, and the options measured on the mesh (the weight per area, the
+//! smoothing length, the cancellation distance) measured on the piece. The field on
+//! a piece does not depend on the other pieces. One eigenproblem over several pieces
+//! would not give each its smoothest field: its smallest eigenvalue is nearly
+//! repeated (exactly zero on every flat or developable piece), so the eigenvector
+//! gathers on the piece of smallest eigenvalue and leaves the others near zero, their
+//! directions decided by round-off. A vertex that several pieces share (on a
+//! non-manifold edge or a pinched vertex) takes the value of the piece with the most
+//! faces around it. The pieces are solved on every thread; each solve is
+//! deterministic and the results are gathered in piece order.
+//!
 //! # Solves
 //! The complex Hermitian `n x n` systems are factored by faer's sparse Cholesky over
 //! `c64` (sequential), with one symbolic factorization (AMD ordering) of the mesh's
-//! pattern shared by every solve on the whole mesh (see `design/connection.rs`). From
+//! pattern shared by every solve on the piece (see `design/connection.rs`). From
 //! [`MULTIGRID_VERTICES`] vertices ([`LinearSolver::Auto`]) they are solved instead by
 //! conjugate gradients preconditioned with algebraic multigrid ([`crate::linalg`]) to
 //! [`SOLVE_TOLERANCE`], since a factor's fill grows faster than the mesh; the
@@ -98,8 +113,9 @@
 
 //!
 //! # Parts
-//! - `solve.rs`: the solvers' entry points and options ([`smoothest_line_field`],
-//!   [`guided_line_field`], [`constrained_line_field`], [`LineFieldOptions`]).
+//! - `pieces.rs`: the solvers' entry points ([`smoothest_line_field`],
+//!   [`guided_line_field`], [`constrained_line_field`]): one solve per connected piece.
+//! - `solve.rs`: the solvers on one piece and their options ([`LineFieldOptions`]).
 //! - `line_field.rs`: the result [`LineField`], [`LinearSolver`] and the solver
 //!   constants, below the solver and its system.
 //! - `connection.rs`: the connection Laplacian, its factors and multigrid solves, on
@@ -122,6 +138,7 @@ mod frames;
 mod index;
 mod line_field;
 mod pattern;
+mod pieces;
 mod solve;
 mod vertex_graph;
 
@@ -130,9 +147,7 @@ pub use eigenpair::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
 pub use line_field::{
     LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
 };
-pub use solve::{
-    LineConstraint, LineFieldOptions, constrained_line_field, guided_line_field, line_field_energy,
-    smoothest_line_field,
-};
+pub use pieces::{constrained_line_field, guided_line_field, smoothest_line_field};
+pub use solve::{LineConstraint, LineFieldOptions, line_field_energy};
 
 pub use crate::field::error::LineFieldError;

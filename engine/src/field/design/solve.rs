@@ -1,6 +1,6 @@
-//! The line-field solvers' entry points ([`smoothest_line_field`], [`guided_line_field`],
-//! [`constrained_line_field`], [`line_field_energy`]) and their options; the method is
-//! in the [folder's docs](super).
+//! The line-field solvers on one connected piece (the smoothest field, the guided and
+//! constrained field; `pieces.rs` calls them once per piece), [`line_field_energy`]
+//! and the solvers' options; the method is in the [folder's docs](super).
 //!
 //! Input: a mesh, options, guidance and constraints. Output: a [`LineField`]. Cost:
 //! see the [folder's docs](super).
@@ -24,8 +24,8 @@ use crate::mesh::TriMesh;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct LineFieldOptions {
-    /// Weight of the guidance against smoothness ([`guided_line_field`] only). It is
-    /// divided by the mesh area, `w = weight / area`, so that it is dimensionless (the
+    /// Weight of the guidance against smoothness ([`guided_line_field`](crate::field::design::guided_line_field) only). It is
+    /// divided by the piece's area, `w = weight / area`, so that it is dimensionless (the
     /// Dirichlet energy of a field is scale-invariant on a surface, the guidance term
     /// `w |z - q|_M^2` scales with area). Range `[0, inf)`, 0 meaning the smoothest field;
     /// default 10.
@@ -38,7 +38,8 @@ pub struct LineFieldOptions {
     /// rotation and local detail from the guidance. Range `[0, 0.95]`; default 0.
     pub smoothness: f64,
     /// Length over which the surface's normals are smoothed before they define the
-    /// connection, as a fraction of the mesh's area radius `R = sqrt(area / 4 pi)`:
+    /// connection, as a fraction of the area radius `R = sqrt(area / 4 pi)` of the connected
+    /// piece (each piece is solved on its own):
     /// bumps smaller than about `smoothing R` then create no singularities (one
     /// implicit heat step of the normals, see the [module docs](crate::field::design)). Range
     /// `[0, inf)`, 0 using the mesh's own normals; default 0.
@@ -124,7 +125,8 @@ impl LineFieldOptions {
     }
 }
 
-/// A hard constraint of [`constrained_line_field`]: the field's line at `vertex` is
+/// A hard constraint of
+/// [`constrained_line_field`](crate::field::design::constrained_line_field): the field's line at `vertex` is
 /// exactly `direction`'s (projected into the vertex's tangent plane; its sign does not
 /// matter).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -135,14 +137,10 @@ pub struct LineConstraint {
     pub direction: DVec3,
 }
 
-/// The smoothest line field of `mesh`: the eigenvector of the smallest eigenvalue of
-/// `A z = lambda M z` (see the [module docs](crate::field::design)): Rayleigh-Ritz on a Krylov space
-/// with a direct solver, Rayleigh-Ritz on multigrid-preconditioned residuals (the
-/// Davidson method) with multigrid.
-/// `options.weight` is not used.
-///
-/// Errors: invalid options, an empty mesh, a failed factorization.
-pub fn smoothest_line_field(
+/// The smoothest line field of `mesh`, one connected piece (see
+/// [`smoothest_line_field`](crate::field::design::smoothest_line_field), which calls
+/// this once per piece).
+pub(crate) fn smoothest_piece(
     mesh: &TriMesh,
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
@@ -156,7 +154,7 @@ pub fn smoothest_line_field(
     smoothest_on(mesh, &system, options)
 }
 
-/// [`smoothest_line_field`] with the connection already built.
+/// [`smoothest_piece`] with the connection already built.
 fn smoothest_on(
     mesh: &TriMesh,
     system: &Connection,
@@ -207,7 +205,8 @@ fn output(
 
 /// The smoothness energy `E(z) = sum_edges w_ab |z_b - r_ab z_a|^2` of the unit line
 /// field along `directions` (one tangent direction per vertex, sign ignored), under the
-/// mesh's own connection (no smoothing): the measure [`smoothest_line_field`]
+/// mesh's own connection (no smoothing): the measure
+/// [`smoothest_line_field`](crate::field::design::smoothest_line_field)
 /// minimises, so fields from different sources can be compared. A direction with no
 /// tangent part counts as zero there.
 ///
@@ -231,66 +230,14 @@ pub fn line_field_energy(mesh: &TriMesh, directions: &[DVec3]) -> Result<f64, Li
     Ok(system.energy(&z))
 }
 
-/// The line field that balances smoothness against `guidance`: the minimiser of
-/// `E(z) + w sum_v m_v c_v |z_v - u_v|^2`, `w = options.weight / area` (see the
-/// [module docs](crate::field::design)). Each guidance vector is projected into its vertex's tangent
-/// plane; its direction gives the line `u_v` (its sign does not matter) and its length
-/// the confidence `c_v` (a zero vector: no guidance there, the field follows its
-/// neighbours). A weight of 0, or no guidance anywhere, gives
-/// [`smoothest_line_field`].
-///
-/// Errors: invalid options, an empty mesh, a guidance of the wrong length or with a
-/// non-finite vector, a failed factorization.
-pub fn guided_line_field(
-    mesh: &TriMesh,
-    guidance: &[DVec3],
-    options: &LineFieldOptions,
-) -> Result<LineField, LineFieldError> {
-    constrained_line_field(mesh, guidance, &[], options)
-}
-
-/// [`guided_line_field`] with hard constraints: the field's line at each constrained
-/// vertex is exactly the constraint's, and the rest minimises the same energy. With
-/// constraints and weight 0 (or no guidance) the field is the smoothest one through
-/// the constraints. `guidance` may be empty, meaning no soft guidance at all.
-///
-/// ```
-/// use glam::DVec3;
-/// use strata_engine::field::{LineConstraint, LineFieldOptions, constrained_line_field};
-/// use strata_engine::mesh::shapes;
-/// let mesh = shapes::plane(1.0, 8)?;
-/// let pin = LineConstraint { vertex: 0, direction: DVec3::new(1.0, 1.0, 0.0) };
-/// let field = constrained_line_field(&mesh, &[], &[pin], &LineFieldOptions::default())?;
-/// // One constraint on a flat square: the smoothest field through it is constant.
-/// let diagonal = DVec3::new(1.0, 1.0, 0.0).normalize();
-/// assert!(field.directions.iter().all(|d| d.dot(diagonal).abs() > 1.0 - 1e-9));
-/// # Ok::<(), Box<dyn std::error::Error>>(())
-/// ```
-///
-/// Errors: those of [`guided_line_field`], and a constraint naming a missing vertex,
-/// with a direction normal to the surface (or not finite), or fixing a vertex that
-/// another constraint fixes.
-pub fn constrained_line_field(
-    mesh: &TriMesh,
-    guidance: &[DVec3],
-    constraints: &[LineConstraint],
-    options: &LineFieldOptions,
-) -> Result<LineField, LineFieldError> {
-    let guided = !guidance.is_empty();
-    constrained_line_field_with(
-        mesh,
-        (guided, || Cow::Borrowed(guidance)),
-        constraints,
-        options,
-    )
-}
-
-/// [`constrained_line_field`] with the guidance made by `guidance.1` on one thread
+/// The guided and constrained line field of `mesh`, one connected piece (see
+/// [`constrained_line_field`](crate::field::design::constrained_line_field), which
+/// calls this once per piece), with the guidance made by `guidance.1` on one thread
 /// while the connection is built (and `lambda_1` estimated) on another; `guidance.0`
 /// says whether it may be non-empty (without it and without constraints the field is
 /// the smoothest, and no `lambda_1` is estimated for a shift). The result does not
 /// depend on the thread count.
-pub(crate) fn constrained_line_field_with<'g>(
+pub(crate) fn constrained_piece<'g>(
     mesh: &TriMesh,
     (guided, guidance): (bool, impl FnOnce() -> Cow<'g, [DVec3]> + Send),
     constraints: &[LineConstraint],
@@ -488,7 +435,11 @@ struct Unknowns<'a> {
 /// hierarchy `reuse` when given and it converges. An estimate of `lambda_1` slightly
 /// too high could leave the shifted system indefinite (a failed factorization, or
 /// conjugate gradients meeting negative curvature): then the shift is halved (three
-/// times at most, then none).
+/// times at most, then none). Last, where even that fails, the tiny shift
+/// `sigma M` that keeps an unguided piece definite is added everywhere: a piece whose
+/// guidance is almost zero (a nearly flat crumb of a scan, whose curvature guidance is
+/// round-off) is nearly singular without it, which a multigrid hierarchy's dense
+/// coarsest factor can find not positive definite.
 fn solve_shifted(
     mesh: &TriMesh,
     system: &Connection,
@@ -501,20 +452,17 @@ fn solve_shifted(
     let shift = system.shift();
     let mut attempt = 0;
     loop {
-        let shifted: Vec<f64> = if attempt < 4 {
-            let back = pull * (1.0 - 0.5f64.powi(attempt));
-            extra
-                .iter()
-                .zip(&system.mass)
-                .map(|(d, m)| d + back * m)
-                .collect()
-        } else {
-            extra
-                .iter()
-                .zip(&system.mass)
-                .map(|(d, m)| d + pull * m)
-                .collect()
+        // The mass multiple added to `extra` at this attempt.
+        let back = match attempt {
+            0..=3 => pull * (1.0 - 0.5f64.powi(attempt)),
+            4 => pull,
+            _ => pull + shift,
         };
+        let shifted: Vec<f64> = extra
+            .iter()
+            .zip(&system.mass)
+            .map(|(d, m)| d + back * m)
+            .collect();
         if let Some(amg) = reuse.take()
             && let Some(z) = system.solve_with_hierarchy(&amg, shift, &shifted, &rhs)
         {
@@ -526,7 +474,8 @@ fn solve_shifted(
             .and_then(|mut factor| factor.solve(&mut z));
         match solved {
             Ok(()) => return Ok(z),
-            Err(e) if pull == 0.0 || attempt >= 4 => return Err(e),
+            Err(e) if attempt >= 5 => return Err(e),
+            Err(_) if pull == 0.0 => attempt = 5,
             Err(_) => attempt += 1,
         }
     }

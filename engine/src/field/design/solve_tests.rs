@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use super::*;
 use crate::field::design::eigenpair::start_value;
+use crate::field::design::{constrained_line_field, guided_line_field, smoothest_line_field};
 use crate::field::{TensorField, tangent_frame};
 use crate::mesh::shapes;
 use crate::segment::detect_singularities;
@@ -569,4 +570,22 @@ fn the_reuse_bound_brackets_the_rayleigh_ratio() {
     // A pull of lambda + shift or more may make K indefinite: no bound.
     let indefinite = [shift - 2.0, shift * 2.0, shift * 0.5];
     assert!(reuse_condition(&indefinite, &mass, shift, lambda).is_infinite());
+}
+
+#[test]
+fn a_piece_whose_guidance_is_almost_zero_still_solves_with_either_solver() {
+    // Guidance of length 1e-150 pins the flat square (it is not zero) but adds
+    // almost nothing to its singular connection Laplacian: without the final
+    // fallback shift the system is singular to round-off.
+    let mesh = shapes::plane(1.0, 40).expect("plane");
+    let (e1, e2) = tangent_frame(mesh.vertex_normals()[0]);
+    let want = (e1 * 0.8 + e2 * 0.6).normalize();
+    let guidance = vec![want * 1e-150; mesh.vertex_count()];
+    for solver in [LinearSolver::Direct, LinearSolver::Multigrid] {
+        let options = with_solver(solver, LineFieldOptions::default());
+        let field = guided_line_field(&mesh, &guidance, &options)
+            .unwrap_or_else(|e| panic!("{solver:?}: {e}"));
+        let spread = largest_spread(&field.directions, want);
+        assert!(spread < 1e-3, "{solver:?}: {spread} rad off the guidance");
+    }
 }
