@@ -476,3 +476,90 @@ fn sample_leaves_a_file_beside_its_input_unless_told_not_to() {
     strata_in(dir.path(), &["sample", "{dir}/q.obj", "--no-out"]).expect("no output");
     assert!(!dir.path().join("q.samples.ply").exists());
 }
+
+/// Every output-path error, for every command that writes a file, as root too (CI runs
+/// as root, who may write almost anywhere): `/proc/self` is a folder that no one may
+/// create files in, and a path under a regular file has no folder to go to.
+#[test]
+fn every_output_path_error_names_the_path_and_its_reason() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let d = dir.path();
+    std::fs::write(
+        d.join("scene.ron"),
+        crate::hostile::scene(crate::hostile::SPHERE, ""),
+    )
+    .expect("write");
+    std::fs::create_dir(d.join("taken.ply")).expect("mkdir");
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["sample", "{dir}/scene.ron", "-o", "/proc/self/s.ply"],
+            "/proc/self/s.ply: --out: the folder /proc/self is not writable",
+        ),
+        (
+            &["field", "{dir}/scene.ron", "-o", "/proc/self/f.ply"],
+            "/proc/self/f.ply: --out (a PLY mesh): the folder /proc/self is not writable",
+        ),
+        (
+            &["field", "{dir}/scene.ron", "--report", "/proc/self/f.json"],
+            "/proc/self/f.json: --report (JSON): the folder /proc/self is not writable",
+        ),
+        (
+            &["segment", "{dir}/scene.ron", "-o", "/proc/self/g.ply"],
+            "/proc/self/g.ply: --out (a PLY mesh): the folder /proc/self is not writable",
+        ),
+        (
+            &["segment", "{dir}/scene.ron", "--atlas", "/proc/self/g.svg"],
+            "/proc/self/g.svg: --atlas (SVG): the folder /proc/self is not writable",
+        ),
+        (
+            &["bench", "{dir}/scene.ron", "--json", "/proc/self/b.json"],
+            "/proc/self/b.json: --json: the folder /proc/self is not writable",
+        ),
+        (
+            &["watch", "{dir}/scene.ron", "-o", "/proc/self/w.ply"],
+            "/proc/self/w.ply: --out (binary PLY samples): the folder /proc/self is not writable",
+        ),
+        (
+            &["render", "{dir}/scene.ron", "-o", "/proc/self/r.png"],
+            "/proc/self/r.png: --out (PNG): the folder /proc/self is not writable",
+        ),
+        (
+            &["analyze", "{dir}/scene.ron", "-o", "/proc/self/an"],
+            "--out: creating the folder /proc/self/an",
+        ),
+        (
+            &["sample", "{dir}/scene.ron", "-o", "{dir}/scene.ron/s.ply"],
+            "s.ply: --out: {dir}/scene.ron is a file, not a folder",
+        ),
+        (
+            &["sample", "{dir}/scene.ron", "-o", "{dir}/taken.ply"],
+            "taken.ply: --out names a folder; give a file name",
+        ),
+        (
+            &["sample", "{dir}/scene.ron", "-o", "{dir}/s.txt"],
+            "s.txt: output must end in .ply or .csv",
+        ),
+        (
+            &["sample", "{dir}/scene.ron", "-o", "{dir}/no/s.ply"],
+            "s.ply: --out: the folder {dir}/no does not exist",
+        ),
+    ];
+    let folder = d.to_str().expect("utf-8 temp path");
+    for (args, expected) in cases {
+        let e = strata_in(d, args).expect_err("refused");
+        let line = one_line(&e);
+        let expected = expected.replace("{dir}", folder);
+        assert!(
+            line.contains(&expected),
+            "{args:?}: {line:?} lacks {expected:?}"
+        );
+        assert!(!line.contains('\n'), "{line}");
+    }
+    // Nothing was written into the scene's folder.
+    let mut names: Vec<_> = std::fs::read_dir(d)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["scene.ron", "taken.ply"]);
+}

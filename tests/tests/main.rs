@@ -7,6 +7,7 @@ mod ecs;
 mod ecs_jobs;
 mod field;
 mod flags;
+mod flags_render;
 mod fuzz;
 mod gpu;
 mod hostile;

@@ -14,6 +14,12 @@
 //! (`sync_all`) before the temporary file is persisted (renamed) over the target, so
 //! that a crash right after it cannot leave an empty or partial target. The temporary
 //! file is removed on every error, and on a panic in the closure.
+//!
+//! Two targets are not replaced: one that exists and is not a regular file (a device
+//! such as `/dev/stdout` or `/dev/null`, a named pipe) is opened and written in place,
+//! since a rename would put a file where the device or pipe was (and needs a writable
+//! folder, which `/dev` is not for most users); and a symbolic link to a file has the
+//! file it points to replaced, so that the link stays a link.
 
 use std::fs::File;
 use std::io::{self, BufWriter};
@@ -32,7 +38,9 @@ const NAME_CHARS: usize = 64;
 /// characters), so concurrent writes never share one. On any error (of `write`, of
 /// creating, flushing, syncing or renaming) or a panic in `write`, the temporary file
 /// is removed and `path` keeps its old content (or stays absent); the error is
-/// returned, file-system errors as `E::from(io::Error)`.
+/// returned, file-system errors as `E::from(io::Error)`. A target that exists and is
+/// not a regular file or a folder (a device, a named pipe) is written in place instead,
+/// and a link to a file replaces the file it points to (see the module docs).
 ///
 /// ```
 /// use std::io::Write;
@@ -54,6 +62,14 @@ pub fn write_atomically<T, E: From<io::Error>>(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<T, E>,
 ) -> Result<T, E> {
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        return write_in_place(path, write);
+    }
+    let linked = std::fs::symlink_metadata(path)
+        .is_ok_and(|m| m.file_type().is_symlink())
+        .then(|| std::fs::canonicalize(path).ok())
+        .flatten();
+    let path = linked.as_deref().unwrap_or(path);
     // The path is removed when dropped: on every return before the rename, and on a
     // panic in `write`.
     let (file, temporary) = create_temporary(path)?.into_parts();
@@ -63,6 +79,19 @@ pub fn write_atomically<T, E: From<io::Error>>(
     file.sync_all()?;
     drop(file);
     persist(temporary, path)?;
+    Ok(value)
+}
+
+/// Writes a device or named pipe `path` in place: opened for writing (not created),
+/// buffered and flushed; no sync, which devices and pipes need not support.
+fn write_in_place<T, E: From<io::Error>>(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> Result<T, E>,
+) -> Result<T, E> {
+    let file = std::fs::OpenOptions::new().write(true).open(path)?;
+    let mut w = BufWriter::new(file);
+    let value = write(&mut w)?;
+    w.into_inner().map_err(io::IntoInnerError::into_error)?;
     Ok(value)
 }
 
@@ -179,6 +208,53 @@ mod tests {
         std::fs::write(folder.join("inside"), "x").expect("write");
         assert!(write_atomically(&folder, |w| w.write_all(b"x")).is_err());
         assert_eq!(names(dir.path()), ["folder"]);
+    }
+
+    #[test]
+    fn a_named_pipe_is_written_in_place() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .expect("mkfifo");
+        assert!(made.success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(&fifo).expect("read the pipe"))
+        };
+        write_atomically(&fifo, |w| w.write_all(b"through the pipe")).expect("write");
+        assert_eq!(reader.join().expect("reader"), b"through the pipe");
+        // Still a pipe, and nothing else appeared beside it.
+        use std::os::unix::fs::FileTypeExt;
+        assert!(
+            std::fs::metadata(&fifo)
+                .expect("meta")
+                .file_type()
+                .is_fifo()
+        );
+        assert_eq!(names(dir.path()), ["pipe"]);
+        // A device: /dev/null takes the bytes and stays a device.
+        write_atomically(Path::new("/dev/null"), |w| w.write_all(b"gone")).expect("null");
+        assert!(!std::fs::metadata("/dev/null").expect("meta").is_file());
+    }
+
+    #[test]
+    fn a_link_to_a_file_stays_a_link() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let target = dir.path().join("target.txt");
+        let link = dir.path().join("link.txt");
+        std::fs::write(&target, "old").expect("write");
+        std::os::unix::fs::symlink(&target, &link).expect("symlink");
+        write_atomically(&link, |w| w.write_all(b"new")).expect("write");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .expect("meta")
+                .file_type()
+                .is_symlink()
+        );
+        assert_eq!(std::fs::read_to_string(&target).expect("read"), "new");
+        assert_eq!(names(dir.path()), ["link.txt", "target.txt"]);
     }
 
     #[test]

@@ -63,7 +63,7 @@ pub(super) fn run(args: &AnalyzeArgs) -> anyhow::Result<()> {
         alignment: args.alignment,
     };
     let summary = write_analysis(&input, &args.input, &args.out, &options)?;
-    println!(
+    say!(
         "analysed {} x {} samples: wrote JSON{} to {}",
         summary.realizations,
         summary.samples,

@@ -126,13 +126,13 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         bytes,
         bytes_per_face: bytes as f64 / scene.mesh.face_count().max(1) as f64,
     };
-    println!("| stage | time (ms) |");
-    println!("| --- | --- |");
+    say!("| stage | time (ms) |");
+    say!("| --- | --- |");
     for (name, s) in &report.stages {
-        println!("| {name} | {:.1} |", s * 1e3);
+        say!("| {name} | {:.1} |", s * 1e3);
     }
-    println!("| preprocessing total | {:.1} |", report.preprocess_s * 1e3);
-    println!(
+    say!("| preprocessing total | {:.1} |", report.preprocess_s * 1e3);
+    say!(
         "{} faces, {} segments; {count} {}: median {:.3} ms over {} runs ({:.1} M samples/s); preprocessed data {:.1} MiB ({:.0} bytes per face)",
         report.faces,
         report.segments,
@@ -154,7 +154,7 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
             seed,
             args.repeat,
         )?;
-        println!("{check}");
+        say!("{check}");
         if !check.passes() {
             bail!("{name}: the GPU's samples differ from the CPU's past the tolerances");
         }
@@ -168,7 +168,7 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
         }
         let text = serde_json::to_string_pretty(&value)?;
         write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(())
 }

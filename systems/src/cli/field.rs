@@ -59,16 +59,16 @@ pub(super) fn run(args: &FieldArgs) -> anyhow::Result<()> {
         config.param.isotropy_threshold,
         field_s,
     );
-    println!("{}", report.summary());
+    say!("{}", report.summary());
     if let Some(path) = &args.out {
         write_field_ply(path, &mesh, &field, &singularities)
             .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     if let Some(path) = &args.report {
         let text = serde_json::to_string_pretty(&report)?;
         write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(())
 }

@@ -7,6 +7,19 @@
 //! the library: [`crate::scene`], [`crate::report`], [`crate::hot_reload`],
 //! [`crate::gpu`] and [`crate::viewer`].
 
+/// Prints a status line (what was written, timings): on stdout, or on stderr when an
+/// output of this run is the process's standard output (`--out /dev/stdout`), so that
+/// the data written there stays whole.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        if $crate::cli::status_on_stderr() {
+            eprintln!($($arg)*);
+        } else {
+            println!($($arg)*);
+        }
+    };
+}
+
 mod analyze;
 mod bench;
 mod field;
@@ -36,7 +49,7 @@ pub use render::RenderArgs;
 pub use sample::SampleArgs;
 pub use segment::SegmentArgs;
 pub use style::StyleArgs;
-pub use view::ViewArgs;
+pub use view::{ViewArgs, view_options};
 pub use watch::WatchArgs;
 
 /// strata: anisotropic, density-controlled stratified sampling of surfaces.
@@ -148,13 +161,40 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
+/// Set when an output of this run is the process's standard output (see `say!`).
+static STATUS_ON_STDERR: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether status lines go to stderr: an output of this run is the process's standard
+/// output.
+pub fn status_on_stderr() -> bool {
+    STATUS_ON_STDERR.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Whether `path` is the file, device or pipe that this process's standard output is
+/// (`/dev/stdout`, `/proc/self/fd/1`, or the pipe's own name).
+fn is_own_stdout(path: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    let (Ok(meta), Ok(out)) = (
+        std::fs::metadata(path),
+        rustix::fs::fstat(std::io::stdout()),
+    ) else {
+        return false;
+    };
+    meta.dev() == out.st_dev && meta.ino() == out.st_ino
+}
+
 /// Writes `bytes` to `path` atomically ([`strata_engine::io::write_atomically`]).
 fn write_file(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     strata_engine::io::write_atomically(path, |w| std::io::Write::write_all(w, bytes))
 }
 
-/// The samples format `path` asks for: `.ply` or `.csv` (any case).
+/// The samples format `path` asks for: `.ply` or `.csv` (any case); binary PLY for a
+/// device, pipe or standard output (`/dev/stdout`) whose name has neither.
 fn output_kind(path: &Path) -> anyhow::Result<SampleFormat> {
+    let ext = path.extension().and_then(|e| e.to_str());
+    if is_stream(path) && !ext.is_some_and(|e| matches!(e, "ply" | "csv")) {
+        return Ok(SampleFormat::Ply);
+    }
     match path
         .extension()
         .and_then(|e| e.to_str())
@@ -167,11 +207,25 @@ fn output_kind(path: &Path) -> anyhow::Result<SampleFormat> {
     }
 }
 
+/// Whether `path` exists and is neither a regular file nor a folder (a device such as
+/// `/dev/stdout` on a pipe or terminal, a named pipe), or is this process's standard
+/// output (`/dev/stdout` redirected to a file): written whatever its name.
+fn is_stream(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) || is_own_stdout(path)
+}
+
 /// Checks an output file before any work: `flag` names the option in messages; its
 /// name must end in one of `extensions` (any case; none to accept any), it must not be
 /// a folder, and its folder must exist and be writable. A device or pipe that exists
-/// (`/dev/null`) is written as it is.
+/// (`/dev/null`, `/dev/stdout`, a named pipe) is written as it is, whatever its name;
+/// when it is this process's standard output, status lines go to stderr.
 fn check_output(path: &Path, flag: &str, extensions: &[&str]) -> anyhow::Result<()> {
+    if is_stream(path) {
+        if is_own_stdout(path) {
+            STATUS_ON_STDERR.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        return Ok(());
+    }
     let shown = path.display();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     if !extensions.is_empty() && !extensions.iter().any(|e| e.eq_ignore_ascii_case(ext)) {
@@ -184,9 +238,6 @@ fn check_output(path: &Path, flag: &str, extensions: &[&str]) -> anyhow::Result<
     if path.is_dir() {
         bail!("{shown}: {flag} names a folder; give a file name");
     }
-    if path.exists() && !path.is_file() {
-        return Ok(());
-    }
     check_folder(path, flag)
 }
 
@@ -196,6 +247,13 @@ fn check_folder(path: &Path, flag: &str) -> anyhow::Result<()> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
+    if folder.exists() && !folder.is_dir() {
+        bail!(
+            "{}: {flag}: {} is a file, not a folder",
+            path.display(),
+            folder.display()
+        );
+    }
     if !folder.is_dir() {
         bail!(
             "{}: {flag}: the folder {} does not exist",

@@ -119,7 +119,7 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     image
         .write_png(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
-    println!(
+    say!(
         "rendered {count} samples (seed {seed}) at {}x{} on {}; wrote {}",
         args.width,
         args.height,
@@ -163,7 +163,7 @@ fn run_npr(
         NprKind::Stipple => "stipple".to_string(),
         NprKind::Strokes(b) => format!("{} strokes", b.name()),
     };
-    println!(
+    say!(
         "rendered {} samples as {what} (seed {seed}) at {}x{} on {}; wrote {}",
         samples.len(),
         args.width,
@@ -245,7 +245,7 @@ fn run_lod(
             .write_png(&path)
             .with_context(|| format!("writing {}", path.display()))?;
         let kept = kept_note(shown_before.as_deref(), &shown, &step.change);
-        println!(
+        say!(
             "frame {frame}: {visible} of {} pool samples shown (base count {:.0}), {:.1} KB sent, pool update {:.2} ms{kept}; wrote {}",
             step.entries,
             style.lod.map_or(0.0, |l| l.base),
@@ -257,7 +257,7 @@ fn run_lod(
         camera.orbit(args.orbit.to_radians(), 0.0);
         camera.distance *= args.dolly;
     }
-    println!(
+    say!(
         "level of detail: base {base} samples (seed {seed}), multiplier up to {} at {}x{} on {}",
         args.lod.lod_max,
         args.width,

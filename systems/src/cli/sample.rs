@@ -118,10 +118,10 @@ fn run_here(args: &SampleArgs) -> anyhow::Result<()> {
     draw.bar.finish_and_clear();
     print_timings(&scene, args.order, count, seed, draw.took);
     if let Some(path) = &out_path {
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
         if args.out.is_none() {
             let image = path.with_extension("").with_extension("png");
-            println!(
+            say!(
                 "see them: strata render {} -o {}",
                 args.config.display(),
                 image.display()
@@ -153,9 +153,11 @@ fn check_request(
     let count = args.count.unwrap_or(config.sampling.count);
     let config_name = args.config.display().to_string();
     super::check_budget(&config_name, crate::budget::check_count(count), None)?;
-    // Drawn a block at a time, so memory does not limit the count; a file's size does.
+    // Drawn a block at a time, so memory does not limit the count; a file's size does
+    // (a device, pipe or standard output takes what its reader does).
     if let Some((path, format)) = out
         && !args.ignore_space_check
+        && !super::is_stream(path)
     {
         let per_sample = match format {
             SampleFormat::Ply => crate::budget::SAMPLE_BYTES,
@@ -181,7 +183,7 @@ fn print_timings(scene: &Scene, order: Order, count: u64, seed: u64, sample_time
         .iter()
         .map(|s| s.curve.cell_count())
         .sum();
-    println!(
+    say!(
         "sampled {count} points (seed {seed}, {} order) on {} faces, {cells} cells: sampling {:.3} ms, preprocessing {:.3} ms ({})",
         match order {
             Order::Stratified => "stratified",
@@ -198,7 +200,7 @@ fn print_timings(scene: &Scene, order: Order, count: u64, seed: u64, sample_time
             .join(", ")
     );
     if let Some(s) = &scene.surface {
-        println!(
+        say!(
             "surface: {} singularities; {} segments after segmentation, {} after {} splits of invalid ones and {} merges of valid neighbours ({} with the isotropic fallback)",
             s.singularities,
             s.segments_before_split,

@@ -110,18 +110,18 @@ pub(super) fn run(args: &SegmentArgs) -> anyhow::Result<()> {
     if let Some(path) = &args.atlas {
         crate::report::atlas::write_atlas_svg(path, &mesh, &field, &params)
             .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     if let Some(path) = &args.out {
         let colors = segment_colors(&mesh, &seg, &params);
         strata_engine::io::write_mesh_ply(path, &mesh, Some(&colors))
             .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     if let Some(path) = &args.report {
         let text = serde_json::to_string_pretty(&report)?;
         write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(())
 }
@@ -147,12 +147,12 @@ fn check_out_is_ply(args: &SegmentArgs) -> anyhow::Result<()> {
 /// vertices took a smooth direction); nothing for a fully anisotropic field.
 fn print_segmentation_kind(kind: SegmentationKind, options: &SurfaceOptions, vertices: usize) {
     match kind {
-        SegmentationKind::IsotropicCharts => println!(
+        SegmentationKind::IsotropicCharts => say!(
             "the field is isotropic everywhere (anisotropy under {}): normal-cone charts of half-angle {:.1} degrees",
             options.isotropy_threshold,
             options.chart_angle.to_degrees()
         ),
-        SegmentationKind::FieldAligned { smoothed_vertices } if smoothed_vertices > 0 => println!(
+        SegmentationKind::FieldAligned { smoothed_vertices } if smoothed_vertices > 0 => say!(
             "{smoothed_vertices} of {vertices} vertices are isotropic (anisotropy under {}): they take a smooth direction",
             options.isotropy_threshold
         ),
@@ -178,7 +178,7 @@ fn print_summary(name: &str, report: &SegmentReport, merges: usize, times: Times
         .count();
     let minus = report.singularities.len() - plus;
     let index_sum: f64 = report.singularities.iter().map(|s| s.index).sum();
-    println!(
+    say!(
         "{} faces (Euler characteristic {}): {} segments, {} singularities ({plus} of +1/2, {minus} of -1/2, index sum {}), {} cut edges; segmentation {:.3} s (loading {:.3} s)",
         report.faces,
         report.euler_characteristic,
@@ -195,7 +195,7 @@ fn print_summary(name: &str, report: &SegmentReport, merges: usize, times: Times
         .iter()
         .filter(|s| s.isotropic_fallback)
         .count();
-    println!(
+    say!(
         "parameterization: {} segments after {} splits and {} merges ({} isotropic charts, {} field-aligned), {valid} valid, {fallback} with the isotropic fallback; {:.3} s",
         report.segment_count,
         report.splits,

@@ -41,6 +41,18 @@ pub struct ViewArgs {
 
 /// Runs `strata view` until the window closes.
 pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
+    let options = view_options(args)?;
+    let outcome = viewer::run(&options)?;
+    if args.frames.is_some() {
+        println!("{} frames; last: {}", outcome.frames, outcome.status);
+    }
+    Ok(())
+}
+
+/// What `strata view` opens its window with: the arguments checked and the scene
+/// loaded (a mesh input's scene written to a temporary scene file, which the viewer
+/// watches). Needs no display or GPU: the flag table checks each flag here.
+pub fn view_options(args: &ViewArgs) -> anyhow::Result<ViewerOptions> {
     args.look.validate()?;
     let lod = &args.lod;
     lod.validate()?;
@@ -73,9 +85,5 @@ pub(super) fn run(args: &ViewArgs) -> anyhow::Result<()> {
         lod_max: lod.lod.then_some(lod.lod_max),
         lod_shown: lod.lod_shown.filter(|_| lod.lod),
     };
-    let outcome = viewer::run(&options)?;
-    if args.frames.is_some() {
-        println!("{} frames; last: {}", outcome.frames, outcome.status);
-    }
-    Ok(())
+    Ok(options)
 }
