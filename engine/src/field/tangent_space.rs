@@ -219,6 +219,20 @@ fn wrap_pi(x: f64) -> f64 {
     if y <= -PI { y + TAU } else { y }
 }
 
+/// The Euler characteristic of the surface with every pinched vertex split into its
+/// cones: `V - E + F` plus `n - 1` for each vertex where `n > 1` closed fans meet. On a
+/// closed mesh the line field's indices sum to this (Poincare-Hopf), since the
+/// connection counts the defect of each cone. `O(F)`.
+pub fn split_euler_characteristic(mesh: &TriMesh) -> i64 {
+    let extra: usize = (0..mesh.vertex_count() as u32)
+        .map(|v| match fans(mesh, v).1 {
+            FanKind::Pinched(n) => n - 1,
+            FanKind::Interior | FanKind::Open => 0,
+        })
+        .sum();
+    mesh.euler_characteristic() + extra as i64
+}
+
 /// How the faces around a vertex close up.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum FanKind {

@@ -258,6 +258,14 @@ fn a_pinched_vertex_counts_the_defect_of_each_cone() {
     triangles.extend(fb.iter().map(|t| t.map(|i| remap[i])));
     let mesh = TriMesh::new(positions, triangles).expect("two octahedra");
     assert_eq!(mesh.euler_characteristic(), 3);
+    assert_eq!(split_euler_characteristic(&mesh), 4, "two spheres");
+    for (name, manifold) in closed_meshes() {
+        assert_eq!(
+            split_euler_characteristic(&manifold),
+            manifold.euler_characteristic(),
+            "{name} has no pinch"
+        );
+    }
     let spaces = TangentSpaces::new(&mesh);
     let total: f64 = spaces.face_holonomy().iter().sum();
     assert!((total - TAU * 4.0).abs() < 1e-9, "total holonomy {total}");

@@ -43,7 +43,8 @@ pub struct FieldReport {
     pub faces: usize,
     /// Vertices of the mesh.
     pub vertices: usize,
-    /// Euler characteristic of the mesh.
+    /// Euler characteristic of the mesh with each pinched vertex split into its cones
+    /// (what the indices sum to on a closed mesh).
     pub euler_characteristic: i64,
     /// Boundary loops of the mesh (0: closed).
     pub boundary_loops: usize,
@@ -109,7 +110,9 @@ impl FieldReport {
         Self {
             faces: mesh.face_count(),
             vertices: mesh.vertex_count(),
-            euler_characteristic: mesh.euler_characteristic(),
+            euler_characteristic: strata_engine::field::tangent_space::split_euler_characteristic(
+                mesh,
+            ),
             boundary_loops: mesh.boundary_loops().len(),
             singularities: singularities
                 .iter()
