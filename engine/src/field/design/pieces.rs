@@ -29,7 +29,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::line_field::LineField;
-use super::solve::{LineConstraint, LineFieldOptions, constrained_piece, smoothest_piece};
+use super::solve::{
+    LineConstraint, LineFieldOptions, check_constraint_vertices, constrained_piece, smoothest_piece,
+};
 use crate::field::LineFieldError;
 use crate::mesh::{NONE, TriMesh};
 
@@ -186,26 +188,7 @@ fn check_whole(
     if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
         return Err(LineFieldError::NonFiniteGuidance { vertex });
     }
-    let mut owner = vec![usize::MAX; n];
-    for (index, c) in constraints.iter().enumerate() {
-        let v = c.vertex as usize;
-        if v >= n {
-            return Err(LineFieldError::ConstraintVertex {
-                index,
-                vertex: c.vertex,
-                vertices: n,
-            });
-        }
-        if owner[v] != usize::MAX {
-            return Err(LineFieldError::DuplicateConstraint {
-                first: owner[v],
-                second: index,
-                vertex: c.vertex,
-            });
-        }
-        owner[v] = index;
-    }
-    Ok(())
+    check_constraint_vertices(n, constraints)
 }
 
 /// A connected piece of a mesh as a mesh of its own.

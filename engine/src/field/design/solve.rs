@@ -529,8 +529,30 @@ fn fixed_values(
     system: &Connection,
     constraints: &[LineConstraint],
 ) -> Result<Vec<Option<c64>>, LineFieldError> {
-    let n = mesh.vertex_count();
-    let mut fixed = vec![None; n];
+    check_constraint_vertices(mesh.vertex_count(), constraints)?;
+    let mut fixed = vec![None; mesh.vertex_count()];
+    for (index, c) in constraints.iter().enumerate() {
+        let v = c.vertex as usize;
+        let nv = mesh.vertex_normals()[v];
+        let d = c.direction;
+        let tangent = d - nv * d.dot(nv);
+        let usable = d.is_finite() && tangent.length_squared() > 1e-12 * d.length_squared();
+        let Some((_, z)) = system.frames.doubled(v, tangent).filter(|_| usable) else {
+            return Err(LineFieldError::ConstraintDirection {
+                index,
+                vertex: c.vertex,
+            });
+        };
+        fixed[v] = Some(z);
+    }
+    Ok(fixed)
+}
+
+/// Every constraint names one of the `n` vertices, and no vertex twice.
+pub(super) fn check_constraint_vertices(
+    n: usize,
+    constraints: &[LineConstraint],
+) -> Result<(), LineFieldError> {
     let mut owner = vec![usize::MAX; n];
     for (index, c) in constraints.iter().enumerate() {
         let v = c.vertex as usize;
@@ -548,20 +570,9 @@ fn fixed_values(
                 vertex: c.vertex,
             });
         }
-        let nv = mesh.vertex_normals()[v];
-        let d = c.direction;
-        let tangent = d - nv * d.dot(nv);
-        let usable = d.is_finite() && tangent.length_squared() > 1e-12 * d.length_squared();
-        let Some((_, z)) = system.frames.doubled(v, tangent).filter(|_| usable) else {
-            return Err(LineFieldError::ConstraintDirection {
-                index,
-                vertex: c.vertex,
-            });
-        };
         owner[v] = index;
-        fixed[v] = Some(z);
     }
-    Ok(fixed)
+    Ok(())
 }
 
 #[cfg(test)]
