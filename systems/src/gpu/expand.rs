@@ -16,7 +16,8 @@ use wgpu::util::DeviceExt;
 use super::buffers::{GpuSampleBuffer, Streamed, StreamedBuffer};
 use super::context::{GpuError, scoped};
 use super::pipeline::{
-    ComputePipelineDesc, buffer_entry, pipeline_layout, shader_module, uniform_buffer,
+    ComputePipelineDesc, compute_storage, compute_uniform, pipeline_layout, shader_module,
+    uniform_buffer,
 };
 use super::shaders;
 
@@ -112,20 +113,7 @@ struct ExpandPasses {
 impl ExpandPasses {
     fn new(device: &wgpu::Device) -> Self {
         let module = shader_module(device, "strata expand", shaders::EXPAND);
-        let storage = |binding, read_only| {
-            buffer_entry(
-                binding,
-                wgpu::ShaderStages::COMPUTE,
-                wgpu::BufferBindingType::Storage { read_only },
-                None,
-            )
-        };
-        let uniform = buffer_entry(
-            0,
-            wgpu::ShaderStages::COMPUTE,
-            wgpu::BufferBindingType::Uniform,
-            None,
-        );
+        let (storage, uniform) = (compute_storage, compute_uniform(0));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("strata expand"),
             entries: &[

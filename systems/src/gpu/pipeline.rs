@@ -246,6 +246,26 @@ pub fn buffer_entry(
     }
 }
 
+/// A compute shader's storage buffer at `binding` (any size).
+pub fn compute_storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(
+        binding,
+        wgpu::ShaderStages::COMPUTE,
+        wgpu::BufferBindingType::Storage { read_only },
+        None,
+    )
+}
+
+/// A compute shader's uniform buffer at `binding` (any size).
+pub fn compute_uniform(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    buffer_entry(
+        binding,
+        wgpu::ShaderStages::COMPUTE,
+        wgpu::BufferBindingType::Uniform,
+        None,
+    )
+}
+
 /// A pipeline layout of the bind `groups` (`None`: a group the pipeline does not use).
 pub fn pipeline_layout(
     device: &wgpu::Device,
