@@ -3,6 +3,7 @@
 use std::process::ExitCode;
 
 use clap::Parser;
+use strata_systems::cli::interrupt;
 
 /// The exit status of a command whose standard output was closed early (`| head`): the
 /// status a shell gives a process ended by SIGPIPE.
@@ -18,9 +19,16 @@ fn main() -> ExitCode {
     // that the parallel work it starts begins at once (`frame_thread`). It fails only
     // if a global pool exists already; then that one serves.
     let _ = strata_systems::frame_thread::join_rayon_pool();
+    if cli.command.writes_samples() {
+        interrupt::install();
+    }
     match strata_systems::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if strata_systems::cli::is_broken_pipe(&e) => ExitCode::from(BROKEN_PIPE_STATUS),
+        Err(e) if interrupt::is_interrupted(&e) => {
+            eprintln!("{}", strata_systems::cli::one_line(&e));
+            ExitCode::from(interrupt::INTERRUPTED_STATUS)
+        }
         Err(e) => {
             eprintln!("error: {}", strata_systems::cli::one_line(&e));
             ExitCode::FAILURE

@@ -24,6 +24,7 @@ mod analyze;
 mod bench;
 mod field;
 mod input;
+pub mod interrupt;
 mod lod;
 mod look;
 mod render;
@@ -93,6 +94,12 @@ impl Command {
     /// Whether the command opens a GPU (`render`, `view`).
     pub fn opens_gpu(&self) -> bool {
         matches!(self, Self::Render(_) | Self::View(_))
+    }
+
+    /// Whether the command writes a sample file whose size grows with the count
+    /// (`sample`), and so stops cleanly on Ctrl-C ([`interrupt`]).
+    pub fn writes_samples(&self) -> bool {
+        matches!(self, Self::Sample(_))
     }
 }
 

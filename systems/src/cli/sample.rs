@@ -248,12 +248,15 @@ impl<'a> Draw<'a> {
         let count = self.count;
         match out {
             Some((path, format)) => {
+                // Ctrl-C stops the write at the next block; the temporary file goes.
+                let _writing = super::interrupt::writing();
                 strata_engine::io::write_samples_in_blocks(
                     path,
                     format,
                     count,
                     BLOCK,
                     |start, block| {
+                        super::interrupt::check()?;
                         self.fill(start, block);
                         Ok(())
                     },
