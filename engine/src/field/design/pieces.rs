@@ -30,7 +30,8 @@ use rayon::prelude::*;
 
 use super::line_field::LineField;
 use super::solve::{
-    LineConstraint, LineFieldOptions, check_constraint_vertices, constrained_piece, smoothest_piece,
+    LineConstraint, LineFieldOptions, check_constraint_vertices, check_guidance, constrained_piece,
+    smoothest_piece,
 };
 use crate::field::LineFieldError;
 use crate::mesh::{NONE, TriMesh};
@@ -179,15 +180,7 @@ fn check_whole(
     constraints: &[LineConstraint],
 ) -> Result<(), LineFieldError> {
     let n = mesh.vertex_count();
-    if !guidance.is_empty() && guidance.len() != n {
-        return Err(LineFieldError::GuidanceLength {
-            expected: n,
-            found: guidance.len(),
-        });
-    }
-    if let Some(vertex) = guidance.iter().position(|d| !d.is_finite()) {
-        return Err(LineFieldError::NonFiniteGuidance { vertex });
-    }
+    check_guidance(guidance, n)?;
     check_constraint_vertices(n, constraints)
 }
 

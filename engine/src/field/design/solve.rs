@@ -389,7 +389,7 @@ struct Built<'g> {
 }
 
 /// Checks a guidance: empty or one finite vector per vertex.
-fn check_guidance(guidance: &[DVec3], n: usize) -> Result<(), LineFieldError> {
+pub(super) fn check_guidance(guidance: &[DVec3], n: usize) -> Result<(), LineFieldError> {
     if !guidance.is_empty() && guidance.len() != n {
         return Err(LineFieldError::GuidanceLength {
             expected: n,
