@@ -263,13 +263,10 @@ fn hilbert_child(state: u32, rank: u32) -> vec3<u32> {
 
 // ---- points in leaves ----
 
-// A full leaf: the centre of the sub-cell `levels` levels down that the continuous
-// Hilbert map reaches at the fraction `q` (curve/locate.rs `FullLeaf::point`).
-fn full_leaf_point(leaf: u32, q: vec2<u32>, levels: u32) -> Located {
-    let w = params.leaves_at + 5u * leaf;
-    let info = table[w + 2u];
-    let level = info & 31u;
-    var state = (info >> 5u) & 3u;
+// The centre of the sub-cell, in the unit square of a cell whose Hilbert curve starts
+// in `start`, that the top `2 levels` bits of the 64-bit `q` (hi, lo as y, x) reach.
+fn hilbert_point(start: u32, q: vec2<u32>, levels: u32) -> vec2<f32> {
+    var state = start;
     var x = 0u;
     var y = 0u;
     for (var i = 0u; i < levels; i = i + 1u) {
@@ -286,7 +283,17 @@ fn full_leaf_point(leaf: u32, q: vec2<u32>, levels: u32) -> Located {
         y = 2u * y + c.y;
         state = c.z;
     }
-    let local = (vec2<f32>(f32(x), f32(y)) + 0.5) * exp2(-f32(levels));
+    return (vec2<f32>(f32(x), f32(y)) + 0.5) * exp2(-f32(levels));
+}
+
+// A full leaf: the centre of the sub-cell `levels` levels down that the continuous
+// Hilbert map reaches at the fraction `q` (curve/locate.rs `FullLeaf::point`).
+fn full_leaf_point(leaf: u32, q: vec2<u32>, levels: u32) -> Located {
+    let w = params.leaves_at + 5u * leaf;
+    let info = table[w + 2u];
+    let level = info & 31u;
+    let state = (info >> 5u) & 3u;
+    let local = hilbert_point(state, q, levels);
     let uv = (vec2<f32>(f32(table[w]), f32(table[w + 1u])) + local) * exp2(-f32(level));
     return point_location(params.cands_at + table[w + 3u], table[w + 4u], 1u, uv);
 }
@@ -445,23 +452,8 @@ fn full_node_point(node: u32, q: vec2<u32>, levels: u32) -> Located {
     let w = params.nodes_at + 13u * node;
     let info = table[w];
     let level = info & 31u;
-    var state = (info >> 5u) & 3u;
-    var x = 0u;
-    var y = 0u;
-    for (var i = 0u; i < levels; i = i + 1u) {
-        let p = 62u - 2u * i;
-        var rank: u32;
-        if p >= 32u {
-            rank = (q.y >> (p - 32u)) & 3u;
-        } else {
-            rank = (q.x >> p) & 3u;
-        }
-        let c = hilbert_child(state, rank);
-        x = 2u * x + c.x;
-        y = 2u * y + c.y;
-        state = c.z;
-    }
-    let local = (vec2<f32>(f32(x), f32(y)) + 0.5) * exp2(-f32(levels));
+    let state = (info >> 5u) & 3u;
+    let local = hilbert_point(state, q, levels);
     let uv = (vec2<f32>(f32(table[w + 1u]), f32(table[w + 2u])) + local) * exp2(-f32(level));
     return point_location(params.pieces_at + 20u * table[w + 3u], table[w + 4u], 20u, uv);
 }
