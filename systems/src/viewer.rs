@@ -6,7 +6,11 @@
 //! the progress of a build running off the frame (the last samples keep drawing).
 //!
 //! Input: [`ViewerOptions`]. Output: the window until it closes, then a
-//! [`ViewerOutcome`]. Cost per frame: one sampling of the scene, one upload, one draw.
+//! [`ViewerOutcome`]. Cost per frame: one sampling of the scene, one upload, one draw;
+//! when the sampler is the GPU's ([`ViewerOptions::sampler`], resolved by
+//! [`crate::gpu::backend`]), the sampling is compute passes into the renderer's buffer
+//! and there is no upload. The sampler used is printed with the adapter and shown in
+//! the title.
 //!
 //! Mouse: drag to orbit, wheel to zoom. Keys: `Up`/`Down` double or halve the count,
 //! `S` a new seed (both until the scene file sets them again), `C` the next colour
@@ -28,8 +32,10 @@ use winit::window::{Window, WindowId};
 use strata_engine::mesh::TriMesh;
 
 use crate::ecs::{
-    EngineSettings, MeshData, MeshSampler, MeshTransform, SamplingSettings, Stage, StageStats,
+    EngineSettings, MeshData, MeshSampler, MeshTransform, SamplerBackend, SamplingSettings, Stage,
+    StageStats,
 };
+use crate::gpu::backend::{GpuSampling, SamplerUse};
 use crate::gpu::headless::DEPTH_FORMAT;
 use crate::gpu::splat::{FrameTarget, TargetFormat};
 use crate::gpu::{
@@ -74,6 +80,9 @@ pub struct ViewerOptions {
     /// With `lod_max`: a point budget ([`crate::ecs::Lod::shown`]): about this many
     /// samples are shown at any distance, and the count is the pool's prefix.
     pub lod_shown: Option<u32>,
+    /// Who draws the samples once the window's GPU is open ([`EngineSettings::sampler`];
+    /// before, the CPU). With level of detail the pool is drawn on the CPU.
+    pub sampler: SamplerBackend,
 }
 
 /// How a viewer run ended.
@@ -110,6 +119,7 @@ pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
         .resource_mut::<EngineSettings>()
         .sample_every_update = true;
     crate::gpu::upload::register(&mut engine.schedule);
+    crate::gpu::backend::register(&mut engine.world, &mut engine.schedule);
     // A scene that is bad at start-up is waited for: the first good save opens it.
     // The watcher loads the scene off this thread; a scene that is bad at start-up
     // is waited for: the first good save opens it.
@@ -162,6 +172,7 @@ pub fn run(options: &ViewerOptions) -> anyhow::Result<ViewerOutcome> {
         lod_max: options.lod_max,
         lod_shown: options.lod_shown,
         lod: None,
+        sampler: options.sampler,
     };
     if options.lod_max.is_some() {
         // The pool follows the camera; the sample buffer is not redrawn every frame.
@@ -254,6 +265,8 @@ struct Viewer {
     /// `--lod-shown`: the point budget.
     lod_shown: Option<u32>,
     lod: Option<SplatLod>,
+    /// `--sampler`: set in the engine when the window's GPU opens.
+    sampler: SamplerBackend,
 }
 
 fn depth_view(device: &wgpu::Device, width: u32, height: u32) -> wgpu::TextureView {
@@ -340,9 +353,15 @@ impl Viewer {
         }
         let depth = depth_view(&ctx.device, config.width, config.height);
         println!("strata view: {}", ctx.adapter_summary());
+        let used = crate::gpu::backend::resolve(self.sampler, Some(&ctx.adapter.get_info()))?;
+        match self.lod_max {
+            Some(_) => println!("strata view: sampler cpu (level of detail)"),
+            None => println!("strata view: {used}"),
+        }
         let mut splats = GpuSplats::new(ctx, renderer);
         splats.mesh = Some(self.mesh_entity);
         self.engine.world.insert_resource(splats);
+        self.engine.world.resource_mut::<EngineSettings>().sampler = self.sampler;
         self.gpu = Some(WindowGpu {
             window,
             surface,
@@ -457,9 +476,9 @@ impl Viewer {
             let splats = self.engine.world.resource::<GpuSplats>();
             (splats.renderer.samples().len(), splats.last.time)
         };
+        let used = self.sampler_used();
         if self.refit_colors {
-            self.style.log_density_range =
-                crate::gpu::layout::log_density_range(self.engine.samples());
+            self.style.log_density_range = self.density_range(used);
             self.refit_colors = false;
         }
         let seed = self.sampling().seed;
@@ -517,8 +536,9 @@ impl Viewer {
         } else {
             "samples"
         };
+        let sampler = used.map_or(String::new(), |u| format!("{u} | "));
         self.status = format!(
-            "{count} {what} | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {}, {:?}, {:?}",
+            "{count} {what} | frame {:.1} ms (sampling {:.1} ms, upload {:.1} ms) | {sampler}{}, {:?}, {:?}",
             self.frame_ms,
             sampling.as_secs_f64() * 1e3,
             upload.as_secs_f64() * 1e3,
@@ -541,6 +561,28 @@ impl Viewer {
         }
         gpu.window.request_redraw();
         Ok(())
+    }
+
+    /// The sampler that drew this frame's samples, when the GPU one did.
+    fn sampler_used(&self) -> Option<SamplerUse> {
+        let on_gpu = self.engine.world.resource::<crate::ecs::GpuSampled>().0;
+        let state = self.engine.world.get_resource::<GpuSampling>()?;
+        state.used.filter(|u| !u.is_gpu() || on_gpu.is_some())
+    }
+
+    /// The density colour map's range: fitted to the samples, or with the GPU's
+    /// sampler (whose samples stay on the GPU) to a CPU draw of at most 4096 of them.
+    fn density_range(&self, used: Option<SamplerUse>) -> [f32; 2] {
+        if !used.is_some_and(SamplerUse::is_gpu) {
+            return crate::gpu::layout::log_density_range(self.engine.samples());
+        }
+        let sampling = self.sampling();
+        let world = &self.engine.world;
+        let sampler = world.get::<MeshSampler>(self.mesh_entity);
+        let few = sampler.and_then(|s| s.0.as_ref()).map_or(Vec::new(), |s| {
+            s.sample(sampling.count.min(4096), sampling.seed)
+        });
+        crate::gpu::layout::log_density_range(&few)
     }
 
     fn fail(&mut self, e: anyhow::Error, event_loop: &ActiveEventLoop) {

@@ -11,6 +11,7 @@ use std::path::Path;
 
 use clap::Parser;
 use strata_systems::cli::{Cli, Command, one_line, run, view_options};
+use strata_systems::ecs::SamplerBackend;
 use strata_systems::viewer::ViewerOptions;
 
 /// The flags the rows below cover.
@@ -45,6 +46,7 @@ pub(crate) const COVERED: &[&str] = &[
     "render --field",
     "render --anisotropy",
     "render --density-from",
+    "render --sampler",
     "view --width",
     "view --height",
     "view --frames",
@@ -69,6 +71,7 @@ pub(crate) const COVERED: &[&str] = &[
     "view --field",
     "view --anisotropy",
     "view --density-from",
+    "view --sampler",
 ];
 
 /// A small sphere scene with 300 samples, a unit quad and a density file over it.
@@ -198,6 +201,42 @@ fn every_render_flag_has_an_effect() {
     );
     lod_flags(d);
     mesh_flags(d);
+    sampler_flags(d, &base);
+}
+
+/// `--sampler`: the GPU's compute passes draw the CPU's samples into the renderer's
+/// buffer, so the picture is the CPU's (here its size and bytes; the pixels and the
+/// status line that names the sampler are compared in `systems/tests/sampler.rs`,
+/// which runs the binary); `auto`, the default, is the CPU on a software adapter;
+/// `gpu` with `--lod` is refused in one line.
+fn sampler_flags(d: &Path, base: &[u8]) {
+    let cpu = render(d, "scene.ron", "cpu.png", &["--sampler", "cpu"]);
+    let gpu = render(d, "scene.ron", "gpu.png", &["--sampler", "gpu"]);
+    let seeded = render(
+        d,
+        "scene.ron",
+        "gpu7.png",
+        &["--sampler", "gpu", "--seed", "7"],
+    );
+    assert_eq!(png_size(&gpu), (64, 48));
+    assert!(seeded != gpu, "--seed left the GPU's picture as it was");
+    let ctx = crate::gpu::gpu("sampler flags").expect("an adapter");
+    if !strata_systems::gpu::backend::is_hardware(&ctx.adapter.get_info()) {
+        assert!(cpu == base, "auto is not the CPU on a software adapter");
+        assert!(gpu == cpu, "the GPU's samples drew another picture");
+    }
+    let args = [
+        "render",
+        "{dir}/scene.ron",
+        "-o",
+        "{dir}/no.png",
+        "--sampler",
+        "gpu",
+        "--lod",
+    ];
+    let cli = Cli::try_parse_from(argv(d, &args)).expect("parses");
+    let e = one_line(&run(cli).expect_err("gpu with --lod"));
+    assert!(e.contains("--sampler gpu does not apply with --lod"), "{e}");
 }
 
 fn bytes(d: &Path, name: &str) -> Vec<u8> {
@@ -346,6 +385,16 @@ fn every_view_flag_reaches_the_window_options() {
     assert_eq!(look(&base), "Density Disc Plain 0.8");
     assert_eq!(look(&o), "Constant Gaussian Segments 0.25");
     assert_eq!(o.gpu.adapter_name.as_deref(), Some("llvm"));
+    // --sampler: auto by default; the choice reaches the engine's settings; gpu with
+    // --lod is refused below.
+    assert_eq!(base.sampler, SamplerBackend::Auto);
+    for (name, want) in [
+        ("cpu", SamplerBackend::Cpu),
+        ("gpu", SamplerBackend::Gpu),
+        ("auto", SamplerBackend::Auto),
+    ] {
+        assert_eq!(view(d, &[scene, "--sampler", name]).sampler, want);
+    }
     assert_eq!(
         format!("{:?}", view(d, &[scene, "--glyphs"]).style.footprint),
         "Glyph"
@@ -388,6 +437,10 @@ fn every_view_flag_reaches_the_window_options() {
     for (bad, says) in [
         (&["--lod", "--lod-max", "0"] as &[&str], "--lod-max"),
         (&["--zoom", "0"], "--zoom must be a positive number"),
+        (
+            &["--lod", "--sampler", "gpu"],
+            "--sampler gpu does not apply with --lod",
+        ),
     ] {
         let mut all = vec!["view", scene];
         all.extend_from_slice(bad);

@@ -4,6 +4,8 @@
 //! ([`LodScene`](crate::gpu::LodScene)), for one still or, with `--frames`, a PNG
 //! sequence of a moving camera; with `--style stipple|strokes`, draw the samples as
 //! stipple dots or brush strokes on paper ([`NprRenderer`](crate::gpu::NprRenderer)).
+//! `--sampler` picks who draws the samples ([`crate::gpu::backend`]): the CPU, or the
+//! GPU's compute passes straight into the renderer's buffer; the status line names it.
 
 use std::path::{Path, PathBuf};
 
@@ -13,9 +15,11 @@ use super::{LodArgs, LookArgs, StyleArgs};
 use strata_engine::mesh::TriMesh;
 use strata_engine::sample::{LodPool, PoolChange, Sample};
 
+use crate::ecs::SamplerBackend;
+use crate::gpu::backend::{self, SamplerUse, UsedSampler};
 use crate::gpu::{
-    GpuContext, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer, NprStyle,
-    OrbitCamera, SplatLod, SplatRenderer,
+    GpuContext, GpuSampler, HeadlessTarget, LodFades, LodScene, MeshMode, NprKind, NprRenderer,
+    NprStyle, OrbitCamera, SplatLod, SplatRenderer,
 };
 use crate::scene::Scene;
 
@@ -74,6 +78,11 @@ pub struct RenderArgs {
     /// `--style` and `--brush`.
     #[command(flatten)]
     pub paint: StyleArgs,
+    /// Who draws the samples: `auto` (the GPU on a hardware adapter, the CPU on a
+    /// software one), `cpu` (the reference) or `gpu` (compute passes on any adapter;
+    /// the same samples to `f32` round-off). With `--lod` the pool is drawn on the CPU.
+    #[arg(long, value_enum, default_value_t = SamplerBackend::Auto)]
+    pub sampler: SamplerBackend,
 }
 
 /// Runs `strata render`.
@@ -90,7 +99,11 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let config = args.input.load(&args.config)?;
     super::refuse_inputs_as_outputs(&args.config, &config, &[Some(&args.out)])?;
     // The GPU first: without one, fail before the preprocessing.
-    let ctx = GpuContext::headless(&args.look.gpu_options()).context("opening a GPU")?;
+    let ctx = GpuContext::headless(&args.look.gpu_options()).context(match args.sampler {
+        SamplerBackend::Gpu => "--sampler gpu needs a GPU adapter; opening one",
+        _ => "opening a GPU",
+    })?;
+    let used = backend::resolve(args.sampler, Some(&ctx.adapter.get_info()))?;
     let target = HeadlessTarget::new(&ctx.device, args.width, args.height, args.msaa)?;
     let scene = Scene::build(&config).with_context(|| args.config.display().to_string())?;
     let count = usize::try_from(args.look.count.unwrap_or(config.sampling.count))
@@ -105,22 +118,29 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     if args.lod.lod {
         return run_lod(args, &ctx, &target, &scene, count, seed);
     }
-    let samples = scene.sampler.sample(count, seed);
+    let mut splats = SplatRenderer::new(&ctx.device, target.format())?;
+    let samples = draw(&ctx, &scene, used, count, seed, &mut splats)?;
     if let Some(kind) = npr {
-        return run_npr(args, &ctx, &target, &scene, &samples, kind, seed);
+        let drawn = Drawn {
+            samples: &samples,
+            used,
+            seed,
+        };
+        return run_npr(args, &ctx, &target, &scene, &mut splats, kind, &drawn);
     }
-    let segments = (args.look.mesh != MeshMode::None)
-        .then(|| crate::gpu::splat::face_segments(&scene.sampler));
-    let mesh = segments.as_deref().map(|s| (&*scene.mesh, s));
+    if args.look.mesh != MeshMode::None {
+        let segments = crate::gpu::splat::face_segments(&scene.sampler);
+        splats.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, Some(&segments))?;
+    }
     let camera = args
         .look
         .camera(&scene, args.width as f32 / args.height as f32);
-    let image = target.render_samples(&ctx, &samples, mesh, &camera, &args.look.style(&samples))?;
+    let image = target.render(&ctx, &splats, &camera, &args.look.style(&samples))?;
     image
         .write_png(&args.out)
         .with_context(|| format!("writing {}", args.out.display()))?;
     say!(
-        "rendered {count} samples (seed {seed}) at {}x{} on {}; wrote {}",
+        "rendered {count} samples (seed {seed}, {used}) at {}x{} on {}; wrote {}",
         args.width,
         args.height,
         ctx.adapter_summary(),
@@ -129,19 +149,57 @@ pub(super) fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `strata render --style stipple|strokes`: the samples as dots or strokes on paper,
-/// the mesh drawn into depth only (it hides what lies behind it).
+/// Draws `count` samples for `seed` into `splats`' buffer with the sampler `used`: on
+/// the CPU and uploaded, or on the GPU in place. Returns them on the CPU (the GPU's
+/// read back once), for the colour map's range.
+fn draw(
+    ctx: &GpuContext,
+    scene: &Scene,
+    used: SamplerUse,
+    count: usize,
+    seed: u64,
+    splats: &mut SplatRenderer,
+) -> anyhow::Result<Vec<Sample>> {
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    Ok(match used.used {
+        UsedSampler::Cpu => {
+            let samples = scene.sampler.sample(count, seed);
+            splats.upload(device, queue, &samples)?;
+            samples
+        }
+        UsedSampler::Gpu => {
+            let mut gpu = GpuSampler::new(device, &scene.sampler)?;
+            gpu.sample(device, queue, count, seed, splats.samples_mut())?;
+            splats.samples().read_back(device, queue)?
+        }
+    })
+}
+
+/// The samples drawn for a picture: on the CPU (the GPU's read back), the sampler that
+/// drew them and their seed.
+#[derive(Clone, Copy)]
+struct Drawn<'a> {
+    samples: &'a [Sample],
+    used: SamplerUse,
+    seed: u64,
+}
+
+/// `strata render --style stipple|strokes`: the samples in `splats` as dots or strokes
+/// on paper, the mesh drawn into depth only (it hides what lies behind it).
 fn run_npr(
     args: &RenderArgs,
     ctx: &GpuContext,
     target: &HeadlessTarget,
     scene: &Scene,
-    samples: &[strata_engine::sample::Sample],
+    splats: &mut SplatRenderer,
     kind: NprKind,
-    seed: u64,
+    drawn: &Drawn<'_>,
 ) -> anyhow::Result<()> {
-    let mut splats = SplatRenderer::new(&ctx.device, target.format())?;
-    splats.upload(&ctx.device, &ctx.queue, samples)?;
+    let Drawn {
+        samples,
+        used,
+        seed,
+    } = *drawn;
     splats.set_mesh(&ctx.device, &ctx.queue, &scene.mesh, None)?;
     let npr = NprRenderer::new(&ctx.device, target.format())?;
     let camera = args
@@ -150,7 +208,7 @@ fn run_npr(
     let style = NprStyle::for_samples(kind, seed);
     let image = target.render_npr(
         ctx,
-        &splats,
+        splats,
         &npr,
         &camera,
         &args.look.style(samples),
@@ -164,7 +222,7 @@ fn run_npr(
         NprKind::Strokes(b) => format!("{} strokes", b.name()),
     };
     say!(
-        "rendered {} samples as {what} (seed {seed}) at {}x{} on {}; wrote {}",
+        "rendered {} samples as {what} (seed {seed}, {used}) at {}x{} on {}; wrote {}",
         samples.len(),
         args.width,
         args.height,
@@ -258,7 +316,7 @@ fn run_lod(
         camera.distance *= args.dolly;
     }
     say!(
-        "level of detail: base {base} samples (seed {seed}), multiplier up to {} at {}x{} on {}",
+        "level of detail: base {base} samples (seed {seed}, sampler cpu (level of detail)), multiplier up to {} at {}x{} on {}",
         args.lod.lod_max,
         args.width,
         args.height,
@@ -270,6 +328,11 @@ fn run_lod(
 /// Checks the options of `strata render --lod`.
 fn check_lod_args(args: &RenderArgs) -> anyhow::Result<()> {
     args.lod.validate()?;
+    if args.sampler == SamplerBackend::Gpu {
+        anyhow::bail!(
+            "--sampler gpu does not apply with --lod: the level-of-detail pool is drawn on the CPU (use --sampler auto or cpu)"
+        );
+    }
     if !(args.dolly > 0.0 && args.dolly.is_finite() && args.orbit.is_finite()) {
         anyhow::bail!("--dolly must be a positive number and --orbit a number");
     }

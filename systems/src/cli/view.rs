@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 
 use super::{LodArgs, LookArgs, StyleArgs};
+use crate::ecs::SamplerBackend;
 use crate::gpu::StyleChoice;
 use crate::viewer::{self, ViewerOptions};
 
@@ -37,6 +38,11 @@ pub struct ViewArgs {
     /// `--style` and `--brush`, as `strata render`'s (the keys `P` and `B` change them).
     #[command(flatten)]
     pub paint: StyleArgs,
+    /// Who draws the samples each frame: `auto` (the GPU on a hardware adapter, the CPU
+    /// on a software one), `cpu` (the reference) or `gpu` (compute passes straight into
+    /// the renderer's buffer, on any adapter). With `--lod` the pool is drawn on the CPU.
+    #[arg(long, value_enum, default_value_t = SamplerBackend::Auto)]
+    pub sampler: SamplerBackend,
 }
 
 /// Runs `strata view` until the window closes.
@@ -56,6 +62,11 @@ pub fn view_options(args: &ViewArgs) -> anyhow::Result<ViewerOptions> {
     args.look.validate()?;
     let lod = &args.lod;
     lod.validate()?;
+    if lod.lod && args.sampler == SamplerBackend::Gpu {
+        anyhow::bail!(
+            "--sampler gpu does not apply with --lod: the level-of-detail pool is drawn on the CPU (use --sampler auto or cpu)"
+        );
+    }
     let paint = StyleChoice::new(args.paint.npr_kind_for(lod.lod)?);
     let scene = if super::input::is_mesh(&args.config) {
         // The viewer watches a scene file: the mesh's scene, written to a temporary one.
@@ -84,6 +95,7 @@ pub fn view_options(args: &ViewArgs) -> anyhow::Result<ViewerOptions> {
         paint,
         lod_max: lod.lod.then_some(lod.lod_max),
         lod_shown: lod.lod_shown.filter(|_| lod.lod),
+        sampler: args.sampler,
     };
     Ok(options)
 }

@@ -43,7 +43,7 @@ pub use jobs::{
     launch_builds, preprocess_pool, report_progress, settle,
 };
 pub use lod::{Lod, LodState, update_lod_pools};
-pub use sampling::{SampleRequest, sample_meshes};
+pub use sampling::{GpuSampled, SampleRequest, sample_meshes};
 pub use stats::{EngineErrors, Stage, StageRun, StageStats};
 
 /// The engine's systems, in the order they run in an update.
@@ -70,6 +70,37 @@ pub struct EngineSettings {
     /// consume the buffer); default false: sample when something changed or on
     /// [`SampleRequest`].
     pub sample_every_update: bool,
+    /// Which sampler draws the samples: the CPU's (`Sampler::sample_into` into the
+    /// [`SampleBuffer`]) or the GPU's compute passes, straight into the renderer's
+    /// buffer ([`crate::gpu::backend`]). Default [`SamplerBackend::Auto`].
+    pub sampler: SamplerBackend,
+}
+
+/// Which sampler draws a frame's samples ([`EngineSettings::sampler`], the `--sampler`
+/// flag of `strata view` and `strata render`). The CPU sampler is the reference and the
+/// fallback; the GPU draws the same samples (the same face and segment, positions
+/// within `f32` round-off) with no per-sample work or upload on the CPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum SamplerBackend {
+    /// The GPU when the adapter is a real GPU (discrete, integrated or virtual), the
+    /// CPU on a software adapter (llvmpipe, lavapipe, WARP) and without a GPU.
+    #[default]
+    Auto,
+    /// Always the CPU.
+    Cpu,
+    /// Always the GPU, the software adapter included; an error without any adapter.
+    Gpu,
+}
+
+impl SamplerBackend {
+    /// The name of the choice, as the flag spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Cpu => "cpu",
+            Self::Gpu => "gpu",
+        }
+    }
 }
 
 /// An error of one of the engine's stages; the state it would have changed is kept.
@@ -104,6 +135,10 @@ pub enum EngineError {
     /// similarity).
     #[error("{0}")]
     Lod(#[from] strata_engine::sample::lod::LodError),
+    /// GPU sampling was asked for and cannot run (no device, or the device refused);
+    /// the CPU sampler keeps drawing.
+    #[error("GPU sampling: {0}")]
+    GpuSampling(String),
 }
 
 /// Adds the engine's resources to `world` and its systems to `schedule`, ordered by
@@ -115,6 +150,7 @@ pub fn register(world: &mut World, schedule: &mut Schedule) {
     world.init_resource::<EngineErrors>();
     world.init_resource::<EngineSettings>();
     world.init_resource::<SampleRequest>();
+    world.init_resource::<GpuSampled>();
     world.init_resource::<PreprocessJobs>();
     world.init_resource::<PreprocessProgress>();
     schedule.configure_sets(

@@ -1,6 +1,8 @@
 //! Sampling: draws each mesh's samples into its [`SampleBuffer`] when its sampler,
 //! count, seed or transform changed, on demand ([`SampleRequest`]), or every update
-//! when [`EngineSettings::sample_every_update`] is set.
+//! when [`EngineSettings::sample_every_update`] is set. A mesh entity that the GPU
+//! layer samples ([`GpuSampled`], set by [`crate::gpu::backend`]) is left alone: its
+//! samples are drawn on the GPU, straight into the renderer's buffer.
 
 use std::time::Instant;
 
@@ -16,10 +18,17 @@ use crate::budget::{BudgetError, check_count};
 #[derive(Resource, Clone, Copy, Debug, Default)]
 pub struct SampleRequest(pub bool);
 
+/// The mesh entity whose samples the GPU draws (`None`: every mesh is sampled on the
+/// CPU). Written by the GPU layer's sampling system ([`crate::gpu::backend`]) before
+/// [`sample_meshes`] runs; when it changes, the CPU redraws the meshes it samples.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GpuSampled(pub Option<Entity>);
+
 /// Draws samples into the sample buffers (see the module docs).
 #[allow(clippy::type_complexity)]
 pub fn sample_meshes(
     settings: Res<EngineSettings>,
+    on_gpu: Res<GpuSampled>,
     mut request: ResMut<SampleRequest>,
     mut stats: ResMut<StageStats>,
     mut errors: ResMut<EngineErrors>,
@@ -33,7 +42,13 @@ pub fn sample_meshes(
 ) {
     let forced = settings.sample_every_update || request.0;
     for (entity, sampler, sampling, transform, mut buffer) in &mut meshes {
-        let dirty = sampler.is_changed() || sampling.is_changed() || transform.is_changed();
+        if on_gpu.0 == Some(entity) {
+            continue;
+        }
+        let dirty = sampler.is_changed()
+            || sampling.is_changed()
+            || transform.is_changed()
+            || on_gpu.is_changed();
         let Some(s) = sampler.0.as_ref() else {
             continue;
         };

@@ -1,6 +1,8 @@
 //! GPU streaming and field-aligned splat rendering with wgpu (the only module that
 //! touches `wgpu::Buffer`).
 //!
+//! - [`backend`]: which sampler draws the samples (CPU or GPU, [`EngineSettings`](crate::ecs::EngineSettings)'s
+//!   switch) and the ECS systems that draw them on the GPU.
 //! - [`context`]: adapter and device with typed errors; error scopes.
 //! - [`layout`]: the Pod structs shared with WGSL and their vertex layouts.
 //! - [`buffers`]: the growable sample (and sites) buffers with their staging rings.
@@ -24,6 +26,7 @@
 //! `SampleStream::upload` (into mapped staging memory, then a recorded copy; no wait
 //! on the GPU), `SplatRenderer::encode` (one pass: mesh, then instanced quads).
 
+pub mod backend;
 pub mod buffers;
 pub mod camera;
 pub mod context;

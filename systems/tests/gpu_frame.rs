@@ -1,0 +1,287 @@
+//! A frame of the ECS engine with GPU sampling ([`strata_systems::gpu::backend`]) costs
+//! the CPU nothing per sample: a counting global allocator around the system's, and
+//! the engine's schedule run with `sampler: Gpu` on whatever adapter wgpu opens (the
+//! software adapter in CI; skipped without one unless `STRATA_REQUIRE_GPU=1`).
+//!
+//! Checked: the resample runs on the GPU into the renderer's buffer (the CPU's sample
+//! buffer stays empty, the GPU's records are the CPU's samples); a frame that resamples
+//! allocates the same blocks and bytes at 10^3 and 10^5 samples (wgpu's command
+//! encoder, bind groups and submission, and the request's per-segment table: a fixed
+//! cost, none per sample) and uploads only its parameters (the two uniforms and the
+//! per-segment request table, written with `queue.write_buffer`, against 16 bytes
+//! per sample for sites and 64 for records); a frame with nothing to redraw allocates
+//! nothing beyond what bevy_ecs's schedule allocates by itself (the same as with the
+//! CPU's sampler). The binary holds this one test, so no other test allocates while
+//! it counts.
+
+#![allow(unsafe_code)] // A global allocator; each block says why it holds.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::io::Write;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use bevy_ecs::prelude::*;
+use strata_engine::field::FieldSpec;
+use strata_engine::mesh::shapes;
+use strata_engine::sample::Sample;
+use strata_engine::surface::SurfaceOptions;
+use strata_systems::ecs::{
+    self, EngineSettings, MeshBundle, MeshSampler, SampleBuffer, SamplerBackend, SamplingSettings,
+};
+use strata_systems::gpu::backend::{self, GpuSampling};
+use strata_systems::gpu::{GpuContext, GpuOptions, GpuSplats, HeadlessTarget, SplatRenderer};
+
+/// The system allocator, counting allocations, reallocations and their bytes.
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+static BYTES: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every method forwards to `System` with the same arguments, so `System`'s
+// guarantees hold; the counters have no effect on the memory returned.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        BYTES.fetch_add(layout.size(), Ordering::Relaxed);
+        // SAFETY: forwarded with the caller's layout (the caller upholds `alloc`'s
+        // contract).
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from `System` through this allocator with `layout`.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        BYTES.fetch_add(new_size, Ordering::Relaxed);
+        // SAFETY: as `dealloc`, with the caller's new size.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations and bytes allocated while `f` runs.
+fn counted(f: impl FnOnce()) -> (usize, usize) {
+    let (a, b) = (
+        ALLOCATIONS.load(Ordering::Relaxed),
+        BYTES.load(Ordering::Relaxed),
+    );
+    f();
+    (
+        ALLOCATIONS.load(Ordering::Relaxed) - a,
+        BYTES.load(Ordering::Relaxed) - b,
+    )
+}
+
+/// An engine world streaming into a headless renderer, sampling on the GPU.
+struct Engine {
+    world: World,
+    schedule: Schedule,
+    mesh: Entity,
+}
+
+impl Engine {
+    fn new(ctx: GpuContext) -> Self {
+        let target = HeadlessTarget::new(&ctx.device, 64, 48, 1).expect("target");
+        let renderer = SplatRenderer::new(&ctx.device, target.format()).expect("renderer");
+        let mut world = World::new();
+        let mut schedule = Schedule::default();
+        ecs::register(&mut world, &mut schedule);
+        strata_systems::gpu::upload::register(&mut schedule);
+        backend::register(&mut world, &mut schedule);
+        world.insert_resource(GpuSplats::new(ctx, renderer));
+        *world.resource_mut::<EngineSettings>() = EngineSettings {
+            sampler: SamplerBackend::Gpu,
+            sample_every_update: true,
+            ..EngineSettings::default()
+        };
+        let mesh = Arc::new(shapes::sphere(1.0, 4).expect("sphere"));
+        let field = FieldSpec::Constant {
+            direction: [1.0, 0.3, 0.2],
+            anisotropy: 2.0,
+            density: 1.0,
+        };
+        let field = Arc::new(field.build(&mesh).expect("field"));
+        let options = SurfaceOptions::default();
+        let mesh = world
+            .spawn(MeshBundle::new(mesh, field, options, 1000, 1))
+            .id();
+        schedule.run(&mut world);
+        let settled = ecs::settle(
+            &mut world,
+            &mut schedule,
+            std::time::Duration::from_secs(120),
+        );
+        assert!(settled, "the build did not finish");
+        Self {
+            world,
+            schedule,
+            mesh,
+        }
+    }
+
+    fn set(&mut self, count: usize, seed: u64) {
+        let mut s = self
+            .world
+            .get_mut::<SamplingSettings>(self.mesh)
+            .expect("sampling settings");
+        s.count = count;
+        s.seed = seed;
+    }
+
+    /// One update, counted; the device is polled afterwards (outside the count), as a
+    /// host's present or poll does.
+    fn frame(&mut self) -> (usize, usize) {
+        self.world.resource_mut::<ecs::StageStats>().clear();
+        let cost = counted(|| self.schedule.run(&mut self.world));
+        let gpu = self.world.resource::<GpuSplats>();
+        gpu.ctx.wait_idle("a frame").expect("device");
+        cost
+    }
+
+    fn gpu_frames(&self) -> u64 {
+        self.world.resource::<GpuSampling>().last.frames
+    }
+}
+
+/// Bytes one GPU resample of `count` samples writes with `queue.write_buffer`: the
+/// request table of per-segment counts and levels (its words, as the GPU sampler
+/// writes them), the sites pass's uniforms (64 bytes) and the expansion's (32 bytes).
+fn upload_bytes(engine: &Engine, count: usize, seed: u64) -> usize {
+    let state = engine.world.resource::<GpuSampling>();
+    let gpu = state.sampler().expect("a GPU sampler");
+    let sampler = engine
+        .world
+        .get::<MeshSampler>(engine.mesh)
+        .and_then(|s| s.0.as_ref())
+        .expect("sampler");
+    let request = gpu
+        .flat()
+        .request(sampler, count as u64, seed)
+        .expect("request");
+    let words = std::mem::size_of_val(request.groups.as_slice()) / 4
+        + request.levels.len()
+        + 2 * request.thresholds.len();
+    4 * words
+        + std::mem::size_of::<strata_systems::gpu::sample::SampleParams>()
+        + std::mem::size_of::<strata_systems::gpu::expand::ExpandParams>()
+}
+
+#[test]
+fn gpu_frames_cost_the_cpu_nothing_per_sample() {
+    let ctx = match GpuContext::headless(&GpuOptions::default()) {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            assert!(
+                std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
+                "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
+            );
+            let _ = writeln!(std::io::stderr(), "skipped: {e}");
+            return;
+        }
+    };
+    let mut engine = Engine::new(ctx);
+    let mut cost = Vec::new();
+    for count in [1000, 100_000] {
+        // Warm up: the buffers grow to the count, the pipelines' caches fill.
+        for seed in 0..3 {
+            engine.set(count, seed);
+            engine.frame();
+        }
+        let before = engine.gpu_frames();
+        let mut worst = (0, 0);
+        for seed in 10..20 {
+            engine.set(count, seed);
+            let (a, b) = engine.frame();
+            worst = (worst.0.max(a), worst.1.max(b));
+        }
+        assert_eq!(
+            engine.gpu_frames() - before,
+            10,
+            "every frame resampled on the GPU"
+        );
+        let upload = upload_bytes(&engine, count, 19);
+        let _ = writeln!(
+            std::io::stderr(),
+            "{count} samples: per frame at most {} allocations, {} bytes allocated, {upload} bytes uploaded",
+            worst.0,
+            worst.1
+        );
+        cost.push((worst, upload));
+    }
+    let [(small, small_up), (large, large_up)] = cost[..] else {
+        unreachable!()
+    };
+    // A fixed cost: no allocation or byte that grows with the count (10^5 sites alone
+    // would be 1.6 MB).
+    assert!(
+        large.0 <= small.0 + 8 && large.1 <= small.1 + 4096,
+        "per frame: {small:?} at 10^3, {large:?} at 10^5"
+    );
+    assert!(large.1 < 64 * 1024, "{large:?}");
+    // Only parameters: the uniforms and the per-segment table, nothing per sample.
+    assert!(large_up <= small_up + 1024 && large_up < 16 * 100_000 / 100);
+    // The CPU drew nothing; the renderer's buffer holds the CPU's samples.
+    let buffer = engine
+        .world
+        .get::<SampleBuffer>(engine.mesh)
+        .expect("buffer");
+    assert!(buffer.samples.is_empty() && buffer.generation == 0);
+    let gpu = engine.world.resource::<GpuSplats>();
+    let records = gpu
+        .renderer
+        .samples()
+        .read_back(&gpu.ctx.device, &gpu.ctx.queue)
+        .expect("read back");
+    let sampler = engine
+        .world
+        .get::<MeshSampler>(engine.mesh)
+        .and_then(|s| s.0.as_ref())
+        .expect("sampler");
+    let want: Vec<Sample> = sampler.sample(100_000, 19);
+    assert_eq!(records.len(), want.len());
+    let far = records
+        .iter()
+        .zip(&want)
+        .filter(|(r, w)| {
+            glam::Vec3::from(r.position).distance(w.position.into()) > 1e-4
+                || (r.face, r.segment) != (w.face, w.segment)
+        })
+        .count();
+    assert!(far * 10_000 <= want.len(), "{far} samples differ");
+    // Nothing to redraw: nothing drawn, and no allocation beyond the schedule's own
+    // (bevy_ecs's `Schedule::run` allocates a few blocks even for an empty schedule):
+    // the same as the same engine's idle frame with the CPU's sampler.
+    let idle = |engine: &mut Engine| {
+        engine.frame();
+        let before = engine.gpu_frames();
+        let least = (0..5).map(|_| engine.frame()).min().expect("frames");
+        (least, engine.gpu_frames() - before)
+    };
+    engine
+        .world
+        .resource_mut::<EngineSettings>()
+        .sample_every_update = false;
+    let (on_gpu, drawn) = idle(&mut engine);
+    assert_eq!(drawn, 0, "an idle frame resampled");
+    engine.world.resource_mut::<EngineSettings>().sampler = SamplerBackend::Cpu;
+    let (on_cpu, _) = idle(&mut engine);
+    let buffer = engine
+        .world
+        .get::<SampleBuffer>(engine.mesh)
+        .expect("buffer");
+    assert_eq!(buffer.samples.len(), 100_000, "the CPU took over");
+    let _ = writeln!(
+        std::io::stderr(),
+        "idle frame: {on_gpu:?} with the GPU's sampler, {on_cpu:?} with the CPU's"
+    );
+    assert_eq!(
+        on_gpu, on_cpu,
+        "the GPU's systems allocated in an idle frame"
+    );
+}
