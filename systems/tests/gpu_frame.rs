@@ -206,11 +206,13 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
             "every frame resampled on the GPU"
         );
         let upload = upload_bytes(&engine, count, 19);
+        let record = engine.world.resource::<GpuSampling>().last.record;
         let _ = writeln!(
             std::io::stderr(),
-            "{count} samples: per frame at most {} allocations, {} bytes allocated, {upload} bytes uploaded",
+            "{count} samples: per frame at most {} allocations, {} bytes allocated, {upload} bytes uploaded; the last took the CPU {:.3} ms to record and submit",
             worst.0,
-            worst.1
+            worst.1,
+            record.as_secs_f64() * 1e3
         );
         cost.push((worst, upload));
     }
@@ -271,6 +273,24 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
     assert_eq!(drawn, 0, "an idle frame resampled");
     engine.world.resource_mut::<EngineSettings>().sampler = SamplerBackend::Cpu;
     let (on_cpu, _) = idle(&mut engine);
+    // For the record: the CPU's resample of the same count in the same engine.
+    engine
+        .world
+        .resource_mut::<EngineSettings>()
+        .sample_every_update = true;
+    engine.frame();
+    let stats = engine.world.resource::<ecs::StageStats>();
+    let took = stats
+        .runs
+        .iter()
+        .find(|r| r.stage == ecs::Stage::Sampling)
+        .expect("a CPU resample")
+        .took;
+    let _ = writeln!(
+        std::io::stderr(),
+        "the CPU's resample of 10^5 samples: {:.3} ms",
+        took.as_secs_f64() * 1e3
+    );
     let buffer = engine
         .world
         .get::<SampleBuffer>(engine.mesh)
