@@ -92,17 +92,6 @@ pub enum SamplerBackend {
     Gpu,
 }
 
-impl SamplerBackend {
-    /// The name of the choice, as the flag spells it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Auto => "auto",
-            Self::Cpu => "cpu",
-            Self::Gpu => "gpu",
-        }
-    }
-}
-
 /// An error of one of the engine's stages; the state it would have changed is kept.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]

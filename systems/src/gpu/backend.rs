@@ -16,7 +16,7 @@
 //! straight into the [`GpuSplats`] renderer's sample buffer. The CPU's frame cost is
 //! then O(segments), whatever the count: the per-segment counts and the request's
 //! uniforms, no per-sample work and no per-sample upload. Level of detail
-//! ([`Lod`](crate::ecs::Lod)) and a mesh placed by a transform other than the identity
+//! ([`Lod`]) and a mesh placed by a transform other than the identity
 //! keep the CPU sampler (the progressive pool is drawn on the CPU; the GPU's records
 //! have the untransformed spacings).
 
