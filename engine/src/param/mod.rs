@@ -293,18 +293,24 @@ impl SegmentParam {
     /// `uv` area (an invalid parameterization) get density 0.
     ///
     /// `unit` is [`to_unit_square`](Self::to_unit_square)'s `uv` (passed in because
-    /// the caller needs it too).
+    /// the caller needs it too). Each local vertex's density (an eigen-decomposition)
+    /// is computed once, not once per corner.
     pub fn corner_density(
         &self,
         mesh: &TriMesh,
         field: &TensorField,
         unit: &[DVec2],
     ) -> Vec<[f64; 3]> {
+        let density: Vec<f64> = self
+            .local_to_mesh
+            .iter()
+            .map(|&v| field.vertex_density(mesh, v))
+            .collect();
         crate::curve::corner_densities(
             unit,
             &self.triangles,
             |i| mesh.face_areas()[self.faces[i] as usize],
-            |v| field.vertex_density(mesh, self.local_to_mesh[v as usize]),
+            |v| density[v as usize],
         )
     }
 

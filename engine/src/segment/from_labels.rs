@@ -4,7 +4,10 @@
 //! Input: a mesh and a segment label per face. Output: one segment per connected part
 //! of each label, numbered by lowest face, with its boundary loops and Euler
 //! characteristic; no singularities and no cut edges. Cost: O(F) plus the patch
-//! topology of each segment.
+//! topology of each segment, segments in parallel with rayon (the result does not
+//! depend on the thread count).
+
+use rayon::prelude::*;
 
 use super::{Segment, Segmentation, patch_topology};
 use crate::mesh::{NONE, TriMesh, connected_parts, group_by_label};
@@ -32,13 +35,15 @@ pub fn segmentation_from_labels(mesh: &TriMesh, face_segment: &[u32]) -> Segment
     // segments by lowest face.
     let faces = group_by_label(&parts, 0..mesh.face_count() as u32);
     let mut labels = vec![NONE; mesh.face_count()];
+    for (id, faces) in faces.iter().enumerate() {
+        for &f in faces {
+            labels[f as usize] = id as u32;
+        }
+    }
+    // Each segment's topology on its own, in parallel; collected in segment order.
     let segments = faces
-        .into_iter()
-        .enumerate()
-        .map(|(id, faces)| {
-            for &f in &faces {
-                labels[f as usize] = id as u32;
-            }
+        .into_par_iter()
+        .map(|faces| {
             let top = patch_topology(mesh, &faces, &no_cut);
             Segment {
                 faces,
