@@ -7,8 +7,8 @@ use glam::DVec3;
 use crate::field::{FieldError, TensorField};
 use crate::mesh::TriMesh;
 
-/// Floor of the cotangent edge weights where the energy uses [`Weights::Floored`]
-/// (dimensionless): with a smoothed connection, and on a piece whose energy under the
+/// Floor of the cotangent edge weights (dimensionless) where the energy is built with
+/// floored weights: with a smoothed connection, and on a piece whose energy under the
 /// paper's weights is not positive definite (see the [module docs](super)).
 pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
 

@@ -78,8 +78,8 @@
 //! edge's angles projected into the two vertices' normal planes and `r_smoothed` the
 //! same in the planes of the normals after one implicit heat step
 //! `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the cotangent Laplacian
-//! with the floored weights; each smoothed frame is the mesh's turned by the least rotation between
-//! the two normals, so the factor carries no gauge). Bumps smaller than about `l` no
+//! with the floored weights; each smoothed frame is the mesh's turned by the least
+//! rotation between the two normals, so the factor carries no gauge). Bumps smaller than about `l` no
 //! longer turn the connection, so they no longer attract singularities (Ray, Vallet,
 //! Alonso and Lévy 2009 make fields ignore small details in the same spirit), and the
 //! field stays in the intrinsic frames where the segmentation measures it.

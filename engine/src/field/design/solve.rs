@@ -275,9 +275,10 @@ pub(crate) fn constrained_piece<'g>(
             // with the floored ones (see the module docs).
             let floored = Weights::Floored;
             let system = Connection::build_with(mesh, smoothing, options.solver, true, floored)?;
-            let lambda_1 = match may_shift(options, guided, constraints) {
-                true => Some(smallest_eigenvalue(mesh, &system, system.shift())?),
-                false => None,
+            let lambda_1 = if may_shift(options, guided, constraints) {
+                Some(smallest_eigenvalue(mesh, &system, system.shift())?)
+            } else {
+                None
             };
             constrained_on(mesh, system, lambda_1, guidance, constraints, options)
         }
