@@ -6,15 +6,15 @@
 //!
 //! The field is the one `strata field` builds for `Designed(guidance: Smoothest,
 //! smoothing: 0.0, cancel_distance: 0.0)`: the smoothest line field, no smoothed
-//! connection, no pair cancellation. On every shared mesh and on its midpoint
-//! subdivision (each triangle into four at its edge midpoints: the same flat surface)
-//! its singular faces (index not 0) must number within 20% of the paper's method
-//! (cotangent weights as they are), and equal the reference's exactly where the
-//! reference floors the weights as strata does (a check of strata's connection,
-//! solve and index by code that shares nothing with them). Subdivision must not move strata's count wherever it
-//! does not move the method's (all meshes but the cow; homer is the one exception,
-//! an ignored test says why). Skips where `../shared/meshes` is absent. About 40 s
-//! in release (the bunny subdivided has 278k faces).
+//! connection, no pair cancellation, on the paper's cotangent weights. On every shared
+//! mesh and on its midpoint subdivision (each triangle into four at its edge
+//! midpoints: the same flat surface) its singular faces (index not 0) must number
+//! within 20% of the reference's, and equal them sign for sign (a check of strata's
+//! connection, solve and index by code that shares nothing with them; on the cow the
+//! discretizations differ at its one pinched vertex, which the reference splits and
+//! strata keeps, and the counts agree all the same). Subdivision must not move strata's count wherever it
+//! does not move the reference's (all but the cow). Skips where `../shared/meshes` is
+//! absent. About 40 s in release (the bunny subdivided has 278k faces).
 
 use glam::DVec3;
 use strata_engine::field::{Design, FieldSpec, Guidance};
@@ -27,57 +27,46 @@ use strata_tests::shared_mesh_dir;
 struct Reference {
     /// The mesh's file stem in `../shared/meshes`.
     mesh: &'static str,
-    /// The paper's discretization (cotangent weights as they are).
+    /// The paper's discretization (cotangent weights as they are), as strata's.
     cotan: [(usize, usize); 2],
-    /// The same with the cotangent weights floored at 1e-3, as strata floors them
-    /// (`MIN_EDGE_WEIGHT`): the same discretization as strata's.
-    clamped: [(usize, usize); 2],
 }
 
 /// Made by `target/ref-venv/bin/python bench/reference/line_field.py --shared
 /// ../shared/meshes --subdivide 1 --boundary strata` (columns `+1/2` and `-1/2`; no
-/// face has another index), and the same with `--weights clamped`. Boundary vertices
-/// keep their real angles as in strata's connection (only the bunny has any).
+/// face has another index). Boundary vertices keep their real angles as in strata's
+/// connection (only the bunny has any).
 const REFERENCE: [Reference; 8] = [
     Reference {
         mesh: "cow",
         cotan: [(26, 22), (28, 24)],
-        clamped: [(24, 20), (26, 22)],
     },
     Reference {
         mesh: "fandisk",
         cotan: [(5, 1), (5, 1)],
-        clamped: [(5, 1), (5, 1)],
     },
     Reference {
         mesh: "homer",
         cotan: [(21, 17), (21, 17)],
-        clamped: [(21, 17), (23, 19)],
     },
     Reference {
         mesh: "rocker-arm",
         cotan: [(5, 5), (5, 5)],
-        clamped: [(5, 5), (5, 5)],
     },
     Reference {
         mesh: "spot",
         cotan: [(13, 9), (13, 9)],
-        clamped: [(13, 9), (13, 9)],
     },
     Reference {
         mesh: "stanford-bunny",
         cotan: [(10, 6), (10, 6)],
-        clamped: [(10, 6), (10, 6)],
     },
     Reference {
         mesh: "two-torus",
         cotan: [(0, 4), (0, 4)],
-        clamped: [(0, 4), (0, 4)],
     },
     Reference {
         mesh: "wing",
         cotan: [(4, 0), (4, 0)],
-        clamped: [(4, 0), (4, 0)],
     },
 ];
 
@@ -149,9 +138,9 @@ fn counts(level: usize) -> Option<Vec<Found>> {
             midpoint_subdivide(&mesh)
         };
         let c = strata_counts(&mesh);
-        let ((p, m), (cp, cm)) = (r.cotan[level], r.clamped[level]);
+        let (p, m) = r.cotan[level];
         println!(
-            "{} (subdivided {level}): reference +{p} -{m} (clamped weights +{cp} -{cm}), strata +{} -{} other {}, ratio {:.2}",
+            "{} (subdivided {level}): reference +{p} -{m}, strata +{} -{} other {}, ratio {:.2}",
             r.mesh,
             c.0,
             c.1,
@@ -164,8 +153,7 @@ fn counts(level: usize) -> Option<Vec<Found>> {
 }
 
 /// The failures of strata's counts `found` (at subdivision `level`) against the
-/// paper's (within 20%) and against the reference on strata's own discretization
-/// (equal).
+/// paper's (within 20%, and equal).
 fn failures(level: usize, found: &[Found]) -> Vec<String> {
     let mut failures = Vec::new();
     for &(r, (plus, minus, other)) in found {
@@ -178,10 +166,10 @@ fn failures(level: usize, found: &[Found]) -> Vec<String> {
                 p + m
             ));
         }
-        if (plus, minus, other) != (r.clamped[level].0, r.clamped[level].1, 0) {
+        if (plus, minus, other) != (p, m, 0) {
             failures.push(format!(
-                "{} (subdivided {level}): +{plus} -{minus} other {other}, the reference on clamped weights {:?}",
-                r.mesh, r.clamped[level]
+                "{} (subdivided {level}): +{plus} -{minus} other {other}, the reference {:?}",
+                r.mesh, r.cotan[level]
             ));
         }
     }
@@ -211,22 +199,19 @@ fn midpoint_subdivision_keeps_the_singular_faces() {
         before
             .iter()
             .zip(&after)
-            .filter(|((r, _), _)| r.cotan[0] == r.cotan[1] && !CLAMP_MOVES.contains(&r.mesh))
+            .filter(|((r, _), _)| r.cotan[0] == r.cotan[1])
             .filter(|((_, a), (_, b))| a != b)
             .map(|((r, a), (_, b))| format!("{}: subdivision moved {a:?} to {b:?}", r.mesh)),
     );
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// Meshes where strata's floor on the cotangent weights (`MIN_EDGE_WEIGHT`, 1e-3)
-/// makes midpoint subdivision move the count while the paper's weights keep it:
-/// homer goes from +21 -17 to +23 -19, as the reference does with the same floor
-/// (`--weights clamped`), where with the paper's weights it stays at +21 -17.
-const CLAMP_MOVES: [&str; 1] = ["homer"];
-
 #[test]
-#[ignore = "strata floors the cotangent weights at 1e-3: homer subdivided gets +23 -19 where the paper's weights keep +21 -17 (the reference with the same floor gets +23 -19 too)"]
 fn midpoint_subdivision_keeps_homer_s_singular_faces() {
+    // Homer has obtuse triangles across which the connection turns: with the cotangent
+    // weights floored (at 1e-3) its count moved from +21 -17 to +23 -19 under
+    // subdivision, as the reference's does with the same floor; with the paper's
+    // weights both keep +21 -17.
     let Some(mesh) = load("homer") else {
         return;
     };
@@ -246,4 +231,48 @@ fn midpoint_subdivision_keeps_the_surface() {
     assert_eq!(fine.euler_characteristic(), mesh.euler_characteristic());
     let area = |m: &TriMesh| m.face_areas().iter().sum::<f64>();
     assert!((area(&fine) - area(&mesh)).abs() < 1e-12 * area(&mesh));
+}
+
+#[test]
+fn every_solver_builds_the_smoothest_field_on_every_shared_mesh() {
+    // The cotangent weights are negative across obtuse corners: the systems of the
+    // direct and the multigrid eigen-solves must stay definite after the shift, give a
+    // positive Rayleigh quotient and the same singular faces.
+    use strata_engine::field::design::{LineFieldOptions, LinearSolver, smoothest_line_field};
+    let mut failures = Vec::new();
+    for r in &REFERENCE {
+        let Some(mesh) = load(r.mesh) else {
+            eprintln!("skipped: no shared meshes");
+            return;
+        };
+        let mut seen = Vec::new();
+        for solver in [LinearSolver::Direct, LinearSolver::Multigrid] {
+            let options = LineFieldOptions {
+                solver,
+                ..LineFieldOptions::default()
+            };
+            match smoothest_line_field(&mesh, &options) {
+                Ok(field) => {
+                    println!(
+                        "{} {solver:?}: rayleigh {:.4e}, iterations {}",
+                        r.mesh, field.rayleigh, field.iterations
+                    );
+                    if !(field.rayleigh > 0.0) {
+                        failures.push(format!(
+                            "{} {solver:?}: rayleigh {}",
+                            r.mesh, field.rayleigh
+                        ));
+                    }
+                    seen.push(field.rayleigh);
+                }
+                Err(e) => failures.push(format!("{} {solver:?}: {e}", r.mesh)),
+            }
+        }
+        if let [a, b] = seen[..]
+            && (a - b).abs() > 1e-4 * a.abs().max(b.abs())
+        {
+            failures.push(format!("{}: Rayleigh quotients {a} and {b}", r.mesh));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
 }

@@ -183,10 +183,39 @@ pub enum LineFieldError {
         /// The step that failed.
         stage: &'static str,
     },
+    /// The smoothest field's eigenvalue came out negative: the energy is not positive
+    /// semi-definite (the paper's cotangent weights are negative across obtuse
+    /// corners). The solvers then solve the piece again with floored weights, so this
+    /// is not returned by them.
+    #[error("the line-field energy is not positive semi-definite (eigenvalue {eigenvalue:e})")]
+    Indefinite {
+        /// The negative Rayleigh quotient found.
+        eigenvalue: f64,
+    },
     /// The multigrid-preconditioned solve failed (see [`LinearSolver`](crate::field::LinearSolver)),
     /// or the eigenvalue iteration met a zero or non-finite iterate.
     #[error("line-field multigrid solve failed: {0}")]
     Multigrid(crate::linalg::LinalgError),
+}
+
+impl LineFieldError {
+    /// Whether the error says a system of the energy was not positive definite: a
+    /// failed numeric Cholesky factorization, conjugate gradients meeting negative
+    /// curvature or not converging, a multigrid hierarchy's coarse factor failing, or
+    /// a negative eigenvalue.
+    pub(crate) fn not_definite(&self) -> bool {
+        match self {
+            Self::Factorization { stage } => stage.starts_with("numeric factorization"),
+            Self::Indefinite { .. } => true,
+            Self::Multigrid(e) => matches!(
+                e,
+                LinalgError::Indefinite { .. }
+                    | LinalgError::NotPositiveDefinite { .. }
+                    | LinalgError::NotConverged { .. }
+            ),
+            _ => false,
+        }
+    }
 }
 
 impl From<LinalgError> for LineFieldError {

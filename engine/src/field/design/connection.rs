@@ -24,7 +24,7 @@ use super::vertex_graph::VertexGraph;
 
 use super::frames::Frames;
 use super::line_field::{
-    LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
+    LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE, Weights,
 };
 use crate::field::LineFieldError;
 use crate::field::tangent_space::TangentSpaces;
@@ -130,9 +130,11 @@ fn hermitian_csr<T: Scalar>(n: usize, lower: &[Triplet<usize, usize, T>]) -> Csr
     Csr::from_triplets(n, n, &full)
 }
 
-/// Cotangent weight per edge (clamped below at [`MIN_EDGE_WEIGHT`]) and lumped mass per
-/// vertex.
-fn weights_and_mass(mesh: &TriMesh) -> (Vec<f64>, Vec<f64>) {
+/// Cotangent weight per edge, `(cot alpha + cot beta) / 2`, as it is
+/// ([`Weights::Cotan`]: negative across obtuse corners, 0 where it is not finite) or
+/// floored at [`MIN_EDGE_WEIGHT`] ([`Weights::Floored`]: the floor where it is not
+/// finite), and lumped mass per vertex.
+fn weights_and_mass(mesh: &TriMesh, kind: Weights) -> (Vec<f64>, Vec<f64>) {
     let pos = mesh.positions();
     let mut mass = vec![0.0; mesh.vertex_count()];
     let mut cotan = vec![0.0; mesh.edge_count()];
@@ -156,12 +158,11 @@ fn weights_and_mass(mesh: &TriMesh) -> (Vec<f64>, Vec<f64>) {
     }
     let weights = cotan
         .into_iter()
-        .map(|c| {
-            if c.is_finite() {
-                c.max(MIN_EDGE_WEIGHT)
-            } else {
-                MIN_EDGE_WEIGHT
-            }
+        .map(|c| match (kind, c.is_finite()) {
+            (Weights::Cotan, true) => c,
+            (Weights::Cotan, false) => 0.0,
+            (Weights::Floored, true) => c.max(MIN_EDGE_WEIGHT),
+            (Weights::Floored, false) => MIN_EDGE_WEIGHT,
         })
         .collect();
     (weights, mass)
@@ -219,12 +220,24 @@ impl Connection {
     /// With `prepare` (the caller will factor the system) a direct solver's symbolic
     /// factorization is made on a second thread while the weights are summed, and the
     /// buffers of the complex factors are allocated there while the normals are
-    /// smoothed; the results do not depend on it.
+    /// smoothed; the results do not depend on it. The weights are [`Weights::first`]
+    /// of `smoothing`.
     pub(crate) fn build(
         mesh: &TriMesh,
         smoothing: f64,
         solver: LinearSolver,
         prepare: bool,
+    ) -> Result<Self, LineFieldError> {
+        Self::build_with(mesh, smoothing, solver, prepare, Weights::first(smoothing))
+    }
+
+    /// [`build`](Self::build) with the edge weights `kind`.
+    pub(crate) fn build_with(
+        mesh: &TriMesh,
+        smoothing: f64,
+        solver: LinearSolver,
+        prepare: bool,
+        kind: Weights,
     ) -> Result<Self, LineFieldError> {
         let n = mesh.vertex_count();
         if n == 0 {
@@ -245,14 +258,14 @@ impl Connection {
             Some(pattern) => {
                 let (made, weights_and_mass) = rayon::join(
                     || cholesky::symbolic(pattern.symbolic()),
-                    || weights_and_mass(mesh),
+                    || weights_and_mass(mesh, kind),
                 );
                 (Some(made?), weights_and_mass, None)
             }
             None => {
                 let (graph, weights_and_mass) = rayon::join(
                     || multigrid.then(|| VertexGraph::new(mesh)),
-                    || weights_and_mass(mesh),
+                    || weights_and_mass(mesh, kind),
                 );
                 (None, weights_and_mass, graph)
             }

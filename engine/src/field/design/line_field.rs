@@ -7,8 +7,32 @@ use glam::DVec3;
 use crate::field::{FieldError, TensorField};
 use crate::mesh::TriMesh;
 
-/// Floor of the cotangent edge weights (dimensionless).
+/// Floor of the cotangent edge weights (dimensionless) where the energy is built with
+/// floored weights: with a smoothed connection, and on a piece whose energy under the
+/// paper's weights is not positive definite (see the [module docs](super)).
 pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
+
+/// Which edge weights a piece's energy is built with (see the [module docs](super)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Weights {
+    /// The paper's cotangent weights as they are (negative across obtuse corners).
+    Cotan,
+    /// The cotangent weights floored at [`MIN_EDGE_WEIGHT`]: positive, so the energy is
+    /// positive semi-definite under any connection.
+    Floored,
+}
+
+impl Weights {
+    /// The weights a piece's first solve uses: the paper's without smoothing, the
+    /// floored ones with a smoothed connection (`smoothing > 0`).
+    pub(crate) fn first(smoothing: f64) -> Self {
+        if smoothing > 0.0 {
+            Self::Floored
+        } else {
+            Self::Cotan
+        }
+    }
+}
 
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
 pub const SHIFT: f64 = 1e-8;

@@ -24,11 +24,27 @@
 //!
 //! `E(z) = sum_edges w_ab |z_b - r_ab z_a|^2 = z^H A z`,
 //!
-//! with `A` Hermitian positive semi-definite. The weights are the cotangent weights
-//! `w_ab = (cot alpha + cot beta) / 2` of the two opposite corners, clamped from below at
-//! [`MIN_EDGE_WEIGHT`] (cotangents are negative at obtuse corners, and a negative weight
-//! would break positivity; the floor also keeps every edge coupled). The mass `M` is
-//! lumped: a third of the adjacent face areas per vertex.
+//! with `A` Hermitian. The weights are the paper's cotangent weights
+//! `w_ab = (cot alpha + cot beta) / 2` of the corners opposite the edge (one corner on a
+//! boundary edge), as they are: negative across obtuse corners, which midpoint
+//! subdivision of the same flat faces needs to leave the field unchanged (0 where a
+//! sliver's cotangent overflows). The mass `M` is lumped: a third of the adjacent face
+//! areas per vertex. Boundary vertices keep their real angle sums
+//! ([`TangentSpaces`](crate::field::tangent_space::TangentSpaces)).
+//!
+//! **Where the energy is not positive definite.** With every weight positive `A` is
+//! positive semi-definite under any connection; with negative weights it need not be:
+//! an obtuse triangle across which the connection turns has an indefinite term of its
+//! own, which its neighbours outweigh on a well-shaped surface but not at a scan's
+//! slivers, and not under the smoothed connection below (its holonomy is not the
+//! surface's). Two rules keep every solve definite:
+//! - With [`LineFieldOptions::smoothing`] `> 0` the weights are floored at
+//!   [`MIN_EDGE_WEIGHT`].
+//! - Without smoothing, a piece whose system turns out not positive definite (a
+//!   failed numeric Cholesky factorization, conjugate gradients meeting negative
+//!   curvature or not converging, a multigrid hierarchy's coarse factor failing, or a
+//!   smoothest field's eigenvalue below `-sigma`) is solved once more from the start
+//!   with the floored weights. The other pieces keep the paper's weights.
 //!
 //! # One solve per connected piece
 //! Each connected piece of the mesh ([`TriMesh::face_components`](crate::mesh::TriMesh::face_components):
@@ -61,9 +77,9 @@
 //! r_smoothed conj(r_projected)`, where `r_projected` rotates by the difference of the
 //! edge's angles projected into the two vertices' normal planes and `r_smoothed` the
 //! same in the planes of the normals after one implicit heat step
-//! `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the clamped cotangent
-//! Laplacian; each smoothed frame is the mesh's turned by the least rotation between
-//! the two normals, so the factor carries no gauge). Bumps smaller than about `l` no
+//! `(M + l^2 L) N = M N0` (`l` the smoothing length, `L` the cotangent Laplacian
+//! with the floored weights; each smoothed frame is the mesh's turned by the least
+//! rotation between the two normals, so the factor carries no gauge). Bumps smaller than about `l` no
 //! longer turn the connection, so they no longer attract singularities (Ray, Vallet,
 //! Alonso and Lévy 2009 make fields ignore small details in the same spirit), and the
 //! field stays in the intrinsic frames where the segmentation measures it.

@@ -13,7 +13,7 @@ use glam::DVec3;
 use super::cancel::cancel_pairs;
 use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
-use super::line_field::{LineField, LinearSolver};
+use super::line_field::{LineField, LinearSolver, Weights};
 use crate::field::LineFieldError;
 use crate::field::curvature::area_radius;
 use crate::linalg::Amg;
@@ -145,13 +145,25 @@ pub(crate) fn smoothest_piece(
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
-    let system = Connection::build(
-        mesh,
-        options.smoothing * area_radius(mesh),
-        options.solver,
-        true,
-    )?;
-    smoothest_on(mesh, &system, options)
+    let smoothing = options.smoothing * area_radius(mesh);
+    definite(Weights::first(smoothing), |weights| {
+        let system = Connection::build_with(mesh, smoothing, options.solver, true, weights)?;
+        smoothest_on(mesh, &system, options)
+    })
+}
+
+/// `solve` with the edge weights `first`; where that is [`Weights::Cotan`] and the
+/// piece's energy turns out not positive definite (see
+/// [`LineFieldError::not_definite`]), `solve` once more with [`Weights::Floored`]
+/// (see the [module docs](super)).
+fn definite<T>(
+    first: Weights,
+    mut solve: impl FnMut(Weights) -> Result<T, LineFieldError>,
+) -> Result<T, LineFieldError> {
+    match solve(first) {
+        Err(e) if first == Weights::Cotan && e.not_definite() => solve(Weights::Floored),
+        found => found,
+    }
 }
 
 /// [`smoothest_piece`] with the connection already built.
@@ -161,7 +173,7 @@ fn smoothest_on(
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
     let shift = system.shift();
-    let ((x, _, solves), factor) = smallest_eigenpair(
+    let ((x, value, solves), factor) = smallest_eigenpair(
         mesh,
         system,
         shift,
@@ -171,6 +183,11 @@ fn smoothest_on(
         true,
     )?;
     system.recycle(factor);
+    // A positive definite `A + shift M` has every eigenvalue above `-shift`; a lower
+    // Ritz value (a multigrid hierarchy need not notice) shows the energy indefinite.
+    if value < -shift {
+        return Err(LineFieldError::Indefinite { eigenvalue: value });
+    }
     let held = vec![false; x.len()];
     output(mesh, system, x, &held, options, solves)
 }
@@ -244,18 +261,46 @@ pub(crate) fn constrained_piece<'g>(
     options: &LineFieldOptions,
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
+    let smoothing = options.smoothing * area_radius(mesh);
+    let first = Weights::first(smoothing);
+    let (built, guidance) = connection_beside(mesh, options, guided, constraints, guidance, first);
+    let guidance = &*guidance;
+    check_guidance(guidance, mesh.vertex_count())?;
+    let found = built.and_then(|(system, lambda_1)| {
+        constrained_on(mesh, system, lambda_1, guidance, constraints, options)
+    });
+    match found {
+        Err(e) if first == Weights::Cotan && e.not_definite() => {
+            // The paper's weights left the piece's energy indefinite: solved again
+            // with the floored ones (see the module docs).
+            let floored = Weights::Floored;
+            let system = Connection::build_with(mesh, smoothing, options.solver, true, floored)?;
+            let lambda_1 = if may_shift(options, guided, constraints) {
+                Some(smallest_eigenvalue(mesh, &system, system.shift())?)
+            } else {
+                None
+            };
+            constrained_on(mesh, system, lambda_1, guidance, constraints, options)
+        }
+        found => found,
+    }
+}
+
+/// [`constrained_piece`] with the connection built and (when the smoothness shift may
+/// apply) `lambda_1` estimated, with its multigrid hierarchy.
+fn constrained_on(
+    mesh: &TriMesh,
+    system: Connection,
+    lambda_1: Option<(f64, Option<Amg<c64>>)>,
+    guidance: &[DVec3],
+    constraints: &[LineConstraint],
+    options: &LineFieldOptions,
+) -> Result<LineField, LineFieldError> {
     let n = mesh.vertex_count();
-    let Built {
-        system,
-        lambda_1,
-        guidance,
-    } = connection_beside(mesh, options, guided, constraints, guidance)?;
     let (lambda_1, hierarchy) = match lambda_1 {
         Some((lambda, hierarchy)) => (Some(lambda), hierarchy),
         None => (None, None),
     };
-    let guidance = &*guidance;
-    check_guidance(guidance, n)?;
     let fixed = fixed_values(mesh, &system, constraints)?;
     let q = if options.weight > 0.0 && !guidance.is_empty() {
         guidance_lines(mesh, &system, guidance)
@@ -348,45 +393,32 @@ fn connection_beside<'g>(
     guided: bool,
     constraints: &[LineConstraint],
     guidance: impl FnOnce() -> Cow<'g, [DVec3]> + Send,
-) -> Result<Built<'g>, LineFieldError> {
+    weights: Weights,
+) -> (Result<Built, LineFieldError>, Cow<'g, [DVec3]>) {
     let smoothing = options.smoothing * area_radius(mesh);
-    let may_shift =
-        options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty());
-    let (built, guidance) = if may_shift {
-        let system = Connection::build(mesh, smoothing, options.solver, true)?;
+    let build = || Connection::build_with(mesh, smoothing, options.solver, true, weights);
+    if may_shift(options, guided, constraints) {
         rayon::join(
-            move || -> Result<_, LineFieldError> {
+            || -> Result<Built, LineFieldError> {
+                let system = build()?;
                 let lambda = smallest_eigenvalue(mesh, &system, system.shift())?;
                 Ok((system, Some(lambda)))
             },
             guidance,
         )
     } else {
-        rayon::join(
-            || {
-                Ok((
-                    Connection::build(mesh, smoothing, options.solver, true)?,
-                    None,
-                ))
-            },
-            guidance,
-        )
-    };
-    let (system, lambda_1) = built?;
-    Ok(Built {
-        system,
-        lambda_1,
-        guidance,
-    })
+        rayon::join(|| Ok((build()?, None)), guidance)
+    }
 }
 
-/// What [`connection_beside`] makes.
-struct Built<'g> {
-    system: Connection,
-    /// The estimate of `lambda_1` and, with multigrid, the hierarchy it built.
-    lambda_1: Option<(f64, Option<Amg<c64>>)>,
-    guidance: Cow<'g, [DVec3]>,
+/// Whether the smoothness shift may apply, so that `lambda_1` is estimated.
+fn may_shift(options: &LineFieldOptions, guided: bool, constraints: &[LineConstraint]) -> bool {
+    options.smoothness > 0.0 && ((options.weight > 0.0 && guided) || !constraints.is_empty())
 }
+
+/// What [`connection_beside`] builds: the connection and, when the smoothness shift
+/// may apply, the estimate of `lambda_1` with the multigrid hierarchy it built.
+type Built = (Connection, Option<(f64, Option<Amg<c64>>)>);
 
 /// Checks a guidance: empty or one finite vector per vertex.
 pub(super) fn check_guidance(guidance: &[DVec3], n: usize) -> Result<(), LineFieldError> {

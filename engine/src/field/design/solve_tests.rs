@@ -589,3 +589,123 @@ fn a_piece_whose_guidance_is_almost_zero_still_solves_with_either_solver() {
         assert!(spread < 1e-3, "{solver:?}: {spread} rad off the guidance");
     }
 }
+
+/// A flat tetrahedron: the apex 0.1 above the midpoint of a base edge, so the face on
+/// that edge is obtuse (nearly 180 degrees) at the apex, where the surface is curved.
+fn flat_tetrahedron() -> TriMesh {
+    let positions = vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.5, 0.8, 0.0),
+        DVec3::new(0.5, 0.0, 0.1),
+    ];
+    TriMesh::new(positions, vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]).expect("tetrahedron")
+}
+
+/// Whether `A + sigma M` of `system` factors (is positive definite).
+fn factors(mesh: &TriMesh, system: &Connection) -> bool {
+    let n = system.len();
+    let extra: Vec<f64> = system.mass.iter().map(|m| system.shift() * m).collect();
+    let identity: Vec<usize> = (0..n).collect();
+    match system.factor(mesh, &extra, &identity, n) {
+        Ok(_) => true,
+        Err(e) => {
+            assert!(e.not_definite(), "{e}");
+            false
+        }
+    }
+}
+
+#[test]
+fn an_indefinite_energy_is_solved_with_the_floored_weights_by_every_solver() {
+    // The paper's weights make the flat tetrahedron's energy indefinite (the obtuse
+    // face's own term is, and its three neighbours do not outweigh it); the floored
+    // weights keep it definite. Every solver must give the floored weights' field.
+    let mesh = flat_tetrahedron();
+    let build = |w| Connection::build_with(&mesh, 0.0, LinearSolver::Direct, true, w);
+    let (cotan, floored) = (
+        build(Weights::Cotan).expect("cotan"),
+        build(Weights::Floored).expect("floored"),
+    );
+    assert!(cotan.edges.iter().any(|e| e.weight < 0.0));
+    assert!(!factors(&mesh, &cotan) && factors(&mesh, &floored));
+    let options = LineFieldOptions::default();
+    let expected = smoothest_on(&mesh, &floored, &options).expect("floored field");
+    assert!(expected.rayleigh > 0.0);
+    for solver in [LinearSolver::Direct, LinearSolver::Multigrid] {
+        let options = LineFieldOptions { solver, ..options };
+        let field = smoothest_line_field(&mesh, &options).expect("smoothest field");
+        assert!(
+            (field.rayleigh - expected.rayleigh).abs() < 1e-6 * expected.rayleigh,
+            "{solver:?}: {} against {}",
+            field.rayleigh,
+            expected.rayleigh
+        );
+        // The guided and constrained solves take the same way out.
+        let guidance = vec![DVec3::X; 4];
+        let options = LineFieldOptions {
+            smoothness: 0.5,
+            ..options
+        };
+        let guided = guided_line_field(&mesh, &guidance, &options).expect("guided field");
+        assert!(
+            guided.directions.iter().all(|d| d.is_finite()),
+            "{solver:?}"
+        );
+        let constraint = LineConstraint {
+            vertex: 0,
+            direction: DVec3::X,
+        };
+        constrained_line_field(&mesh, &[], &[constraint], &options).expect("constrained field");
+    }
+}
+
+#[test]
+fn a_definite_energy_keeps_the_paper_s_weights() {
+    // The same surface midpoint-subdivided is definite under the paper's weights: its
+    // field is theirs (the floor would give another).
+    let coarse = flat_tetrahedron();
+    let pos = coarse.positions();
+    let mut positions = pos.to_vec();
+    let first = positions.len() as u32;
+    positions.extend(
+        coarse
+            .edges()
+            .iter()
+            .map(|&[a, b]| 0.5 * (pos[a as usize] + pos[b as usize])),
+    );
+    let mut triangles = Vec::new();
+    for (t, fe) in coarse.triangles().iter().zip(coarse.face_edges()) {
+        let m = fe.map(|e| first + e);
+        triangles.extend([
+            [t[0], m[0], m[2]],
+            [m[0], t[1], m[1]],
+            [m[2], m[1], t[2]],
+            m,
+        ]);
+    }
+    let mesh = TriMesh::new(positions, triangles).expect("subdivided");
+    let build = |w| Connection::build_with(&mesh, 0.0, LinearSolver::Direct, true, w);
+    let (cotan, floored) = (
+        build(Weights::Cotan).expect("cotan"),
+        build(Weights::Floored).expect("floored"),
+    );
+    assert!(cotan.edges.iter().any(|e| e.weight < 0.0) && factors(&mesh, &cotan));
+    let options = LineFieldOptions::default();
+    let paper = smoothest_on(&mesh, &cotan, &options)
+        .expect("cotan field")
+        .rayleigh;
+    let clamped = smoothest_on(&mesh, &floored, &options)
+        .expect("floored field")
+        .rayleigh;
+    assert!((paper - clamped).abs() > 1e-3 * paper, "{paper} {clamped}");
+    for solver in [LinearSolver::Direct, LinearSolver::Multigrid] {
+        let options = LineFieldOptions { solver, ..options };
+        let field = smoothest_line_field(&mesh, &options).expect("smoothest field");
+        assert!(
+            (field.rayleigh - paper).abs() < 1e-6 * paper,
+            "{solver:?}: {} against {paper}",
+            field.rayleigh
+        );
+    }
+}
