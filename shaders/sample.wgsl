@@ -13,13 +13,18 @@ struct Site {
     bary: vec2<f32>,
 }
 
-// Twin of strata_systems::gpu::sample::SampleParams (64 bytes). The table holds, as
+// Twin of strata_systems::gpu::sample::SampleParams (112 bytes). The table holds, as
 // 32-bit words: cumulative measures (2 words per leaf, and one more) from `cum_at`,
 // leaves (5 words) from `leaves_at`, candidates (1) from `cands_at`, pieces (20) from
 // `pieces_at`, triangles (7) from `tris_at`, segment ids per slot from `slots_at`,
-// descent-tree nodes (13) from `nodes_at`. The request holds its groups (10 words
-// each) from word 0, the levels per slot from `levels_at` and `depth` descent
-// thresholds per group (2 words each) from `thresholds_at`.
+// descent-tree nodes (13) from `nodes_at`, density planes (3 per triangle) from
+// `planes_at` and progressive levels per slot from `prog_levels_at`. A stratified
+// request holds its groups (10 words each) from word 0, the levels per slot from
+// `levels_at` and `depth` descent thresholds per group (2 words each) from
+// `thresholds_at`. A progressive request (progressive.wgsl) draws ranks `first +
+// k`, or the ranks listed from word `first` of the request when `listed` is set,
+// over `leaves` leaves with the scramble `add` .. `jitter_hi`, and writes site
+// `out_at + k`.
 struct SampleParams {
     count: u32,
     groups: u32,
@@ -34,6 +39,18 @@ struct SampleParams {
     nodes_at: u32,
     thresholds_at: u32,
     depth: u32,
+    first: u32,
+    listed: u32,
+    out_at: u32,
+    leaves: u32,
+    add: u32,
+    even0: u32,
+    even1: u32,
+    odd: u32,
+    jitter_lo: u32,
+    jitter_hi: u32,
+    planes_at: u32,
+    prog_levels_at: u32,
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,

@@ -23,6 +23,14 @@ impl SegmentCurve {
         self.triangle_corners(t)
     }
 
+    /// The density of domain triangle `t` as an affine function of the unit square's
+    /// coordinates: `[gx, gy, h]` for `gx u + gy v + h`, the function whose integral
+    /// over a piece of the triangle is the piece's exact measure (what a descent
+    /// through a boundary leaf compares). Panics when `t` is out of range.
+    pub fn density_plane(&self, t: usize) -> [f64; 3] {
+        self.density_planes[t]
+    }
+
     /// Calls `f` with each candidate triangle of leaf `leaf`
     /// ([`leaf_triangles`](Self::leaf_triangles), in that order), its part inside the
     /// leaf's square and the exact measure of that part (the integral of the

@@ -16,6 +16,11 @@
 //! deepening; O(segments) per request. The engine stays GPU-free: these are plain
 //! vectors.
 //!
+//! The progressive order ([`Sampler::progressive_sites_into`]) reads the same leaves
+//! and pieces, plus [`FlatProgressive`] (per domain triangle its density plane, per
+//! slot the levels; built once), and per request only the scramble's six words
+//! ([`progressive_scramble`], O(1)).
+//!
 //! Fixed point: the measure before leaf `l` in chain order, over the total `T`, is
 //! stored as `floor(C_l / T 2^64)`. A group's value `v` in `[0, 1)` then maps to
 //! `G_lo + floor(v G_len)`, the same leaf as the sequential sampler's `v M_group` in
@@ -492,6 +497,77 @@ impl FlatSampler {
     }
 }
 
+/// Levels of the continuous map and of the boundary descent for progressive samples:
+/// the progressive sampler's fixed resolution (`progressive.rs`; the GPU tests compare
+/// the two samplers, so a change there shows).
+pub const PROGRESSIVE_LEVELS: u32 = 12;
+
+/// What a data-parallel sampler reads besides [`FlatSampler`]'s tables to draw the
+/// progressive order ([`Sampler::progressive_sites_into`]): per domain triangle its
+/// density plane, from which a boundary leaf's descent measures its sub-cells' pieces
+/// at every level (the descent is [`PROGRESSIVE_LEVELS`] deep whatever the count, too
+/// deep to unroll into trees), and per slot the levels of the descent. Built once per
+/// preprocessing, O(triangles + segments); nothing depends on the request.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlatProgressive {
+    /// Per domain triangle (the order of [`FlatSampler::triangles`]), its density
+    /// plane ([`SegmentCurve::density_plane`](crate::curve::SegmentCurve::density_plane))
+    /// as `f32` bits: `[gx, gy, d0]` with `d0` the density at the triangle's first
+    /// corner (as stored in [`FlatSampler::triangles`]), so the density at `p` is
+    /// `d0 + g . (p - corner)`.
+    pub planes: Vec<[u32; 3]>,
+    /// Per slot (chain order), the levels of the continuous map in full leaves and of
+    /// the descent in boundary leaves: [`PROGRESSIVE_LEVELS`] capped at the segment's
+    /// `leaf_levels`.
+    pub levels: Vec<u32>,
+}
+
+impl FlatProgressive {
+    /// The planes and levels of `sampler` (the sampler [`FlatSampler::new`] flattened).
+    pub fn new(sampler: &Sampler) -> Self {
+        let mut flat = FlatProgressive::default();
+        for &si in &sampler.chains.order {
+            let curve = &sampler.segments[si as usize].curve;
+            for t in 0..curve.triangle_count() {
+                // The density at the first corner as stored (`f32`), not at the
+                // origin: no cancellation when a far origin's terms are large.
+                let [gx, gy, h] = curve.density_plane(t);
+                let c = curve.triangle_uv(t)[0];
+                let (x, y) = (f64::from(c.x as f32), f64::from(c.y as f32));
+                flat.planes
+                    .push([f32_bits(gx), f32_bits(gy), f32_bits(gx * x + gy * y + h)]);
+            }
+            let cap = u32::from(curve.options().leaf_levels);
+            flat.levels.push(PROGRESSIVE_LEVELS.min(cap));
+        }
+        flat
+    }
+
+    /// Bytes of the tables.
+    pub fn bytes(&self) -> usize {
+        self.planes.len() * 12 + self.levels.len() * 4
+    }
+}
+
+/// The per-request words of the progressive order for `seed`: the constants of its
+/// scramble ([`Scramble`](crate::sample::progressive::Scramble)) as `[add, even 0,
+/// even 1, odd, jitter key lo, jitter key hi]`. Value `k` of the sequence is then
+/// `reverse_bits(P(k))` in the top 32 bits of a 64-bit fraction and the top 32 bits of
+/// `keyed_hash(jitter key, k)` below them, with `P(x)` = `x + add`, `x ^= x * even 0`,
+/// `x *= odd`, `x ^= x * even 1` (wrapping). O(1).
+pub fn progressive_scramble(seed: u64) -> [u32; 6] {
+    let word = |i: u64| crate::rng::hash3(seed, 0x5052_4f47, i) as u32;
+    let jitter = split(crate::rng::stream_key(seed, 0x4a49_5454));
+    [
+        word(0),
+        word(1) & !1,
+        word(2) & !1,
+        word(3) | 1,
+        jitter[0],
+        jitter[1],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -567,6 +643,51 @@ mod tests {
             flat.request(sampler, 1 << 33, 3),
             Err(FlatError::TooLarge { .. })
         ));
+    }
+
+    /// The scramble words give the progressive sequence's values: the top 32 bits of
+    /// each as `Scramble::bits`, and with the jitter's top bits below them the value
+    /// of `Scramble::value` to within 2^-52.
+    #[test]
+    fn scramble_words_give_the_progressive_values() {
+        use crate::sample::progressive::Scramble;
+        for seed in [0u64, 1, 77, u64::MAX] {
+            let [add, e0, e1, odd, lo, hi] = progressive_scramble(seed);
+            let scramble = Scramble::new(seed);
+            let key = u64::from(lo) | u64::from(hi) << 32;
+            for rank in [0u32, 1, 2, 3, 1000, 123_456, u32::MAX] {
+                let mut x = rank.wrapping_add(add);
+                x ^= x.wrapping_mul(e0);
+                x = x.wrapping_mul(odd);
+                x ^= x.wrapping_mul(e1);
+                let bits = x.reverse_bits();
+                assert_eq!(bits, scramble.bits(rank), "seed {seed} rank {rank}");
+                let low = (crate::rng::keyed_hash(key, u64::from(rank)) >> 32) as u32;
+                let v = (f64::from(bits) + f64::from(low) / 4_294_967_296.0) / 4_294_967_296.0;
+                assert!(
+                    (v - scramble.value(rank)).abs() < 2f64.powi(-52),
+                    "seed {seed}"
+                );
+            }
+        }
+    }
+
+    /// One plane per domain triangle and levels per slot, capped at the leaf levels.
+    #[test]
+    fn progressive_tables_cover_every_triangle() {
+        let pre = torus();
+        let flat = FlatSampler::new(&pre.sampler).expect("flat");
+        let prog = FlatProgressive::new(&pre.sampler);
+        assert_eq!(prog.planes.len(), flat.triangles.len());
+        assert_eq!(prog.levels.len(), flat.slot_segments.len());
+        assert!(
+            prog.levels
+                .iter()
+                .all(|&l| (1..=PROGRESSIVE_LEVELS).contains(&l))
+        );
+        // Densities are positive somewhere in every triangle: not all planes vanish.
+        assert!(prog.planes.iter().all(|p| p.iter().any(|&w| w != 0)));
+        assert!(prog.bytes() > 0);
     }
 
     /// A request that descends into boundary leaves is refused until the trees are

@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use strata_engine::sample::{Sample, SampleSite};
 
 use super::write_file;
+use crate::gpu::sample_check::{GpuOrder, GpuSampleCheck};
 use crate::scene::Scene;
 
 /// Arguments of `strata bench`.
@@ -36,8 +37,9 @@ pub struct BenchArgs {
     /// memory than is available (by default refused before preprocessing).
     #[arg(long)]
     pub ignore_memory_check: bool,
-    /// Also sample on the GPU (the adapter wgpu opens): time it per stage and check its
-    /// samples against the CPU's; fails past the tolerances.
+    /// Also sample on the GPU (the adapter wgpu opens), in the stratified and the
+    /// progressive order: time it per stage and check its samples against the CPU's;
+    /// fails past the tolerances.
     #[arg(long)]
     pub gpu: bool,
 }
@@ -147,24 +149,28 @@ pub(super) fn run(args: &BenchArgs) -> anyhow::Result<()> {
     if args.gpu {
         let ctx = crate::gpu::GpuContext::headless(&Default::default())?;
         let seed = config.sampling.seed;
-        let check = crate::gpu::sample_check::GpuSampleCheck::run(
-            &ctx,
-            &scene.sampler,
-            count,
-            seed,
-            args.repeat,
-        )?;
-        say!("{check}");
-        if !check.passes() {
-            bail!("{name}: the GPU's samples differ from the CPU's past the tolerances");
+        let mut checks = Vec::new();
+        for order in [GpuOrder::Stratified, GpuOrder::Progressive] {
+            let request = (count, seed, order);
+            let check = GpuSampleCheck::run_order(&ctx, &scene.sampler, request, args.repeat)?;
+            say!("{check}");
+            if !check.passes() {
+                bail!(
+                    "{name}: the GPU's {order} samples differ from the CPU's past the tolerances"
+                );
+            }
+            checks.push(check);
         }
-        gpu = Some(check);
+        gpu = Some(checks);
     }
     if let Some(path) = &args.json {
-        // With `--gpu`, the check's numbers under `gpu`.
+        // With `--gpu`, the checks' numbers under `gpu` (stratified) and
+        // `gpu_progressive`.
         let mut value = serde_json::to_value(&report)?;
-        if let (Some(check), Some(object)) = (&gpu, value.as_object_mut()) {
-            object.insert("gpu".to_owned(), serde_json::to_value(check)?);
+        if let (Some(checks), Some(object)) = (&gpu, value.as_object_mut()) {
+            for (key, check) in ["gpu", "gpu_progressive"].into_iter().zip(checks) {
+                object.insert(key.to_owned(), serde_json::to_value(check)?);
+            }
         }
         let text = serde_json::to_string_pretty(&value)?;
         write_file(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))?;

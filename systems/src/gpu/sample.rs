@@ -17,8 +17,21 @@
 //! descent ([`FlatSampler::deepen`]) the first time a count needs it; the table is
 //! then uploaded again (larger counts need deeper trees, about `2^depth` nodes per
 //! boundary leaf).
+//!
+//! The progressive order (`shaders/progressive.wgsl`,
+//! [`GpuSampler::sample_progressive_sites`]) needs no per-request table: the CPU
+//! computes the scramble's six words ([`progressive_scramble`]) and the pass maps each
+//! rank's value through the cumulative measures of all leaves to a leaf, as
+//! [`Sampler::progressive_sites_into`] does. Its boundary leaves descend twelve levels
+//! whatever the count, too deep to unroll into trees, so the pass runs the descent
+//! itself in `f32` from the leaf's clipped pieces and the triangles' density planes
+//! ([`FlatProgressive`], 12 bytes per domain triangle, uploaded with the table),
+//! carrying the target as a 64-bit fraction: the same sub-cells as the CPU but where
+//! the target lies within `f32` round-off of a cut. Ranks come either as a range or
+//! as a list in a buffer, which is how a level-of-detail pool's new entries are placed
+//! ([`GpuLodPool::sync_placed`](super::lod::GpuLodPool::sync_placed)).
 
-use strata_engine::sample::flat::{FlatError, FlatSampler};
+use strata_engine::sample::flat::{FlatError, FlatProgressive, FlatSampler, progressive_scramble};
 use strata_engine::sample::{SampleSite, Sampler};
 use wgpu::util::DeviceExt;
 
@@ -66,13 +79,37 @@ pub struct SampleParams {
     pub thresholds_at: u32,
     /// Descent thresholds per group.
     pub depth: u32,
+    /// Progressive: the first rank drawn, or the first word of the rank list.
+    pub first: u32,
+    /// Progressive: 1 when the ranks are listed in the request binding.
+    pub listed: u32,
+    /// Progressive: the first site written.
+    pub out_at: u32,
+    /// Leaves in the table.
+    pub leaves: u32,
+    /// Progressive: the scramble's words ([`progressive_scramble`]).
+    pub scramble: [u32; 6],
+    /// First word of the density planes in the table.
+    pub planes_at: u32,
+    /// First word of the progressive levels per slot in the table.
+    pub prog_levels_at: u32,
     /// Padding to 16 bytes.
     pub _pad: [u32; 3],
 }
 
-/// The flat tables of `flat` as one array of 32-bit words, and where each part starts.
-fn table_words(flat: &FlatSampler) -> (Vec<u32>, SampleParams) {
-    let mut words = Vec::with_capacity(flat.bytes() / 4);
+/// Where a progressive pass takes its ranks ([`GpuSampler::encode_progressive`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Ranks<'a> {
+    /// Ranks `first..first + count`.
+    From(u32),
+    /// The ranks in a buffer of `u32`, from entry `first` on.
+    Listed(&'a wgpu::Buffer, u32),
+}
+
+/// The flat tables of `flat` and `prog` as one array of 32-bit words, and where each
+/// part starts.
+fn table_words(flat: &FlatSampler, prog: &FlatProgressive) -> (Vec<u32>, SampleParams) {
+    let mut words = Vec::with_capacity((flat.bytes() + prog.bytes()) / 4);
     let at = |w: &Vec<u32>| w.len() as u32;
     let cum_at = at(&words);
     words.extend(
@@ -92,8 +129,15 @@ fn table_words(flat: &FlatSampler) -> (Vec<u32>, SampleParams) {
     words.extend(&flat.slot_segments);
     let nodes_at = at(&words);
     words.extend(flat.nodes.iter().flatten());
+    let planes_at = at(&words);
+    words.extend(prog.planes.iter().flatten());
+    let prog_levels_at = at(&words);
+    words.extend(&prog.levels);
     let offsets = SampleParams {
         nodes_at,
+        planes_at,
+        prog_levels_at,
+        leaves: flat.leaves.len() as u32,
         cum_at,
         leaves_at,
         cands_at,
@@ -109,8 +153,9 @@ fn table_words(flat: &FlatSampler) -> (Vec<u32>, SampleParams) {
 fn upload_table(
     device: &wgpu::Device,
     flat: &FlatSampler,
+    prog: &FlatProgressive,
 ) -> Result<(wgpu::Buffer, u64, SampleParams), GpuError> {
-    let (words, offsets) = table_words(flat);
+    let (words, offsets) = table_words(flat, prog);
     let table_bytes = std::mem::size_of_val(words.as_slice()) as u64;
     let limit = device.limits().max_storage_buffer_binding_size;
     if table_bytes > limit {
@@ -185,7 +230,12 @@ impl Growable {
 pub struct GpuSampler {
     sampler: Sampler,
     flat: FlatSampler,
+    prog: FlatProgressive,
     pipeline: wgpu::ComputePipeline,
+    progressive: wgpu::ComputePipeline,
+    /// The progressive pass's uniforms (apart from the stratified pass's, so both
+    /// can be recorded before one submission).
+    prog_params: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     table: wgpu::Buffer,
@@ -209,7 +259,8 @@ impl GpuSampler {
     /// passes (the expander uploads the mesh table).
     pub fn new(device: &wgpu::Device, sampler: &Sampler) -> Result<Self, GpuError> {
         let flat = FlatSampler::new(sampler)?;
-        let (table, table_bytes, offsets) = upload_table(device, &flat)?;
+        let prog = FlatProgressive::new(sampler);
+        let (table, table_bytes, offsets) = upload_table(device, &flat, &prog)?;
         let expander = SiteExpander::new(device, sampler)?;
         scoped(device, "building the sampling pass", || {
             let module = shader_module(device, "strata sample", shaders::SAMPLE);
@@ -229,10 +280,19 @@ impl GpuSampler {
                 entry: "cs_sample",
             }
             .create(device, &pipeline_layout, &module);
+            let progressive = ComputePipelineDesc {
+                label: "strata progressive sample",
+                entry: "cs_progressive",
+            }
+            .create(device, &pipeline_layout, &module);
+            let params_bytes = std::mem::size_of::<SampleParams>();
             Self {
                 sampler: sampler.clone(),
                 flat,
+                prog,
                 pipeline,
+                progressive,
+                prog_params: uniform_buffer(device, "strata progressive params", params_bytes),
                 layout,
                 params: uniform_buffer(
                     device,
@@ -373,7 +433,8 @@ impl GpuSampler {
             Err(FlatError::Shallow { .. }) => {
                 // Deeper descent trees for this count: built once, uploaded again.
                 self.flat.deepen(&self.sampler, n as u64)?;
-                (self.table, self.table_bytes, self.offsets) = upload_table(device, &self.flat)?;
+                (self.table, self.table_bytes, self.offsets) =
+                    upload_table(device, &self.flat, &self.prog)?;
                 self.flat.request(&self.sampler, n as u64, seed)?
             }
             other => other?,
@@ -450,6 +511,140 @@ impl GpuSampler {
         Ok(())
     }
 
+    /// Draws the sites of progressive ranks `first_rank..first_rank + n` for `seed` on
+    /// the GPU (kept in the sampler's sites buffer, [`read_sites`](Self::read_sites)):
+    /// the sites of [`Sampler::progressive_sites_into`], so every prefix of a request
+    /// is the request of that count. The CPU computes the scramble's six words; the
+    /// pass places every rank. Records and submits; never waits.
+    pub fn sample_progressive_sites(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        first_rank: u32,
+        n: usize,
+        seed: u64,
+    ) -> Result<(), GpuError> {
+        let count = u32::try_from(n)
+            .ok()
+            .filter(|&c| u64::from(first_rank) + u64::from(c) <= 1 << 32)
+            .ok_or(FlatError::TooLarge {
+                what: "progressive ranks (past 2^32)",
+                value: u64::from(first_rank) + n as u64,
+            })?;
+        self.count = count;
+        if count == 0 {
+            return Ok(());
+        }
+        let sites = self
+            .sites
+            .at_least(device, u64::from(count) * SITE_BYTES)?
+            .clone();
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("strata progressive sample"),
+        });
+        let stamps = self.stamps(0);
+        self.encode_progressive(
+            device,
+            queue,
+            &mut encoder,
+            (Ranks::From(first_rank), count, seed),
+            (&sites, 0),
+            stamps,
+        )?;
+        scoped(device, "sampling progressively on the GPU", || {
+            queue.submit([encoder.finish()]);
+        })
+    }
+
+    /// Timestamp writes at `first` and `first + 1`, where the device has them.
+    fn stamps(&self, first: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        self.timer
+            .as_ref()
+            .map(|(set, _)| wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: Some(first),
+                end_of_pass_write_index: Some(first + 1),
+            })
+    }
+
+    /// Records the progressive pass: the sites of `count` ranks (`ranks`) for `seed`,
+    /// written into `sites` from entry `out_at` on (the buffer must hold them). Its
+    /// uniforms are written with `queue`: submit before the next progressive pass.
+    pub(crate) fn encode_progressive(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        (ranks, count, seed): (Ranks<'_>, u32, u64),
+        (sites, out_at): (&wgpu::Buffer, u32),
+        stamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
+    ) -> Result<(), GpuError> {
+        if count == 0 {
+            return Ok(());
+        }
+        let groups = count.div_ceil(WORKGROUP);
+        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
+        let (list, first, listed) = match ranks {
+            Ranks::From(first) => (&self.table, first, 0),
+            Ranks::Listed(buffer, first) => (buffer, first, 1),
+        };
+        let params = SampleParams {
+            count,
+            row: gx * WORKGROUP,
+            first,
+            listed,
+            out_at,
+            scramble: progressive_scramble(seed),
+            ..self.offsets
+        };
+        queue.write_buffer(&self.prog_params, 0, bytemuck::bytes_of(&params));
+        let bind_group = scoped(device, "binding the progressive pass", || {
+            let entries = [&self.prog_params, &self.table, list, sites];
+            let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
+                .iter()
+                .enumerate()
+                .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                    binding: binding as u32,
+                    resource: buffer.as_entire_binding(),
+                })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("strata progressive sample"),
+                layout: &self.layout,
+                entries: &entries,
+            })
+        })?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("strata progressive sample"),
+            timestamp_writes: stamps,
+        });
+        pass.set_pipeline(&self.progressive);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups(gx, gy, 1);
+        Ok(())
+    }
+
+    /// The GPU time in seconds of the last sites pass alone (stratified or
+    /// progressive), from timestamp queries (waits for the device); `None` where the
+    /// device has no timestamp queries.
+    pub fn sites_pass_time(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<f64>, GpuError> {
+        let Some((set, resolve)) = &self.timer else {
+            return Ok(None);
+        };
+        let mut encoder = device.create_command_encoder(&Default::default());
+        encoder.resolve_query_set(set, 0..2, resolve, 0);
+        queue.submit([encoder.finish()]);
+        let bytes = read_buffer(device, queue, resolve, 16)?;
+        let t: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let period = f64::from(queue.get_timestamp_period()) * 1e-9;
+        Ok(Some(t[1].saturating_sub(t[0]) as f64 * period))
+    }
+
     /// The GPU times in seconds of the last [`sample`](Self::sample)'s sites pass (the
     /// stratified values, the leaf search and the points, one pass) and its expansion
     /// into records, from timestamp queries (waits for the device); `None` where the
@@ -510,6 +705,18 @@ mod tests {
             ("nodes_at", offset_of!(SampleParams, nodes_at)),
             ("thresholds_at", offset_of!(SampleParams, thresholds_at)),
             ("depth", offset_of!(SampleParams, depth)),
+            ("first", offset_of!(SampleParams, first)),
+            ("listed", offset_of!(SampleParams, listed)),
+            ("out_at", offset_of!(SampleParams, out_at)),
+            ("leaves", offset_of!(SampleParams, leaves)),
+            ("add", offset_of!(SampleParams, scramble)),
+            ("even0", offset_of!(SampleParams, scramble) + 4),
+            ("even1", offset_of!(SampleParams, scramble) + 8),
+            ("odd", offset_of!(SampleParams, scramble) + 12),
+            ("jitter_lo", offset_of!(SampleParams, scramble) + 16),
+            ("jitter_hi", offset_of!(SampleParams, scramble) + 20),
+            ("planes_at", offset_of!(SampleParams, planes_at)),
+            ("prog_levels_at", offset_of!(SampleParams, prog_levels_at)),
             ("_pad0", offset_of!(SampleParams, _pad)),
             ("_pad1", offset_of!(SampleParams, _pad) + 4),
             ("_pad2", offset_of!(SampleParams, _pad) + 8),
@@ -541,6 +748,7 @@ mod gpu_tests {
 
     use super::GpuSampler;
     use crate::config::SceneConfig;
+    use crate::gpu::sample_check::{PROGRESSIVE_POSITION_TOLERANCE, SLIVER_TOLERANCE};
     use crate::gpu::{GpuContext, GpuOptions, GpuSampleBuffer};
     use crate::scene::Scene;
 
@@ -763,6 +971,121 @@ mod gpu_tests {
             1,
             "bunny, n 100000",
         );
+    }
+
+    /// Draws progressive ranks `first..first + n` for `seed` on both sides and checks
+    /// them with the tolerances of `check`; returns the GPU's sites.
+    fn check_progressive(
+        ctx: &GpuContext,
+        gpu: &mut GpuSampler,
+        sampler: &Sampler,
+        (first, n, seed): (u32, usize, u64),
+        at: &str,
+    ) -> Vec<SampleSite> {
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        let mut cpu = vec![SampleSite::default(); n];
+        sampler.progressive_sites_into(seed, first, &mut cpu);
+        gpu.sample_progressive_sites(device, queue, first, n, seed)
+            .expect("progressive sites");
+        let sites = gpu.read_sites(device, queue).expect("read back");
+        let d = compare(sampler, &sites, &cpu);
+        let _ = writeln!(
+            std::io::stderr(),
+            "{at} (progressive from {first}): {} faces and {} segments differ, largest deviation {:.2e} of the diagonal ({} beyond 1e-5)",
+            d.faces,
+            d.segments,
+            d.position,
+            d.beyond
+        );
+        // The sampler check's tolerances for the progressive order (sliver leaves,
+        // `PROGRESSIVE_POSITION_TOLERANCE`).
+        let slivers = (SLIVER_TOLERANCE * n as f64).floor() as usize;
+        assert!(
+            d.beyond <= slivers && d.position <= PROGRESSIVE_POSITION_TOLERANCE,
+            "{at}: {d:?}"
+        );
+        assert!(d.faces * 1000 <= n && d.segments * 1000 <= n, "{at}: {d:?}");
+        gpu.sample_progressive_sites(device, queue, first, n, seed)
+            .expect("progressive sites");
+        assert!(
+            gpu.read_sites(device, queue).expect("read back") == sites,
+            "{at}: two runs differ"
+        );
+        sites
+    }
+
+    /// Progressive sites drawn on the GPU are the CPU's on a planar scene, a varying
+    /// density and the default scene (many segments; boundary leaves descended twelve
+    /// levels), at counts 1, 7, 4096 and 10^5; the same bits in two runs; prefixes
+    /// nested: the first `n` sites of a larger request, and a request from a later
+    /// first rank, are the same bits as the matching entries of the larger one.
+    #[test]
+    fn gpu_progressive_sites_are_the_cpu_sites() {
+        let Some(ctx) = gpu("gpu_progressive_sites_are_the_cpu_sites") else {
+            return;
+        };
+        let device = &ctx.device;
+        for (name, ron) in [
+            ("plane", PLANE),
+            ("gaussian", GAUSSIAN),
+            ("default", DEFAULT),
+        ] {
+            let scene = scene(ron);
+            let sampler = &scene.sampler;
+            let mut gpu = GpuSampler::new(device, sampler).expect("GPU sampler");
+            let seed = 7;
+            let mut runs = Vec::new();
+            for n in [1usize, 7, 4096, 100_000] {
+                let at = format!("{name}, n {n}");
+                runs.push(check_progressive(
+                    &ctx,
+                    &mut gpu,
+                    sampler,
+                    (0, n, seed),
+                    &at,
+                ));
+            }
+            for pair in runs.windows(2) {
+                assert!(
+                    pair[1][..pair[0].len()] == pair[0][..],
+                    "{name}: prefixes not nested"
+                );
+            }
+            let later = check_progressive(
+                &ctx,
+                &mut gpu,
+                sampler,
+                (1000, 3000, seed),
+                &format!("{name}, ranks 1000..4000"),
+            );
+            assert!(
+                later[..] == runs[2][1000..4000],
+                "{name}: later ranks differ"
+            );
+        }
+    }
+
+    /// The bunny (shared mesh, skipped without it) in progressive order at 10^5.
+    #[test]
+    fn gpu_progressive_bunny_matches_the_cpu() {
+        let Some(ctx) = gpu("gpu_progressive_bunny_matches_the_cpu") else {
+            return;
+        };
+        let Some(dir) = strata_engine::io::shared_mesh_dir() else {
+            let _ = writeln!(std::io::stderr(), "bunny skipped: no shared meshes");
+            return;
+        };
+        let bunny = dir.join("stanford-bunny.obj");
+        let ron = format!(
+            "(mesh: File({:?}), field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))",
+            bunny.display().to_string()
+        );
+        let bunny = scene(&ron);
+        let mut gpu = GpuSampler::new(&ctx.device, &bunny.sampler).expect("GPU sampler");
+        for n in [1usize, 7, 4096, 100_000] {
+            let at = format!("bunny, n {n}");
+            check_progressive(&ctx, &mut gpu, &bunny.sampler, (0, n, 1), &at);
+        }
     }
 
     /// `strata bench --gpu` prints the check and succeeds on a scene within tolerance.

@@ -18,8 +18,13 @@ pub const EXPAND: &str = concat!(
     include_str!("../../../shaders/expand.wgsl")
 );
 
-/// The sampling pass's module: `sample.wgsl` alone (it uses nothing of `common.wgsl`).
-pub const SAMPLE: &str = include_str!("../../../shaders/sample.wgsl");
+/// The sampling passes' module: `sample.wgsl` + `progressive.wgsl` (they use nothing
+/// of `common.wgsl`).
+pub const SAMPLE: &str = concat!(
+    include_str!("../../../shaders/sample.wgsl"),
+    "\n",
+    include_str!("../../../shaders/progressive.wgsl")
+);
 
 /// The mesh pipeline's module: `common.wgsl` + `mesh.wgsl`.
 pub const MESH: &str = concat!(
@@ -52,7 +57,7 @@ mod tests {
             ),
             ("mesh", MESH, &["vs_mesh", "fs_mesh"][..]),
             ("expand", EXPAND, &["cs_expand"][..]),
-            ("sample", SAMPLE, &["cs_sample"][..]),
+            ("sample", SAMPLE, &["cs_sample", "cs_progressive"][..]),
             (
                 "npr",
                 NPR,

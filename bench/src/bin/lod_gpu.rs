@@ -1,0 +1,138 @@
+//! The `lod` bench's camera paths with the pool's new entries placed on the GPU:
+//! `cargo run --release -p strata-bench --bin lod_gpu [-- frames]`.
+//!
+//! The scene, camera, base count and paths of the `lod` bench (bunny, 3:1 field,
+//! seed 3; the default scene without the shared meshes; the first frame shows about
+//! 10^6 samples; `count +1%`, `dolly in 1%`, `dolly out 1%`, `orbit 1 degree`, each
+//! `frames` steps, default 10, after 30 untimed ones). Per frame the CPU runs
+//! `LodPool::update` and `GpuLodPool::sync_placed`: the ranks the update appended are
+//! uploaded (4 bytes each) and the GPU's progressive pass places them, then expands
+//! them into the sample buffer. Per path it prints the CPU time per frame of the update
+//! and of the sync (writing the ranks and recording the passes; the GPU's work is not
+//! waited for, as in a frame loop), the bytes uploaded per frame, and how the GPU
+//! copy's sites differ from the CPU pool's at the end of the path (faces, largest
+//! deviation over the bounding-box diagonal, samples beyond 1e-5). On the software
+//! adapter the GPU's own time is not representative, and the device is waited for
+//! after every frame so frames do not pile up. `LOD_GPU_SHOWN=n` sets the samples the
+//! first frame shows (default 10^6; the software adapter's 128 MiB binding limit holds
+//! the records of about 2 * 10^6 pool entries, so use 2 * 10^5 there).
+
+use std::time::Instant;
+
+use glam::DVec3;
+use strata_bench::lod_camera::{LodCamera, lod_scene};
+use strata_engine::sample::lod::{Budget, ViewLod};
+use strata_engine::sample::{LodPool, SampleSite, Sampler};
+use strata_systems::gpu::{GpuContext, GpuLodPool, GpuSampleBuffer, GpuSampler};
+
+const SEED: u64 = 3;
+const WARM_UP: i32 = 30;
+
+type Path<'a> = Box<dyn Fn(i32) -> (ViewLod, f64) + 'a>;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
+    let mesh = sampler.mesh();
+    let tri = mesh.triangles()[s.face as usize];
+    let b = s.barycentric().map(f64::from);
+    (0..3).fold(DVec3::ZERO, |acc, k| {
+        acc + mesh.positions()[tri[k] as usize] * b[k]
+    })
+}
+
+/// The base count whose first frame shows about `shown` samples (the `lod` bench's
+/// calibration).
+fn calibrate_base(s: &Sampler, first: &ViewLod, shown_target: f64) -> f64 {
+    let probe = 100_000.0;
+    let pool = LodPool::new(s, SEED, probe as u32, 1_000_000);
+    let mut fades = vec![0.0f32; pool.len()];
+    pool.fades_into(s, first, probe, &mut fades);
+    let shown = fades.iter().filter(|&&f| f > 0.0).count().max(1) as f64;
+    probe * shown_target / shown
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let frames = strata_bench::repeats_arg(10)?.max(1);
+    let (file, scene) = lod_scene(SEED)?;
+    let s = &scene.sampler;
+    let ctx = GpuContext::headless(&Default::default())?;
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    let gpu = GpuSampler::new(device, s)?;
+    let camera = LodCamera::around(scene.mesh.positions());
+    let first = camera.view(camera.start);
+    let shown: f64 = match std::env::var("LOD_GPU_SHOWN") {
+        Ok(v) => v.parse()?,
+        Err(_) => 1e6,
+    };
+    let base = calibrate_base(s, &first, shown);
+    let prefix = LodPool::new(s, SEED, base as u32, 8_000_000);
+    println!(
+        "scene `{file}`: {} faces; base count {base:.0}; adapter {}; {frames} frames per path.\n",
+        scene.mesh.face_count(),
+        ctx.adapter_summary(),
+    );
+    println!(
+        "| path | update ms, median | sync (GPU placement) ms, median | CPU per frame ms, median | upload KB per frame, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let (centre, start) = (camera.centre, camera.start);
+    let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
+    let orbit = || -> Path {
+        Box::new(move |t| {
+            let turn = glam::DQuat::from_rotation_y(f64::from(t).to_radians());
+            (camera.view(centre + turn * (start - centre)), base)
+        })
+    };
+    let paths: [(&str, Path); 4] = [
+        ("count +1%", Box::new(|t| (first, base * 1.01f64.powi(t)))),
+        ("dolly in 1%", dolly(0.99)),
+        ("dolly out 1%", dolly(1.01)),
+        ("orbit 1 degree", orbit()),
+    ];
+    let (lo, hi) = s.mesh().bounds();
+    let diagonal = (hi - lo).length();
+    for (name, path) in &paths {
+        let mut pool = prefix.clone();
+        let mut gpu_pool = GpuLodPool::new(device, base)?;
+        let mut samples = GpuSampleBuffer::new(device)?;
+        let (mut updates, mut syncs, mut totals, mut bytes) = (vec![], vec![], vec![], vec![]);
+        for t in -WARM_UP..=frames as i32 {
+            let (v, b) = path(t);
+            let clock = Instant::now();
+            let update = pool.update(s, &v, Budget::Base(b))?;
+            let updated = clock.elapsed().as_secs_f64();
+            let clock = Instant::now();
+            let sent =
+                gpu_pool.sync_placed(device, queue, (&pool, &update.change), &gpu, &mut samples)?;
+            let synced = clock.elapsed().as_secs_f64();
+            ctx.wait_idle("placing the pool's entries")?;
+            if t > 0 {
+                updates.push(updated * 1e3);
+                syncs.push(synced * 1e3);
+                totals.push((updated + synced) * 1e3);
+                bytes.push(sent as f64 / 1e3);
+            }
+        }
+        let sites = gpu_pool.read_sites(device, queue)?;
+        let (mut faces, mut beyond, mut worst) = (0, 0, 0.0f64);
+        for (g, c) in sites.iter().zip(pool.sites()) {
+            faces += usize::from(g.face != c.face || g.segment != c.segment);
+            let d = point(s, g).distance(point(s, c)) / diagonal;
+            worst = worst.max(d);
+            beyond += usize::from(d > 1e-5);
+        }
+        println!(
+            "| {name} | {:.3} | {:.3} | {:.3} | {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
+            median(updates),
+            median(syncs),
+            median(totals),
+            bytes.iter().sum::<f64>() / bytes.len() as f64,
+            pool.len(),
+        );
+    }
+    Ok(())
+}
