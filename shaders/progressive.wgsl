@@ -510,29 +510,9 @@ fn cs_progressive(@builtin(global_invocation_id) id: vec3<u32>) {
     ));
     let v = vec2<u32>(jitter.y, reverseBits(permute(rank)));
     // The first leaf (chain order, all segments) whose end exceeds v.
-    var a = 0u;
-    var b = params.leaves - 1u;
-    while a < b {
-        let mid = (a + b) / 2u;
-        if lt64(v, cum(mid + 1u)) {
-            b = mid;
-        } else {
-            a = mid + 1u;
-        }
-    }
-    let leaf = a;
-    let w0 = cum(leaf);
-    let span = sub64(cum(leaf + 1u), w0);
-    var inside = sub64(v, w0);
-    if lt64(v, w0) {
-        inside = vec2<u32>(0u, 0u);
-    }
-    var q = vec2<u32>(0u, 0u);
-    if lt64(inside, span) {
-        q = fraction64(inside, span);
-    } else if span.x != 0u || span.y != 0u {
-        q = vec2<u32>(0xffffffffu, 0xffffffffu);
-    }
+    let found = leaf_at(v, 0u, params.leaves - 1u);
+    let leaf = found.leaf;
+    let q = found.q;
     let info = table[params.leaves_at + 5u * leaf + 2u];
     let slot = info >> 8u;
     let levels = table[params.prog_levels_at + slot];

@@ -535,6 +535,42 @@ fn descent_levels(root: u32, group: u32) -> u32 {
 
 // ---- the pass ----
 
+// A leaf found by `leaf_at` and the fraction of its measure below the value.
+struct LeafAt {
+    leaf: u32,
+    q: vec2<u32>,
+}
+
+// The first leaf in `first..=last` whose end in the cumulative measures exceeds the
+// 64-bit value `m` (`last` if none), and the fraction of that leaf's measure below `m`
+// as a 64-bit fraction (0 below the leaf, all ones past its end).
+fn leaf_at(m: vec2<u32>, first: u32, last: u32) -> LeafAt {
+    var a = first;
+    var b = last;
+    while a < b {
+        let mid = (a + b) / 2u;
+        if lt64(m, cum(mid + 1u)) {
+            b = mid;
+        } else {
+            a = mid + 1u;
+        }
+    }
+    let w0 = cum(a);
+    let span = sub64(cum(a + 1u), w0);
+    var inside = sub64(m, w0);
+    if lt64(m, w0) {
+        inside = vec2<u32>(0u, 0u);
+    }
+    var q = vec2<u32>(0u, 0u);
+    if lt64(inside, span) {
+        q = fraction64(inside, span);
+    } else if span.x != 0u || span.y != 0u {
+        q = vec2<u32>(0xffffffffu, 0xffffffffu);
+    }
+    return LeafAt(a, q);
+}
+
+
 @compute @workgroup_size(64)
 fn cs_sample(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.y * params.row + id.x;
@@ -564,29 +600,9 @@ fn cs_sample(@builtin(global_invocation_id) id: vec3<u32>) {
         mulhi64(v, vec2<u32>(request[g + 8u], request[g + 9u])),
     );
     // The first leaf of the group whose end exceeds m (the last if none).
-    var a = request[g + 2u];
-    var b = request[g + 3u] - 1u;
-    while a < b {
-        let mid = (a + b) / 2u;
-        if lt64(m, cum(mid + 1u)) {
-            b = mid;
-        } else {
-            a = mid + 1u;
-        }
-    }
-    let leaf = a;
-    let w0 = cum(leaf);
-    let span = sub64(cum(leaf + 1u), w0);
-    var inside = sub64(m, w0);
-    if lt64(m, w0) {
-        inside = vec2<u32>(0u, 0u);
-    }
-    var q = vec2<u32>(0u, 0u);
-    if lt64(inside, span) {
-        q = fraction64(inside, span);
-    } else if span.x != 0u || span.y != 0u {
-        q = vec2<u32>(0xffffffffu, 0xffffffffu);
-    }
+    let found = leaf_at(m, request[g + 2u], request[g + 3u] - 1u);
+    let leaf = found.leaf;
+    let q = found.q;
     let info = table[params.leaves_at + 5u * leaf + 2u];
     let slot = info >> 8u;
     var p: Located;

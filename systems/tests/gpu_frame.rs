@@ -30,7 +30,7 @@ use strata_systems::ecs::{
     self, EngineSettings, MeshBundle, MeshSampler, SampleBuffer, SamplerBackend, SamplingSettings,
 };
 use strata_systems::gpu::backend::{self, GpuSampling};
-use strata_systems::gpu::{GpuContext, GpuOptions, GpuSplats, HeadlessTarget, SplatRenderer};
+use strata_systems::gpu::{GpuContext, GpuSplats, HeadlessTarget, SplatRenderer};
 
 /// The system allocator, counting allocations, reallocations and their bytes.
 struct Counting;
@@ -174,16 +174,9 @@ fn upload_bytes(engine: &Engine, count: usize, seed: u64) -> usize {
 
 #[test]
 fn gpu_frames_cost_the_cpu_nothing_per_sample() {
-    let ctx = match GpuContext::headless(&GpuOptions::default()) {
-        Ok(ctx) => ctx,
-        Err(e) => {
-            assert!(
-                std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
-                "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
-            );
-            let _ = writeln!(std::io::stderr(), "skipped: {e}");
-            return;
-        }
+    let Some(ctx) = GpuContext::headless_or_skip("gpu_frames_cost_the_cpu_nothing_per_sample")
+    else {
+        return;
     };
     let mut engine = Engine::new(ctx);
     let mut cost = Vec::new();

@@ -22,20 +22,7 @@ use strata_systems::scene::Scene;
 /// An open device, or `None` (after a skip line) when there is no adapter; panics
 /// instead when `STRATA_REQUIRE_GPU=1`.
 pub(crate) fn gpu(test: &str) -> Option<GpuContext> {
-    match GpuContext::headless(&GpuOptions::default()) {
-        Ok(ctx) => Some(ctx),
-        Err(e) => {
-            assert!(
-                std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
-                "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
-            );
-            // Written to the process's stderr, not through `eprintln!`, which the test
-            // harness captures and hides for passing tests.
-            use std::io::Write;
-            let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
-            None
-        }
-    }
+    GpuContext::headless_or_skip(test)
 }
 
 fn scene(ron: &str) -> Scene {

@@ -134,6 +134,26 @@ impl GpuContext {
         Self::with_instance(instance, options, None)
     }
 
+    /// A headless device with the default options for a test or a check named `test`,
+    /// or `None` after a line on stderr when no adapter opens (a machine without a GPU
+    /// or a software adapter); panics instead when the environment sets
+    /// `STRATA_REQUIRE_GPU=1`, so a machine that should have a GPU fails loudly.
+    pub fn headless_or_skip(test: &str) -> Option<Self> {
+        match Self::headless(&GpuOptions::default()) {
+            Ok(ctx) => Some(ctx),
+            Err(e) => {
+                assert!(
+                    std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
+                    "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
+                );
+                // Straight to the process's stderr: the test harness hides `eprintln!`.
+                use std::io::Write;
+                let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
+                None
+            }
+        }
+    }
+
     /// Picks an adapter on `instance` (compatible with `surface` if given) and opens a
     /// device on it.
     pub fn with_instance(

@@ -563,7 +563,7 @@ mod gpu_tests {
 
     use super::GpuLodPool;
     use crate::config::SceneConfig;
-    use crate::gpu::{GpuContext, GpuOptions, GpuSampleBuffer, GpuSampler, OrbitCamera, SplatLod};
+    use crate::gpu::{GpuContext, GpuSampleBuffer, GpuSampler, OrbitCamera, SplatLod};
     use crate::scene::Scene;
 
     const BASE: f64 = 20_000.0;
@@ -584,16 +584,9 @@ mod gpu_tests {
     /// the sites.
     #[test]
     fn placed_pool_holds_the_cpu_pools_sites() {
-        let ctx = match GpuContext::headless(&GpuOptions::default()) {
-            Ok(ctx) => ctx,
-            Err(e) => {
-                assert!(
-                    std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
-                    "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
-                );
-                let _ = writeln!(std::io::stderr(), "skipping placed pool test: {e}");
-                return;
-            }
+        let Some(ctx) = GpuContext::headless_or_skip("placed_pool_holds_the_cpu_pools_sites")
+        else {
+            return;
         };
         let (device, queue) = (&ctx.device, &ctx.queue);
         let ron = "(mesh: Shape(Genus2(size: 2.0, resolution: 3)), \

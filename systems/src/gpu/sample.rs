@@ -749,21 +749,25 @@ mod gpu_tests {
     use super::GpuSampler;
     use crate::config::SceneConfig;
     use crate::gpu::sample_check::{PROGRESSIVE_POSITION_TOLERANCE, SLIVER_TOLERANCE};
-    use crate::gpu::{GpuContext, GpuOptions, GpuSampleBuffer};
+    use crate::gpu::{GpuContext, GpuSampleBuffer};
     use crate::scene::Scene;
 
     fn gpu(test: &str) -> Option<GpuContext> {
-        match GpuContext::headless(&GpuOptions::default()) {
-            Ok(ctx) => Some(ctx),
-            Err(e) => {
-                assert!(
-                    std::env::var("STRATA_REQUIRE_GPU").as_deref() != Ok("1"),
-                    "STRATA_REQUIRE_GPU=1 but no GPU adapter could be opened: {e}"
-                );
-                let _ = writeln!(std::io::stderr(), "skipping {test}: {e}");
-                None
-            }
-        }
+        GpuContext::headless_or_skip(test)
+    }
+
+    /// The bunny (shared mesh) under a constant anisotropic field; `None`, with a
+    /// line on stderr, without the shared meshes.
+    fn bunny() -> Option<Scene> {
+        let Some(dir) = strata_engine::io::shared_mesh_dir() else {
+            let _ = writeln!(std::io::stderr(), "bunny skipped: no shared meshes");
+            return None;
+        };
+        let ron = format!(
+            "(mesh: File({:?}), field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))",
+            dir.join("stanford-bunny.obj").display().to_string()
+        );
+        Some(scene(&ron))
     }
 
     fn scene(ron: &str) -> Scene {
@@ -952,16 +956,9 @@ mod gpu_tests {
         );
         gpu.sample_sites(device, &ctx.queue, 0, 1).expect("nothing");
         assert!(gpu.read_sites(device, &ctx.queue).expect("read").is_empty());
-        let Some(dir) = strata_engine::io::shared_mesh_dir() else {
-            let _ = writeln!(std::io::stderr(), "bunny skipped: no shared meshes");
+        let Some(bunny) = bunny() else {
             return;
         };
-        let bunny = dir.join("stanford-bunny.obj");
-        let ron = format!(
-            "(mesh: File({:?}), field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))",
-            bunny.display().to_string()
-        );
-        let bunny = scene(&ron);
         let mut gpu = GpuSampler::new(device, &bunny.sampler).expect("GPU sampler");
         check(
             &ctx,
@@ -1071,16 +1068,9 @@ mod gpu_tests {
         let Some(ctx) = gpu("gpu_progressive_bunny_matches_the_cpu") else {
             return;
         };
-        let Some(dir) = strata_engine::io::shared_mesh_dir() else {
-            let _ = writeln!(std::io::stderr(), "bunny skipped: no shared meshes");
+        let Some(bunny) = bunny() else {
             return;
         };
-        let bunny = dir.join("stanford-bunny.obj");
-        let ron = format!(
-            "(mesh: File({:?}), field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))",
-            bunny.display().to_string()
-        );
-        let bunny = scene(&ron);
         let mut gpu = GpuSampler::new(&ctx.device, &bunny.sampler).expect("GPU sampler");
         for n in [1usize, 7, 4096, 100_000] {
             let at = format!("bunny, n {n}");

@@ -181,21 +181,12 @@ impl GpuSampleCheck {
         }
         let got = gpu.read_sites(device, queue)?;
         let mut check = Self {
-            order: GpuOrder::Stratified,
-            adapter: ctx.adapter_summary(),
-            count: n,
-            faces: sampler.mesh().face_count(),
-            table_bytes: gpu.table_bytes(),
-            cpu_bytes: sampler.heap_bytes(),
             request_s: median(request),
             sites_s: median(sites),
             samples_s: Some(median(samples)),
             pass_s: (!gpu_sites.is_empty()).then(|| [median(gpu_sites), median(gpu_records)]),
             cpu_sites_s: median(cpu_sites),
-            faces_differ: 0,
-            segments_differ: 0,
-            deviation: 0.0,
-            beyond: 0,
+            ..Self::unmeasured(GpuOrder::Stratified, ctx, sampler, n, &gpu)
         };
         check.compare(sampler, &got, &cpu);
         Ok(check)
@@ -233,27 +224,46 @@ impl GpuSampleCheck {
         }
         let got = gpu.read_sites(device, queue)?;
         let mut check = Self {
-            order: GpuOrder::Progressive,
-            adapter: ctx.adapter_summary(),
-            count: n,
-            faces: sampler.mesh().face_count(),
-            table_bytes: gpu.table_bytes(),
-            cpu_bytes: sampler.heap_bytes(),
             request_s: median(request),
             sites_s: median(sites),
             samples_s: None,
             pass_s: (!passes.is_empty()).then(|| [median(passes), 0.0]),
             cpu_sites_s: median(cpu_sites),
-            faces_differ: 0,
-            segments_differ: 0,
-            deviation: 0.0,
-            beyond: 0,
+            ..Self::unmeasured(GpuOrder::Progressive, ctx, sampler, n, &gpu)
         };
         check.compare(sampler, &got, &cpu);
         Ok(check)
     }
 
     /// Counts how the GPU's sites `got` differ from the CPU's `cpu`.
+    /// What a check knows before it times or compares anything: the order, the
+    /// adapter, the count and the sizes, with every time and difference zero.
+    fn unmeasured(
+        order: GpuOrder,
+        ctx: &GpuContext,
+        sampler: &Sampler,
+        n: usize,
+        gpu: &GpuSampler,
+    ) -> Self {
+        Self {
+            order,
+            adapter: ctx.adapter_summary(),
+            count: n,
+            faces: sampler.mesh().face_count(),
+            table_bytes: gpu.table_bytes(),
+            cpu_bytes: sampler.heap_bytes(),
+            request_s: 0.0,
+            sites_s: 0.0,
+            samples_s: None,
+            pass_s: None,
+            cpu_sites_s: 0.0,
+            faces_differ: 0,
+            segments_differ: 0,
+            deviation: 0.0,
+            beyond: 0,
+        }
+    }
+
     fn compare(&mut self, sampler: &Sampler, got: &[SampleSite], cpu: &[SampleSite]) {
         let (lo, hi) = sampler.mesh().bounds();
         let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
