@@ -36,9 +36,9 @@ pub use curvature::{
     CurvatureMeasure, CurvatureNormalization, PrincipalCurvatures, principal_curvatures,
 };
 pub use design::{
-    Anisotropy, Constraint, Density, Design, Guidance, LineConstraint, LineField, LineFieldOptions,
-    LinearSolver, MULTIGRID_VERTICES, SOLVE_TOLERANCE, Site, constrained_line_field,
-    guided_line_field, line_field_energy, smoothest_line_field,
+    Anisotropy, Constraint, Density, Design, EdgeWeights, Guidance, LineConstraint, LineField,
+    LineFieldOptions, LinearSolver, MULTIGRID_VERTICES, SOLVE_TOLERANCE, Site,
+    constrained_line_field, guided_line_field, line_field_energy, smoothest_line_field,
 };
 pub use eigen::{
     Eigen2, eigen_2x2, eigen_in_plane, frame_angle, principal_axis, tangent_frame, vertex_frames,

@@ -24,7 +24,8 @@ use super::vertex_graph::VertexGraph;
 
 use super::frames::Frames;
 use super::line_field::{
-    LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE, Weights,
+    EdgeWeights, LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
+    SOLVE_TOLERANCE,
 };
 use crate::field::LineFieldError;
 use crate::field::tangent_space::TangentSpaces;
@@ -131,10 +132,10 @@ fn hermitian_csr<T: Scalar>(n: usize, lower: &[Triplet<usize, usize, T>]) -> Csr
 }
 
 /// Cotangent weight per edge, `(cot alpha + cot beta) / 2`, as it is
-/// ([`Weights::Cotan`]: negative across obtuse corners, 0 where it is not finite) or
-/// floored at [`MIN_EDGE_WEIGHT`] ([`Weights::Floored`]: the floor where it is not
+/// ([`EdgeWeights::Cotan`]: negative across obtuse corners, 0 where it is not finite) or
+/// floored at [`MIN_EDGE_WEIGHT`] ([`EdgeWeights::Floored`]: the floor where it is not
 /// finite), and lumped mass per vertex.
-fn weights_and_mass(mesh: &TriMesh, kind: Weights) -> (Vec<f64>, Vec<f64>) {
+fn weights_and_mass(mesh: &TriMesh, kind: EdgeWeights) -> (Vec<f64>, Vec<f64>) {
     let pos = mesh.positions();
     let mut mass = vec![0.0; mesh.vertex_count()];
     let mut cotan = vec![0.0; mesh.edge_count()];
@@ -159,10 +160,10 @@ fn weights_and_mass(mesh: &TriMesh, kind: Weights) -> (Vec<f64>, Vec<f64>) {
     let weights = cotan
         .into_iter()
         .map(|c| match (kind, c.is_finite()) {
-            (Weights::Cotan, true) => c,
-            (Weights::Cotan, false) => 0.0,
-            (Weights::Floored, true) => c.max(MIN_EDGE_WEIGHT),
-            (Weights::Floored, false) => MIN_EDGE_WEIGHT,
+            (EdgeWeights::Cotan, true) => c,
+            (EdgeWeights::Cotan, false) => 0.0,
+            (EdgeWeights::Floored, true) => c.max(MIN_EDGE_WEIGHT),
+            (EdgeWeights::Floored, false) => MIN_EDGE_WEIGHT,
         })
         .collect();
     (weights, mass)
@@ -220,7 +221,7 @@ impl Connection {
     /// With `prepare` (the caller will factor the system) a direct solver's symbolic
     /// factorization is made on a second thread while the weights are summed, and the
     /// buffers of the complex factors are allocated there while the normals are
-    /// smoothed; the results do not depend on it. The weights are [`Weights::first`]
+    /// smoothed; the results do not depend on it. The weights are [`EdgeWeights::first`]
     /// of `smoothing`.
     pub(crate) fn build(
         mesh: &TriMesh,
@@ -228,7 +229,13 @@ impl Connection {
         solver: LinearSolver,
         prepare: bool,
     ) -> Result<Self, LineFieldError> {
-        Self::build_with(mesh, smoothing, solver, prepare, Weights::first(smoothing))
+        Self::build_with(
+            mesh,
+            smoothing,
+            solver,
+            prepare,
+            EdgeWeights::Cotan.first(smoothing),
+        )
     }
 
     /// [`build`](Self::build) with the edge weights `kind`.
@@ -237,7 +244,7 @@ impl Connection {
         smoothing: f64,
         solver: LinearSolver,
         prepare: bool,
-        kind: Weights,
+        kind: EdgeWeights,
     ) -> Result<Self, LineFieldError> {
         let n = mesh.vertex_count();
         if n == 0 {
@@ -449,6 +456,45 @@ impl Connection {
             None,
             &AmgOptions::default(),
         )?)
+    }
+
+    /// The multigrid hierarchy that preconditions the eigen-iteration of the whole
+    /// mesh's `A + diag(extra)` (see `eigenpair.rs`), and whether it is that system's
+    /// own (the one [`hierarchy`](Self::hierarchy) makes). Where every weight is at
+    /// least [`MIN_EDGE_WEIGHT`] it is; where the paper's weights are negative across
+    /// obtuse corners it is the hierarchy of the same system with the weights floored
+    /// at [`MIN_EDGE_WEIGHT`]. A preconditioner need only be positive definite and
+    /// close: the iteration applies the true `A`, so its result is the true system's,
+    /// while the floored system's couplings all carry the connection's own phase,
+    /// which the aggregation's near-null vector and the Gauss-Seidel smoother assume.
+    pub(crate) fn preconditioner(
+        &self,
+        mesh: &TriMesh,
+        extra: &[f64],
+    ) -> Result<(Amg<c64>, bool), LineFieldError> {
+        let n = self.len();
+        let identity: Vec<usize> = (0..n).collect();
+        let exact = self.edges.iter().all(|e| e.weight >= MIN_EDGE_WEIGHT);
+        let Some(graph) = self.graph.as_ref().filter(|_| !exact) else {
+            return Ok((self.hierarchy(mesh, extra, &identity, n)?, true));
+        };
+        let mut diagonal = extra.to_vec();
+        for e in &self.edges {
+            let w = e.weight.max(MIN_EDGE_WEIGHT);
+            diagonal[e.a] += w;
+            diagonal[e.b] += w;
+        }
+        let edges = &self.edges;
+        let amg = graph.hierarchy(
+            |v| c64::new(diagonal[v], 0.0),
+            |e, larger| {
+                let term = &edges[e];
+                let c = -term.rotation * term.weight.max(MIN_EDGE_WEIGHT);
+                if larger { c } else { c.conj() }
+            },
+            mesh,
+        )?;
+        Ok((amg, false))
     }
 
     /// The lower triangle of `A + diag(extra)` on the unknowns of `slots`.

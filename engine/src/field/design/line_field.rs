@@ -12,25 +12,27 @@ use crate::mesh::TriMesh;
 /// paper's weights is not positive definite (see the [module docs](super)).
 pub const MIN_EDGE_WEIGHT: f64 = 1e-3;
 
-/// Which edge weights a piece's energy is built with (see the [module docs](super)).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Weights {
-    /// The paper's cotangent weights as they are (negative across obtuse corners).
+/// Which cotangent edge weights a piece's energy is built with
+/// ([`LineFieldOptions::weights`](crate::field::design::LineFieldOptions::weights); see
+/// the [module docs](super)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum EdgeWeights {
+    /// The paper's cotangent weights as they are (negative across obtuse corners) where
+    /// the connection is not smoothed and the piece's energy stays positive definite
+    /// under them; else the floored ones.
+    #[default]
     Cotan,
-    /// The cotangent weights floored at [`MIN_EDGE_WEIGHT`]: positive, so the energy is
-    /// positive semi-definite under any connection.
+    /// The cotangent weights floored at [`MIN_EDGE_WEIGHT`] on every piece: positive,
+    /// so the energy is positive semi-definite under any connection.
     Floored,
 }
 
-impl Weights {
-    /// The weights a piece's first solve uses: the paper's without smoothing, the
-    /// floored ones with a smoothed connection (`smoothing > 0`).
-    pub(crate) fn first(smoothing: f64) -> Self {
-        if smoothing > 0.0 {
-            Self::Floored
-        } else {
-            Self::Cotan
-        }
+impl EdgeWeights {
+    /// The weights a piece's first solve uses when `self` is asked for: the floored
+    /// ones with a smoothed connection (`smoothing > 0`) whatever is asked.
+    pub(crate) fn first(self, smoothing: f64) -> Self {
+        if smoothing > 0.0 { Self::Floored } else { self }
     }
 }
 

@@ -161,7 +161,8 @@ mod vertex_graph;
 pub use designed::{Anisotropy, Constraint, Density, Design, Guidance, Site};
 pub use eigenpair::{LAMBDA_ITERATIONS, LAMBDA_TOLERANCE};
 pub use line_field::{
-    LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT, SOLVE_TOLERANCE,
+    EdgeWeights, LineField, LinearSolver, MIN_EDGE_WEIGHT, MULTIGRID_VERTICES, SHIFT,
+    SOLVE_TOLERANCE,
 };
 pub use pieces::{constrained_line_field, guided_line_field, smoothest_line_field};
 pub use solve::{LineConstraint, LineFieldOptions, line_field_energy};

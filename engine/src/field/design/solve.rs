@@ -13,7 +13,7 @@ use glam::DVec3;
 use super::cancel::cancel_pairs;
 use super::connection::Connection;
 use super::eigenpair::{smallest_eigenpair, smallest_eigenvalue};
-use super::line_field::{LineField, LinearSolver, Weights};
+use super::line_field::{EdgeWeights, LineField, LinearSolver};
 use crate::field::LineFieldError;
 use crate::field::curvature::area_radius;
 use crate::linalg::Amg;
@@ -60,6 +60,12 @@ pub struct LineFieldOptions {
     /// it the result's directions lie in the mesh's own tangent planes. Range
     /// `[0, inf)`, 0 cancelling none; default 0.
     pub cancel_distance: f64,
+    /// The edge weights of the energy: [`EdgeWeights::Cotan`], the paper's (default), or
+    /// [`EdgeWeights::Floored`], every weight floored at
+    /// [`MIN_EDGE_WEIGHT`](crate::field::design::MIN_EDGE_WEIGHT) (the rule with
+    /// smoothing, and the way out where the paper's leave a piece's energy indefinite;
+    /// see the [module docs](crate::field::design)).
+    pub weights: EdgeWeights,
 }
 
 impl Default for LineFieldOptions {
@@ -72,6 +78,7 @@ impl Default for LineFieldOptions {
             tolerance: 1e-8,
             solver: LinearSolver::Auto,
             cancel_distance: 0.0,
+            weights: EdgeWeights::Cotan,
         }
     }
 }
@@ -146,22 +153,22 @@ pub(crate) fn smoothest_piece(
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let smoothing = options.smoothing * area_radius(mesh);
-    definite(Weights::first(smoothing), |weights| {
+    definite(options.weights.first(smoothing), |weights| {
         let system = Connection::build_with(mesh, smoothing, options.solver, true, weights)?;
         smoothest_on(mesh, &system, options)
     })
 }
 
-/// `solve` with the edge weights `first`; where that is [`Weights::Cotan`] and the
+/// `solve` with the edge weights `first`; where that is [`EdgeWeights::Cotan`] and the
 /// piece's energy turns out not positive definite (see
-/// [`LineFieldError::not_definite`]), `solve` once more with [`Weights::Floored`]
+/// [`LineFieldError::not_definite`]), `solve` once more with [`EdgeWeights::Floored`]
 /// (see the [module docs](super)).
 fn definite<T>(
-    first: Weights,
-    mut solve: impl FnMut(Weights) -> Result<T, LineFieldError>,
+    first: EdgeWeights,
+    mut solve: impl FnMut(EdgeWeights) -> Result<T, LineFieldError>,
 ) -> Result<T, LineFieldError> {
     match solve(first) {
-        Err(e) if first == Weights::Cotan && e.not_definite() => solve(Weights::Floored),
+        Err(e) if first == EdgeWeights::Cotan && e.not_definite() => solve(EdgeWeights::Floored),
         found => found,
     }
 }
@@ -182,7 +189,9 @@ fn smoothest_on(
         shift,
         true,
     )?;
-    system.recycle(factor);
+    if let Some(factor) = factor {
+        system.recycle(factor);
+    }
     // A positive definite `A + shift M` has every eigenvalue above `-shift`; a lower
     // Ritz value (a multigrid hierarchy need not notice) shows the energy indefinite.
     if value < -shift {
@@ -262,7 +271,7 @@ pub(crate) fn constrained_piece<'g>(
 ) -> Result<LineField, LineFieldError> {
     options.validate()?;
     let smoothing = options.smoothing * area_radius(mesh);
-    let first = Weights::first(smoothing);
+    let first = options.weights.first(smoothing);
     let (built, guidance) = connection_beside(mesh, options, guided, constraints, guidance, first);
     let guidance = &*guidance;
     check_guidance(guidance, mesh.vertex_count())?;
@@ -270,10 +279,10 @@ pub(crate) fn constrained_piece<'g>(
         constrained_on(mesh, system, lambda_1, guidance, constraints, options)
     });
     match found {
-        Err(e) if first == Weights::Cotan && e.not_definite() => {
+        Err(e) if first == EdgeWeights::Cotan && e.not_definite() => {
             // The paper's weights left the piece's energy indefinite: solved again
             // with the floored ones (see the module docs).
-            let floored = Weights::Floored;
+            let floored = EdgeWeights::Floored;
             let system = Connection::build_with(mesh, smoothing, options.solver, true, floored)?;
             let lambda_1 = if may_shift(options, guided, constraints) {
                 Some(smallest_eigenvalue(mesh, &system, system.shift())?)
@@ -393,7 +402,7 @@ fn connection_beside<'g>(
     guided: bool,
     constraints: &[LineConstraint],
     guidance: impl FnOnce() -> Cow<'g, [DVec3]> + Send,
-    weights: Weights,
+    weights: EdgeWeights,
 ) -> (Result<Built, LineFieldError>, Cow<'g, [DVec3]>) {
     let smoothing = options.smoothing * area_radius(mesh);
     let build = || Connection::build_with(mesh, smoothing, options.solver, true, weights);
