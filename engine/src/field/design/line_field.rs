@@ -36,6 +36,10 @@ impl EdgeWeights {
     }
 }
 
+/// Most conjugate-gradient iterations of one multigrid-preconditioned solve (a mesh
+/// needs 10 to 25; more means the system is nearly singular).
+pub(crate) const MAX_CG_ITERATIONS: usize = 500;
+
 /// Relative shift of the inverse power iteration: `sigma = SHIFT * tr(A) / tr(M)`.
 pub const SHIFT: f64 = 1e-8;
 

@@ -45,6 +45,15 @@
 //!   curvature or not converging, a multigrid hierarchy's coarse factor failing, or a
 //!   smoothest field's eigenvalue below `-sigma`) is solved once more from the start
 //!   with the floored weights. The other pieces keep the paper's weights.
+//! - [`LineFieldOptions::weights`] asks for the floored weights on every piece.
+//!
+//! With multigrid, the smoothest field's eigen-iteration under the paper's weights is
+//! preconditioned by the hierarchy of the floored weights' system: the negative
+//! couplings turn the phase the aggregation transports and weaken the Gauss-Seidel
+//! smoother (the bunny took 35 V-cycles with the system's own hierarchy, 21 with the
+//! floored one's, 18 with the floored weights throughout), while Rayleigh-Ritz
+//! applies the paper's `A`, so the field is theirs to the solver's tolerance
+//! (`design/connection.rs`, `Connection::preconditioner`).
 //!
 //! # One solve per connected piece
 //! Each connected piece of the mesh ([`TriMesh::face_components`](crate::mesh::TriMesh::face_components):
@@ -135,7 +144,8 @@
 //! - `line_field.rs`: the result [`LineField`], [`LinearSolver`] and the solver
 //!   constants, below the solver and its system.
 //! - `connection.rs`: the connection Laplacian, its factors and multigrid solves, on
-//!   the vertex pattern (`pattern.rs`) or the vertex graph (`vertex_graph.rs`).
+//!   the vertex pattern (`pattern.rs`) or the vertex graph (`vertex_graph.rs`);
+//!   `normals.rs`: the smoothed normals behind the smoothed connection.
 //! - `frames.rs`: doubled angles to world directions and back, in the intrinsic
 //!   tangent spaces (or, for the smoothing's factor, in vertex-normal planes).
 //! - `eigenpair.rs`: the smallest eigenpair of the connection Laplacian (the
@@ -153,6 +163,7 @@ mod eigenpair;
 mod frames;
 mod index;
 mod line_field;
+mod normals;
 mod pattern;
 mod pieces;
 mod solve;
