@@ -572,6 +572,7 @@ mod gpu_tests {
     use std::path::Path;
 
     use glam::{DVec3, Vec3};
+    use strata_engine::sample::lod::Placement;
     use strata_engine::sample::{Budget, LodPool, PoolChange, SampleSite, Sampler};
 
     use super::GpuLodPool;
@@ -590,11 +591,12 @@ mod gpu_tests {
         })
     }
 
-    /// A pool synced with GPU placement holds the CPU pool's sites (the sampler
-    /// check's tolerances: at most 1 in 10^4 beyond 1e-5 of the diagonal, none beyond
-    /// 1e-4, at most 1 in 10^3 in another face) along a dolly in and an orbit on the
-    /// default scene, uploading 4 bytes per new entry, and the expanded records follow
-    /// the sites.
+    /// A pool that lists ranks only, synced with GPU placement, holds the sites of a
+    /// pool placed on the CPU (the sampler check's tolerances: at most 1 in 10^4
+    /// beyond 1e-5 of the diagonal, none beyond 1e-4, at most 1 in 10^3 in another
+    /// face) along a dolly in and an orbit on the default scene, uploading 4 bytes per
+    /// new entry, and the expanded records follow the sites. Synced with its sites
+    /// instead, it is refused.
     #[test]
     fn placed_pool_holds_the_cpu_pools_sites() {
         let Some(ctx) = GpuContext::headless_or_skip("placed_pool_holds_the_cpu_pools_sites")
@@ -609,8 +611,21 @@ mod gpu_tests {
         let s = &scene.sampler;
         let gpu = GpuSampler::new(device, s).expect("GPU sampler");
         let mut pool = LodPool::new(s, 5, BASE as u32, 2_000_000);
+        let mut listed = LodPool::new_with(s, 5, (BASE as u32, 2_000_000), Placement::Elsewhere);
         let mut gpu_pool = GpuLodPool::new(device, BASE).expect("pool");
         let mut samples = GpuSampleBuffer::new(device).expect("buffer");
+        let expander = gpu.expander();
+        let refused = gpu_pool.sync(
+            device,
+            queue,
+            &listed,
+            &PoolChange::Rebuilt,
+            expander,
+            &mut samples,
+        );
+        let e = refused.expect_err("sites placed elsewhere");
+        assert!(e.to_string().contains("placed elsewhere"), "{e}");
+        assert!(gpu_pool.is_empty() && samples.is_empty());
         let lod = SplatLod {
             base: BASE as f32,
             expanded: BASE as f32,
@@ -632,13 +647,16 @@ mod gpu_tests {
                 radius: 2.0,
             };
             let view = lod.view(&camera, (320, 240));
-            let change = pool
+            let update = pool
                 .update(s, &view, Budget::Base(BASE))
-                .expect("the pool's sampler")
-                .change;
+                .expect("the pool's sampler");
+            let change = listed.update(s, &view, Budget::Base(BASE)).expect("same");
+            assert_eq!(change, update, "frame {frame}");
+            assert_eq!(listed.ranks(), pool.ranks(), "frame {frame}");
+            let change = change.change;
             let held = gpu_pool.len();
             let bytes = gpu_pool
-                .sync_placed(device, queue, (&pool, &change), &gpu, &mut samples)
+                .sync_placed(device, queue, (&listed, &change), &gpu, &mut samples)
                 .expect("sync");
             let sent = if frame == 0 {
                 pool.len()
