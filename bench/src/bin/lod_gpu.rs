@@ -16,7 +16,8 @@
 //! (a frame's CPU cost with GPU placement), the bytes uploaded per frame, and how the
 //! GPU copy's sites differ from the placing pool's at the end of the path (faces,
 //! largest deviation over the bounding-box diagonal, samples beyond 1e-5); it fails
-//! when the two pools list other ranks. On the software
+//! when the two pools list other ranks. It also counts the heap allocations each
+//! pool's update makes per frame (mean over the timed frames). On the software
 //! adapter the GPU's own time is not representative, and the device is waited for
 //! after every frame so frames do not pile up. `LOD_GPU_SHOWN=n` sets the samples the
 //! first frame shows (default 10^6; the software adapter's 128 MiB binding limit holds
@@ -24,6 +25,8 @@
 //! `lod` bench, the frame loop runs on a worker of rayon's global pool
 //! (`use_current_thread`); `LOD_OUTSIDE_POOL=1` calls from outside the pool.
 
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use glam::DVec3;
@@ -31,6 +34,41 @@ use strata_bench::lod_camera::{LodCamera, lod_scene};
 use strata_engine::sample::lod::{Budget, Placement, ViewLod};
 use strata_engine::sample::{LodPool, SampleSite, Sampler};
 use strata_systems::gpu::{GpuContext, GpuLodPool, GpuSampleBuffer, GpuSampler};
+
+/// The system allocator, counting allocations (all threads).
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every call is forwarded to the system allocator unchanged; the counter is
+// an atomic add.
+#[allow(unsafe_code)]
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: the caller's contract is the system allocator's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations so far.
+fn allocations() -> usize {
+    ALLOCATIONS.load(Ordering::Relaxed)
+}
 
 const SEED: u64 = 3;
 const WARM_UP: i32 = 30;
@@ -89,9 +127,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ctx.adapter_summary(),
     );
     println!(
-        "| path | update, CPU placement, ms | update, ranks only, ms | sync (GPU placement) ms | CPU per frame with GPU placement, ms | upload KB per frame, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
+        "| path | update, CPU placement, ms | update, ranks only, ms | sync (GPU placement) ms | CPU per frame with GPU placement, ms | upload KB per frame, mean | allocations per update, placing / ranks only, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let (centre, start) = (camera.centre, camera.start);
     let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
     let orbit = || -> Path {
@@ -113,15 +151,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut gpu_pool = GpuLodPool::new(device, base)?;
         let mut samples = GpuSampleBuffer::new(device)?;
         let mut times: [Vec<f64>; 4] = Default::default();
-        let mut bytes = vec![];
+        let (mut bytes, mut allocated) = (vec![], [0; 2]);
         for t in -WARM_UP..=frames as i32 {
             let (v, b) = path(t);
-            let clock = Instant::now();
+            let (clock, before) = (Instant::now(), allocations());
             pool.update(s, &v, Budget::Base(b))?;
             let placed = clock.elapsed().as_secs_f64();
-            let clock = Instant::now();
+            let (clock, between) = (Instant::now(), allocations());
             let update = ranks_only.update(s, &v, Budget::Base(b))?;
             let listed = clock.elapsed().as_secs_f64();
+            if t > 0 {
+                allocated[0] += between - before;
+                allocated[1] += allocations() - between;
+            }
             let clock = Instant::now();
             let sent = gpu_pool.sync_placed(
                 device,
@@ -155,8 +197,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let [placed, listed, synced, total] = times.map(median);
         println!(
-            "| {name} | {placed:.3} | {listed:.3} | {synced:.3} | {total:.3} | {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
+            "| {name} | {placed:.3} | {listed:.3} | {synced:.3} | {total:.3} | {:.1} | {:.1} / {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
             bytes.iter().sum::<f64>() / bytes.len() as f64,
+            allocated[0] as f64 / frames as f64,
+            allocated[1] as f64 / frames as f64,
             pool.len(),
         );
     }
