@@ -5,25 +5,70 @@
 //! seed 3; the default scene without the shared meshes; the first frame shows about
 //! 10^6 samples; `count +1%`, `dolly in 1%`, `dolly out 1%`, `orbit 1 degree`, each
 //! `frames` steps, default 10, after 30 untimed ones). Per frame the CPU runs
-//! `LodPool::update` and `GpuLodPool::sync_placed`: the ranks the update appended are
-//! uploaded (4 bytes each) and the GPU's progressive pass places them, then expands
-//! them into the sample buffer. Per path it prints the CPU time per frame of the update
-//! and of the sync (writing the ranks and recording the passes; the GPU's work is not
-//! waited for, as in a frame loop), the bytes uploaded per frame, and how the GPU
-//! copy's sites differ from the CPU pool's at the end of the path (faces, largest
-//! deviation over the bounding-box diagonal, samples beyond 1e-5). On the software
+//! `LodPool::update` on a pool that lists ranks only (`Placement::Elsewhere`) and
+//! `GpuLodPool::sync_placed`: the ranks the update appended are uploaded (4 bytes
+//! each) and the GPU's progressive pass places them, then expands them into the sample
+//! buffer. A pool that places its entries on the CPU (the default) is updated along the
+//! same path, for comparison and as the reference of the GPU's sites. Per path it
+//! prints the medians over the frames of the CPU time of the placing pool's update, of
+//! the listing pool's update, of the sync (writing the ranks and recording the passes;
+//! the GPU's work is not waited for, as in a frame loop) and of the last two together
+//! (a frame's CPU cost with GPU placement), the bytes uploaded per frame, and how the
+//! GPU copy's sites differ from the placing pool's at the end of the path (faces,
+//! largest deviation over the bounding-box diagonal, samples beyond 1e-5); it fails
+//! when the two pools list other ranks. It also counts the heap allocations each
+//! pool's update makes per frame (mean over the timed frames). On the software
 //! adapter the GPU's own time is not representative, and the device is waited for
 //! after every frame so frames do not pile up. `LOD_GPU_SHOWN=n` sets the samples the
 //! first frame shows (default 10^6; the software adapter's 128 MiB binding limit holds
-//! the records of about 2 * 10^6 pool entries, so use 2 * 10^5 there).
+//! the records of about 2 * 10^6 pool entries, so use 2 * 10^5 there). As in the
+//! `lod` bench, the frame loop runs on a worker of rayon's global pool
+//! (`use_current_thread`); `LOD_OUTSIDE_POOL=1` calls from outside the pool.
 
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
-use strata_engine::sample::lod::{Budget, ViewLod};
+use strata_engine::sample::lod::{Budget, Placement, ViewLod};
 use strata_engine::sample::{LodPool, SampleSite, Sampler};
 use strata_systems::gpu::{GpuContext, GpuLodPool, GpuSampleBuffer, GpuSampler};
+
+/// The system allocator, counting allocations (all threads).
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every call is forwarded to the system allocator unchanged; the counter is
+// an atomic add.
+#[allow(unsafe_code)]
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: the caller's contract is the system allocator's.
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: `ptr` came from `System.alloc` with this layout.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations so far.
+fn allocations() -> usize {
+    ALLOCATIONS.load(Ordering::Relaxed)
+}
 
 const SEED: u64 = 3;
 const WARM_UP: i32 = 30;
@@ -57,6 +102,11 @@ fn calibrate_base(s: &Sampler, first: &ViewLod, shown_target: f64) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames = strata_bench::repeats_arg(10)?.max(1);
+    if std::env::var_os("LOD_OUTSIDE_POOL").is_none() {
+        rayon::ThreadPoolBuilder::new()
+            .use_current_thread()
+            .build_global()?;
+    }
     let (file, scene) = lod_scene(SEED)?;
     let s = &scene.sampler;
     let ctx = GpuContext::headless(&Default::default())?;
@@ -70,15 +120,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let base = calibrate_base(s, &first, shown);
     let prefix = LodPool::new(s, SEED, base as u32, 8_000_000);
+    let listing = LodPool::new_with(s, SEED, (base as u32, 8_000_000), Placement::Elsewhere);
     println!(
         "scene `{file}`: {} faces; base count {base:.0}; adapter {}; {frames} frames per path.\n",
         scene.mesh.face_count(),
         ctx.adapter_summary(),
     );
     println!(
-        "| path | update ms, median | sync (GPU placement) ms, median | CPU per frame ms, median | upload KB per frame, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
+        "| path | update, CPU placement, ms | update, ranks only, ms | sync (GPU placement) ms | CPU per frame with GPU placement, ms | upload KB per frame, mean | allocations per update, placing / ranks only, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let (centre, start) = (camera.centre, camera.start);
     let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
     let orbit = || -> Path {
@@ -96,24 +147,43 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (lo, hi) = s.mesh().bounds();
     let diagonal = (hi - lo).length();
     for (name, path) in &paths {
-        let mut pool = prefix.clone();
+        let (mut pool, mut ranks_only) = (prefix.clone(), listing.clone());
         let mut gpu_pool = GpuLodPool::new(device, base)?;
         let mut samples = GpuSampleBuffer::new(device)?;
-        let (mut updates, mut syncs, mut totals, mut bytes) = (vec![], vec![], vec![], vec![]);
+        let mut times: [Vec<f64>; 4] = Default::default();
+        let (mut bytes, mut allocated) = (vec![], [0; 2]);
         for t in -WARM_UP..=frames as i32 {
             let (v, b) = path(t);
+            let (clock, before) = (Instant::now(), allocations());
+            pool.update(s, &v, Budget::Base(b))?;
+            let placed = clock.elapsed().as_secs_f64();
+            let (clock, between) = (Instant::now(), allocations());
+            let update = ranks_only.update(s, &v, Budget::Base(b))?;
+            let listed = clock.elapsed().as_secs_f64();
+            if t > 0 {
+                allocated[0] += between - before;
+                allocated[1] += allocations() - between;
+            }
             let clock = Instant::now();
-            let update = pool.update(s, &v, Budget::Base(b))?;
-            let updated = clock.elapsed().as_secs_f64();
-            let clock = Instant::now();
-            let sent =
-                gpu_pool.sync_placed(device, queue, (&pool, &update.change), &gpu, &mut samples)?;
+            let sent = gpu_pool.sync_placed(
+                device,
+                queue,
+                (&ranks_only, &update.change),
+                &gpu,
+                &mut samples,
+            )?;
             let synced = clock.elapsed().as_secs_f64();
             ctx.wait_idle("placing the pool's entries")?;
+            if pool.ranks() != ranks_only.ranks() {
+                return Err(format!("{name}, frame {t}: the pools list other ranks").into());
+            }
             if t > 0 {
-                updates.push(updated * 1e3);
-                syncs.push(synced * 1e3);
-                totals.push((updated + synced) * 1e3);
+                for (row, ms) in times
+                    .iter_mut()
+                    .zip([placed, listed, synced, listed + synced])
+                {
+                    row.push(ms * 1e3);
+                }
                 bytes.push(sent as f64 / 1e3);
             }
         }
@@ -125,12 +195,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             worst = worst.max(d);
             beyond += usize::from(d > 1e-5);
         }
+        let [placed, listed, synced, total] = times.map(median);
         println!(
-            "| {name} | {:.3} | {:.3} | {:.3} | {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
-            median(updates),
-            median(syncs),
-            median(totals),
+            "| {name} | {placed:.3} | {listed:.3} | {synced:.3} | {total:.3} | {:.1} | {:.1} / {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
             bytes.iter().sum::<f64>() / bytes.len() as f64,
+            allocated[0] as f64 / frames as f64,
+            allocated[1] as f64 / frames as f64,
             pool.len(),
         );
     }

@@ -5,7 +5,9 @@
 //! After [`LodPool::update`] only the entries it appended are uploaded and expanded
 //! ([`GpuLodPool::sync`]); a pool rebuilt for a far view re-sends its extension. With
 //! [`GpuLodPool::sync_placed`] only the new entries' ranks are uploaded (4 bytes each)
-//! and [`GpuSampler`]'s progressive pass places them on the GPU. The
+//! and [`GpuSampler`]'s progressive pass places them on the GPU; the engine pool is
+//! then built with [`Placement::Elsewhere`], so that it lists ranks and places
+//! nothing on the CPU either. The
 //! splat pipelines then cull and fade by rank against the frame's camera
 //! ([`SplatLod`], in the vertex shader), so a frame whose view
 //! needs no new ranks uploads nothing but its uniforms. A deforming mesh keeps its
@@ -17,6 +19,7 @@
 //! [`LodPool::fades_into`] and for counting what a frame shows.
 
 use strata_engine::mesh::TriMesh;
+use strata_engine::sample::lod::Placement;
 use strata_engine::sample::{Budget, FrameUpdate, LodPool, PoolChange, SampleSite, Sampler};
 
 use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
@@ -32,7 +35,7 @@ const SITE_BYTES: u64 = std::mem::size_of::<SampleSite>() as u64;
 
 /// Where the sites of a pool's new entries come from.
 #[derive(Clone, Copy)]
-enum Placement<'a> {
+enum SiteSource<'a> {
     /// Uploaded from the pool (placed by the CPU); expanded with the expander.
     Upload(&'a SiteExpander),
     /// Placed by the sampler's progressive pass.
@@ -112,7 +115,9 @@ impl GpuLodPool {
     /// [`LodPool::update`] returned; anything for a first call) and expands the
     /// entries that changed into `samples` with `expander` (built for the pool's
     /// sampler). Returns the bytes uploaded: 20 per new entry. Records and submits;
-    /// never waits on the GPU.
+    /// never waits on the GPU. An error, and nothing sent, for a pool whose entries
+    /// are not placed on the CPU ([`Placement::Elsewhere`]: use
+    /// [`sync_placed`](Self::sync_placed)).
     pub fn sync(
         &mut self,
         device: &wgpu::Device,
@@ -122,11 +127,17 @@ impl GpuLodPool {
         expander: &SiteExpander,
         samples: &mut GpuSampleBuffer,
     ) -> Result<u64, GpuError> {
+        if pool.placement() != Placement::Cpu {
+            return Err(GpuError::Mismatch {
+                what: "a level-of-detail pool synced with its sites",
+                detail: "its entries are placed elsewhere (sync_placed places them)".into(),
+            });
+        }
         self.sync_with(
             device,
             queue,
             (pool, change),
-            Placement::Upload(expander),
+            SiteSource::Upload(expander),
             samples,
         )
     }
@@ -134,8 +145,10 @@ impl GpuLodPool {
     /// [`sync`](Self::sync) with the new entries placed on the GPU: only their ranks
     /// are uploaded (4 bytes per new entry), and `sampler`'s progressive pass (built
     /// for the pool's sampler) places them in the GPU copy's sites buffer, the sites
-    /// of [`LodPool::sites`] up to `f32` round-off (the tolerances of
+    /// a CPU-placed pool holds up to `f32` round-off (the tolerances of
     /// [`GpuSampler::sample_progressive_sites`]); its expander makes the records.
+    /// Reads only the pool's ranks and seed: build it with [`Placement::Elsewhere`]
+    /// ([`LodPool::new_with`]) so that its updates place nothing on the CPU.
     /// Returns the bytes uploaded. Records and submits; never waits on the GPU.
     pub fn sync_placed(
         &mut self,
@@ -149,7 +162,7 @@ impl GpuLodPool {
             device,
             queue,
             (pool, change),
-            Placement::Gpu(sampler),
+            SiteSource::Gpu(sampler),
             samples,
         )
     }
@@ -169,7 +182,7 @@ impl GpuLodPool {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         (pool, change): (&LodPool, &PoolChange),
-        placement: Placement<'_>,
+        placement: SiteSource<'_>,
         samples: &mut GpuSampleBuffer,
     ) -> Result<u64, GpuError> {
         let n = pool.len();
@@ -206,7 +219,7 @@ impl GpuLodPool {
             bytemuck::cast_slice(&pool.ranks()[from..]),
         );
         let (expander, site_bytes) = match placement {
-            Placement::Upload(expander) => {
+            SiteSource::Upload(expander) => {
                 let new = &pool.sites()[from..];
                 queue.write_buffer(
                     &self.sites,
@@ -215,7 +228,7 @@ impl GpuLodPool {
                 );
                 (expander, SITE_BYTES)
             }
-            Placement::Gpu(sampler) => {
+            SiteSource::Gpu(sampler) => {
                 let ranks = Ranks::Listed(&self.ranks, from as u32);
                 sampler.encode_progressive(
                     device,
@@ -559,6 +572,7 @@ mod gpu_tests {
     use std::path::Path;
 
     use glam::{DVec3, Vec3};
+    use strata_engine::sample::lod::Placement;
     use strata_engine::sample::{Budget, LodPool, PoolChange, SampleSite, Sampler};
 
     use super::GpuLodPool;
@@ -577,11 +591,12 @@ mod gpu_tests {
         })
     }
 
-    /// A pool synced with GPU placement holds the CPU pool's sites (the sampler
-    /// check's tolerances: at most 1 in 10^4 beyond 1e-5 of the diagonal, none beyond
-    /// 1e-4, at most 1 in 10^3 in another face) along a dolly in and an orbit on the
-    /// default scene, uploading 4 bytes per new entry, and the expanded records follow
-    /// the sites.
+    /// A pool that lists ranks only, synced with GPU placement, holds the sites of a
+    /// pool placed on the CPU (the sampler check's tolerances: at most 1 in 10^4
+    /// beyond 1e-5 of the diagonal, none beyond 1e-4, at most 1 in 10^3 in another
+    /// face) along a dolly in and an orbit on the default scene, uploading 4 bytes per
+    /// new entry, and the expanded records follow the sites. Synced with its sites
+    /// instead, it is refused.
     #[test]
     fn placed_pool_holds_the_cpu_pools_sites() {
         let Some(ctx) = GpuContext::headless_or_skip("placed_pool_holds_the_cpu_pools_sites")
@@ -596,8 +611,21 @@ mod gpu_tests {
         let s = &scene.sampler;
         let gpu = GpuSampler::new(device, s).expect("GPU sampler");
         let mut pool = LodPool::new(s, 5, BASE as u32, 2_000_000);
+        let mut listed = LodPool::new_with(s, 5, (BASE as u32, 2_000_000), Placement::Elsewhere);
         let mut gpu_pool = GpuLodPool::new(device, BASE).expect("pool");
         let mut samples = GpuSampleBuffer::new(device).expect("buffer");
+        let expander = gpu.expander();
+        let refused = gpu_pool.sync(
+            device,
+            queue,
+            &listed,
+            &PoolChange::Rebuilt,
+            expander,
+            &mut samples,
+        );
+        let e = refused.expect_err("sites placed elsewhere");
+        assert!(e.to_string().contains("placed elsewhere"), "{e}");
+        assert!(gpu_pool.is_empty() && samples.is_empty());
         let lod = SplatLod {
             base: BASE as f32,
             expanded: BASE as f32,
@@ -619,13 +647,16 @@ mod gpu_tests {
                 radius: 2.0,
             };
             let view = lod.view(&camera, (320, 240));
-            let change = pool
+            let update = pool
                 .update(s, &view, Budget::Base(BASE))
-                .expect("the pool's sampler")
-                .change;
+                .expect("the pool's sampler");
+            let change = listed.update(s, &view, Budget::Base(BASE)).expect("same");
+            assert_eq!(change, update, "frame {frame}");
+            assert_eq!(listed.ranks(), pool.ranks(), "frame {frame}");
+            let change = change.change;
             let held = gpu_pool.len();
             let bytes = gpu_pool
-                .sync_placed(device, queue, (&pool, &change), &gpu, &mut samples)
+                .sync_placed(device, queue, (&listed, &change), &gpu, &mut samples)
                 .expect("sync");
             let sent = if frame == 0 {
                 pool.len()

@@ -2,9 +2,10 @@
 //! ranks drawn per bin, and the draws that append them.
 //!
 //! Input: the [`Bins`] with their needs for the current view. Output: the missing
-//! ranks of every bin (with draw-ahead), appended with their sites, and each bin's
-//! reach raised. Cost: in proportion to the bins plus the ranks drawn; no allocation
-//! while the extension stays within its budget.
+//! ranks of every bin (with draw-ahead), appended with their sites (with
+//! [`Placement::Cpu`]; ranks alone with [`Placement::Elsewhere`]), and each bin's
+//! reach raised. Cost: in proportion to the bins plus the ranks drawn (and placed);
+//! no allocation while the extension stays within its budget.
 
 use std::ops::Range;
 
@@ -27,6 +28,25 @@ const DRAW_CHUNK: usize = 16;
 /// Ranks a bin may list beyond its share of a rank range (an estimate's slack: the
 /// cover's end intervals).
 const COVER_SLACK: f64 = 24.0;
+
+/// Where a [`LodPool`](super::LodPool)'s entries are placed on the surface.
+///
+/// Which ranks a pool holds, in which order, and everything decided from ranks and
+/// the bins' bounds (needs, reaches, splits, draw-ahead, the budget, rebuilds, the
+/// point budget's estimate) are the same under both: only whether the pool computes
+/// its entries' sites differs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Placement {
+    /// The pool places every entry it lists on the CPU
+    /// ([`LodPool::sites`](super::LodPool::sites) holds one site per entry).
+    #[default]
+    Cpu,
+    /// The pool lists ranks only and never places them
+    /// ([`LodPool::sites`](super::LodPool::sites) is empty): whoever draws the samples
+    /// places them from the ranks and the seed, as a GPU's progressive pass does. A
+    /// frame's CPU cost is the bins' bookkeeping and the ranks' enumeration.
+    Elsewhere,
+}
 
 /// What an update of a [`LodPool`](super::LodPool) changed.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -72,6 +92,9 @@ pub(super) struct Entries {
     budget: usize,
     /// The draw-ahead fraction.
     ahead: f64,
+    /// Whether the entries are placed here.
+    placement: Placement,
+    /// One site per entry with [`Placement::Cpu`]; empty with [`Placement::Elsewhere`].
     sites: Vec<SampleSite>,
     ranks: Vec<u32>,
     /// The bins a parallel update draws in, in order.
@@ -91,6 +114,7 @@ impl Clone for Entries {
             prefix: self.prefix,
             budget: self.budget,
             ahead: self.ahead,
+            placement: self.placement,
             sites: with_room(&self.sites, self.sites.capacity()),
             ranks: with_room(&self.ranks, self.ranks.capacity()),
             todo: self.todo.clone(),
@@ -103,12 +127,23 @@ impl Clone for Entries {
 impl Entries {
     /// Ranks `0..prefix` of `sampler`'s sequence for `seed`, with room for `budget`
     /// more (`min(budget, prefix)` of it reserved and committed up front), drawing
-    /// ahead by [`DRAW_AHEAD`].
-    pub(super) fn new(sampler: &Sampler, seed: u64, prefix: u32, budget: usize) -> Self {
+    /// ahead by [`DRAW_AHEAD`], their sites placed by `placement`.
+    pub(super) fn new(
+        sampler: &Sampler,
+        seed: u64,
+        (prefix, budget): (u32, usize),
+        placement: Placement,
+    ) -> Self {
         let capacity = prefix as usize + budget.min(prefix as usize);
-        let mut sites = with_room(&[], capacity);
-        sites.resize(prefix as usize, SampleSite::default());
-        sampler.progressive_sites_into(seed, 0, &mut sites);
+        let sites = match placement {
+            Placement::Cpu => {
+                let mut sites = with_room(&[], capacity);
+                sites.resize(prefix as usize, SampleSite::default());
+                sampler.progressive_sites_into(seed, 0, &mut sites);
+                sites
+            }
+            Placement::Elsewhere => Vec::new(),
+        };
         let mut ranks = with_room(&[], capacity);
         ranks.extend(0..prefix);
         Self {
@@ -116,6 +151,7 @@ impl Entries {
             prefix,
             budget,
             ahead: DRAW_AHEAD,
+            placement,
             sites,
             ranks,
             todo: Vec::new(),
@@ -134,6 +170,11 @@ impl Entries {
         self.ahead
     }
 
+    /// Where the entries are placed.
+    pub(super) fn placement(&self) -> Placement {
+        self.placement
+    }
+
     /// The seed of the sequence.
     pub(super) fn seed(&self) -> u64 {
         self.seed
@@ -144,7 +185,7 @@ impl Entries {
         self.prefix
     }
 
-    /// Every entry's site.
+    /// Every entry's site (none with [`Placement::Elsewhere`]).
     pub(super) fn sites(&self) -> &[SampleSite] {
         &self.sites
     }
@@ -156,12 +197,13 @@ impl Entries {
 
     /// Entries held.
     pub(super) fn len(&self) -> usize {
-        self.sites.len()
+        self.ranks.len()
     }
 
     /// Drops every entry past the prefix and the runs listed.
     pub(super) fn truncate_to_prefix(&mut self) {
-        self.sites.truncate(self.prefix as usize);
+        self.sites
+            .truncate(self.sites.len().min(self.prefix as usize));
         self.ranks.truncate(self.prefix as usize);
         self.runs.clear();
     }
@@ -193,7 +235,8 @@ impl Entries {
 
     /// Lists the missing ranks of every bin in order (with their sites when the
     /// parallel pass takes them, with [`finish`](Self::finish) to place them
-    /// otherwise), raising the bins' reach; false when the budget ran out first.
+    /// otherwise; never placed with [`Placement::Elsewhere`]), raising the bins' reach;
+    /// false when the budget ran out first.
     pub(super) fn extend(&mut self, sampler: &Sampler, bins: &mut Bins) -> bool {
         if self.extend_parallel(sampler, bins) {
             return true;
@@ -250,6 +293,7 @@ impl Entries {
             lists.resize_with(chunks, Default::default);
         }
         let (this, held) = (&*self, &*bins);
+        let place = self.placement == Placement::Cpu;
         let total: usize = lists[..chunks]
             .par_iter_mut()
             .zip(this.todo.par_chunks(DRAW_CHUNK))
@@ -269,6 +313,9 @@ impl Entries {
                         usize::MAX,
                         &mut list.ranks,
                     ));
+                    if !place {
+                        continue;
+                    }
                     list.sites.resize(list.ranks.len(), SampleSite::default());
                     sampler.progressive_cover_sites_with(
                         cover,
@@ -297,11 +344,15 @@ impl Entries {
     }
 
     /// Places the ranks a sequential pass listed (the entries past the sites), in the
-    /// cells of their bins (`bins`), and says what changed from entry `start` on.
+    /// cells of their bins (`bins`), unless they are placed elsewhere, and says what
+    /// changed from entry `start` on.
     pub(super) fn finish(&mut self, sampler: &Sampler, bins: &Bins, start: usize) -> PoolChange {
         let (placed, end) = (self.sites.len(), self.ranks.len());
         if end == start {
             return PoolChange::Unchanged;
+        }
+        if self.placement == Placement::Elsewhere {
+            return PoolChange::Appended(start..end);
         }
         self.sites.resize(end, SampleSite::default());
         let (runs, ranks) = (&self.runs, &self.ranks);

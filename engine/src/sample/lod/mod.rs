@@ -33,7 +33,7 @@ mod tests;
 mod view;
 
 pub use bins::BINS;
-pub use entries::{DRAW_AHEAD, PoolChange};
+pub use entries::{DRAW_AHEAD, Placement, PoolChange};
 pub use estimate::{CLOSE_ROOM, IN_VIEW, MeanMultiplier, PROBES, REFINE_LIMIT, ShownEstimate};
 pub use pool::{Budget, FrameUpdate, LodPool};
 pub use split::{SPLIT_ENTRIES, SPLIT_LOOSE, SPLIT_ROOM, SPLIT_WAYS};

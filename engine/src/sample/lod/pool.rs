@@ -44,14 +44,24 @@
 //! Which ranks are visible, and where each lies, depend only on the seed, the view and
 //! the ranks held, never on the path that led there: the pool's order of entries
 //! differs with the path, the samples do not.
+//!
+//! **Placement.** By default the pool places every entry it lists on the CPU
+//! ([`Placement::Cpu`]). A pool built with [`Placement::Elsewhere`]
+//! ([`LodPool::new_with`]) lists the same ranks in the same order, with the same
+//! bins, reaches and changes, and places none: whoever draws the samples places them
+//! from the ranks and the seed (a GPU's progressive pass), and a frame's CPU cost is
+//! the bins' bookkeeping plus the ranks' enumeration. Nothing the pool decides needs
+//! its entries' positions (needs come from the bins' bounds, the point budget from
+//! its own probes), so both modes decide alike.
 
+use std::borrow::Cow;
 use std::ops::Range;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::bins::Bins;
-use super::entries::{Entries, PoolChange};
+use super::entries::{Entries, Placement, PoolChange};
 use super::estimate::{CLOSE_ROOM, IN_VIEW, MeanMultiplier, ShownEstimate};
 use super::key::SamplerKey;
 use super::split::SPLIT_ROOM;
@@ -161,7 +171,20 @@ impl LodPool {
     /// appending into it takes no page fault), and the pool grows geometrically
     /// beyond, so that updates soon stop allocating.
     pub fn new(sampler: &Sampler, seed: u64, prefix: u32, budget: usize) -> Self {
-        let entries = Entries::new(sampler, seed, prefix, budget);
+        Self::new_with(sampler, seed, (prefix, budget), Placement::Cpu)
+    }
+
+    /// [`new`](Self::new) (ranks `0..prefix`, room for `budget` more) with the entries
+    /// placed by `placement`: with [`Placement::Elsewhere`] the pool lists the ranks
+    /// that [`new`](Self::new)'s would, update by update, and computes no site
+    /// ([`sites`](Self::sites) is empty; 4 bytes per entry instead of 20).
+    pub fn new_with(
+        sampler: &Sampler,
+        seed: u64,
+        (prefix, budget): (u32, usize),
+        placement: Placement,
+    ) -> Self {
+        let entries = Entries::new(sampler, seed, (prefix, budget), placement);
         Self {
             entries,
             bins: Bins::new(sampler, seed, prefix),
@@ -326,9 +349,16 @@ impl LodPool {
         self.entries.prefix()
     }
 
-    /// Every entry's site.
+    /// Every entry's site with [`Placement::Cpu`]; empty with
+    /// [`Placement::Elsewhere`] (the entries' ranks and [`seed`](Self::seed) say
+    /// where they lie: [`Sampler::progressive_sites_of`]).
     pub fn sites(&self) -> &[SampleSite] {
         self.entries.sites()
+    }
+
+    /// Where the entries are placed ([`new_with`](Self::new_with)).
+    pub fn placement(&self) -> Placement {
+        self.entries.placement()
     }
 
     /// Every entry's rank (entry `k < prefix` has rank `k`).
@@ -467,16 +497,26 @@ impl LodPool {
     /// Writes each entry's fade weight under `view` with base count `base` into `out`
     /// (0 for an entry that is not visible), computing positions and normals on the
     /// CPU as [`Sampler::record`] does: the reference a GPU cull is checked against.
-    /// Panics when `out` is not one weight per entry, or `sampler` is not the pool's
-    /// ([`drawn_from`](Self::drawn_from)).
+    /// With [`Placement::Elsewhere`] the entries' sites are placed for it
+    /// ([`Sampler::progressive_sites_of`]). Panics when `out` is not one weight per
+    /// entry, or `sampler` is not the pool's ([`drawn_from`](Self::drawn_from)).
     pub fn fades_into(&self, sampler: &Sampler, view: &ViewLod, base: f64, out: &mut [f32]) {
         assert_eq!(out.len(), self.len(), "one weight per entry");
         assert!(self.drawn_from(sampler), "the pool's own sampler");
+        let (seed, placed) = (self.seed(), self.sites());
         out.par_chunks_mut(4096)
-            .zip(self.sites().par_chunks(4096))
             .zip(self.ranks().par_chunks(4096))
-            .for_each(|((dst, sites), ranks)| {
-                for ((slot, site), &rank) in dst.iter_mut().zip(sites).zip(ranks) {
+            .enumerate()
+            .for_each(|(c, (dst, ranks))| {
+                let sites = match placed.get(c * 4096..c * 4096 + ranks.len()) {
+                    Some(sites) => Cow::Borrowed(sites),
+                    None => {
+                        let mut sites = vec![SampleSite::default(); ranks.len()];
+                        sampler.progressive_sites_of(seed, ranks, &mut sites);
+                        Cow::Owned(sites)
+                    }
+                };
+                for ((slot, site), &rank) in dst.iter_mut().zip(sites.iter()).zip(ranks) {
                     let b = site.barycentric().map(f64::from);
                     *slot = sampler
                         .record(site.face, b, site.segment, rank, 1)

@@ -514,3 +514,112 @@ mod estimates {
         );
     }
 }
+
+/// Pools that place their entries on the CPU and pools that list ranks only.
+mod placement {
+    use super::*;
+    use crate::fixtures::lod::{close_view, view, view_at};
+    use crate::sample::lod::{Budget, FrameUpdate, Placement};
+
+    /// One update of both pools: the same change and base count, the same ranks in
+    /// the same order, the same bins and reaches; the placing pool's sites are its
+    /// ranks' (every `step`-th checked), the other holds none.
+    fn step(
+        (placed, listed): (&mut LodPool, &mut LodPool),
+        s: &Sampler,
+        v: &ViewLod,
+        budget: Budget,
+    ) -> FrameUpdate {
+        let update = placed.update(s, v, budget).expect("the pool's sampler");
+        assert_eq!(listed.update(s, v, budget).expect("the same"), update);
+        assert_eq!(placed.ranks(), listed.ranks());
+        assert_eq!(
+            (placed.len(), listed.len()),
+            (placed.ranks().len(), placed.len())
+        );
+        assert!(listed.sites().is_empty());
+        assert_eq!(placed.bins(), listed.bins());
+        assert!((0..placed.bins()).all(|b| placed.reach(b) == listed.reach(b)));
+        let (ranks, sites): (Vec<u32>, Vec<SampleSite>) = (placed.ranks().iter())
+            .zip(placed.sites())
+            .step_by(37)
+            .map(|(&k, &site)| (k, site))
+            .unzip();
+        let mut expected = vec![SampleSite::default(); ranks.len()];
+        s.progressive_sites_of(placed.seed(), &ranks, &mut expected);
+        assert_eq!(sites, expected);
+        update
+    }
+
+    #[test]
+    fn a_pool_that_places_nothing_lists_the_placing_pools_entries() {
+        let s = torus_sampler();
+        let (seed, prefix, base) = (6, 5_000, 5_000.0);
+        // Room for a close view of one side, not for two: appends, a rebuild, and a
+        // view served in bin order until the budget is spent.
+        let near = view_at(DVec3::new(1.0, 0.0, 1.2), DVec3::X, 50.0);
+        let other = view_at(DVec3::new(-1.0, 0.0, 1.2), -DVec3::X, 50.0);
+        let mut probe = LodPool::new(&s, seed, prefix, usize::MAX / 4);
+        probe.frame(&s, &near, base);
+        let room = (probe.len() - prefix as usize) * 5 / 4;
+        let mut placed = LodPool::new(&s, seed, prefix, room);
+        let mut listed = LodPool::new_with(&s, seed, (prefix, room), Placement::Elsewhere);
+        assert_eq!(
+            (placed.placement(), listed.placement()),
+            (Placement::Cpu, Placement::Elsewhere)
+        );
+        let mut path: Vec<(ViewLod, Budget)> = Vec::new();
+        // A dolly in, an orbit, a growing count, a point budget.
+        for t in 0..6 {
+            let d = 4.0 * 0.85f64.powi(t);
+            path.push((view(DVec3::new(0.3, 0.1, d), 10.0), Budget::Base(base)));
+        }
+        for t in 0..6 {
+            let a = f64::from(t) * 0.05;
+            let eye = DVec3::new(2.0 * a.sin(), 0.2, 2.0 * a.cos());
+            path.push((
+                view(eye, 10.0),
+                Budget::Base(base * (1.0 + 0.1 * f64::from(t))),
+            ));
+        }
+        for shown in [2_000, 8_000, 30_000] {
+            path.push((close_view(&s, 0.3), Budget::new(base, Some(shown))));
+        }
+        let greedy = view_at(DVec3::new(1.0, 0.0, 0.7), DVec3::X, 1e6);
+        path.extend([near, other, greedy, greedy].map(|v| (v, Budget::Base(base))));
+        let mut seen = [0; 3];
+        for (v, budget) in &path {
+            let update = step((&mut placed, &mut listed), &s, v, *budget);
+            seen[match update.change {
+                PoolChange::Unchanged => 0,
+                PoolChange::Appended(_) => 1,
+                PoolChange::Rebuilt => 2,
+            }] += 1;
+        }
+        assert!(seen.iter().all(|&n| n > 0), "{seen:?}");
+        assert!(!listed.complete(&greedy, base));
+        // A deformed surface, and close views that split bins.
+        let tall = moved(s.mesh(), |p| DVec3::new(p.x, p.y, 1.5 * p.z));
+        placed.set_geometry(&s, &tall).expect("same topology");
+        listed.set_geometry(&s, &tall).expect("same topology");
+        let roots = placed.bins();
+        for d in [0.4, 0.2, 0.1] {
+            let v = ViewLod {
+                max: 1e4,
+                ..close_view(&s, d)
+            };
+            step((&mut placed, &mut listed), &s, &v, Budget::Base(base));
+        }
+        assert!(listed.bins() > roots, "no split");
+        check_held(&listed, &s, 1);
+        // The reference cull places the listed pool's entries itself.
+        let v = view(DVec3::new(0.3, 0.1, 2.0), 10.0);
+        let mut fades = [vec![0.0; placed.len()], vec![0.0; listed.len()]];
+        placed.fades_into(&s, &v, base, &mut fades[0]);
+        listed.fades_into(&s, &v, base, &mut fades[1]);
+        assert_eq!(fades[0], fades[1]);
+        assert!(fades[1].iter().any(|&f| f > 0.0));
+        // A clone keeps the mode.
+        assert_eq!(listed.clone().placement(), Placement::Elsewhere);
+    }
+}

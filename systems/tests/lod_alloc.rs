@@ -1,0 +1,88 @@
+//! A level-of-detail pool that lists ranks only (`Placement::Elsewhere`, the pool a
+//! GPU-placed copy is synced from) allocates per frame no more than the pool that
+//! places its entries on the CPU, and nothing once warm (the per-chunk lists of its
+//! parallel listing sized by the frames before): a counting global allocator around
+//! the system's, both pools updated along the same orbit, listing the same ranks. The
+//! binary holds this one test, so no other test allocates while it counts.
+
+#![allow(unsafe_code)] // A global allocator; each block says why it holds.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::DVec3;
+use strata_engine::fixtures::lod::view;
+use strata_engine::fixtures::torus_sampler;
+use strata_engine::sample::lod::{Budget, LodPool, Placement, PoolChange};
+
+/// The system allocator, counting allocations and reallocations.
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: every method forwards to `System` with the same arguments, so `System`'s
+// guarantees hold; the counter has no effect on the memory returned.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: forwarded with the caller's layout (the caller upholds `alloc`'s
+        // contract).
+        unsafe { System.alloc(layout) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` came from `System` through this allocator with `layout`.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: as `dealloc`, with the caller's new size.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations while `f` runs, and its result.
+fn counted<T>(f: impl FnOnce() -> T) -> (usize, T) {
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let out = f();
+    (ALLOCATIONS.load(Ordering::Relaxed) - before, out)
+}
+
+#[test]
+fn a_ranks_only_pool_allocates_no_more_than_a_placing_one() {
+    let s = torus_sampler();
+    let (seed, base, prefix) = (4, 10_000.0, 80_000);
+    let room = 4_000_000;
+    let mut placed = LodPool::new(&s, seed, prefix, room).with_splitting(false);
+    let mut listed =
+        LodPool::new_with(&s, seed, (prefix, room), Placement::Elsewhere).with_splitting(false);
+    // An orbit, a degree a frame: every frame appends entries, within the room
+    // reserved up front (as many entries again as the prefix).
+    let eye = |t: i32| {
+        let a = f64::from(t).to_radians();
+        DVec3::new(1.6 * a.sin(), 0.4, 1.6 * a.cos())
+    };
+    let (mut totals, mut appended) = ([0; 2], 0);
+    for t in -150..20 {
+        let v = view(eye(t), 10.0);
+        let (a, update) = counted(|| placed.update(&s, &v, Budget::Base(base)));
+        let update = update.expect("the pool's sampler");
+        let (b, same) = counted(|| listed.update(&s, &v, Budget::Base(base)));
+        assert_eq!(same.expect("the pool's sampler"), update, "frame {t}");
+        assert_eq!(placed.ranks(), listed.ranks(), "frame {t}");
+        if t >= 0 {
+            totals[0] += a;
+            totals[1] += b;
+            if let PoolChange::Appended(r) = update.change {
+                appended += r.len();
+            }
+        }
+    }
+    assert!(appended > 1000, "the dolly appended {appended} entries");
+    assert!(totals[1] <= totals[0], "{totals:?}");
+    assert_eq!(totals[1], 0, "allocations of the warm ranks-only pool");
+}
