@@ -109,3 +109,10 @@ pub fn cap_field(
     let eigenvalues = vec![[3.0, 1.0 / 3.0]; mesh.vertex_count()];
     strata_engine::field::TensorField::from_frames(mesh, &dirs, &eigenvalues)
 }
+
+/// The median of `values` (the upper of the two middle ones for an even count; NaN
+/// for none), the statistic every benchmark table here quotes.
+pub fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}

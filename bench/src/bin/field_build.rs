@@ -13,13 +13,9 @@
 
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::field::{EdgeWeights, LineField, LineFieldOptions, smoothest_line_field};
 use strata_engine::mesh::{TriMesh, loop_subdivide};
-
-fn median(mut times: Vec<f64>) -> f64 {
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
-}
 
 /// Seconds of one build and its field.
 fn timed(

@@ -11,6 +11,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::field::{FieldSpec, LinearSolver, TensorField};
 use strata_engine::mesh::{TriMesh, loop_subdivide};
 use strata_engine::segment::{detect_singularities, singularity_clusters};
@@ -33,11 +34,6 @@ fn net_singularities(mesh: &TriMesh, field: &TensorField) -> usize {
         .iter()
         .filter(|c| c.is_singular())
         .count()
-}
-
-fn median(mut times: Vec<f64>) -> f64 {
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -11,6 +11,7 @@
 
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::field::{FieldSpec, LinearSolver};
 use strata_engine::mesh::{TriMesh, loop_subdivide};
 use strata_engine::segment::{detect_singularities, singularity_clusters};
@@ -28,11 +29,6 @@ const SCENES: [(&str, &str); 8] = [
 
 /// Skipped from this many vertices (see the module documentation).
 const MAX_VERTICES: usize = 100_000;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// Seconds of each build and the net singularities of the last one.
 fn timed(

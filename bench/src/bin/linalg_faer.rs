@@ -27,6 +27,7 @@ use faer::matrix_free::conjugate_gradient::{
 };
 use faer::matrix_free::{InitialGuessStatus, LinOp, Precond};
 use faer::{MatMut, MatRef, Par, c64};
+use strata_bench::median;
 use strata_engine::linalg::{Amg, AmgOptions, Csr, DenseCholesky, Workspace, pcg};
 
 /// `A` as faer's operator.
@@ -131,11 +132,6 @@ fn connection_system(mesh: &strata_engine::mesh::TriMesh) -> (Csr<c64>, Vec<c64>
         .map(|v| c64::new((v % 7) as f64 - 3.0, (v % 5) as f64 - 2.0))
         .collect();
     (Csr::from_triplets(n, n, &t), b)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// Our conjugate gradient against faer's on the bunny's connection-like system.

@@ -14,6 +14,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::io;
 use strata_engine::mesh::{TriMesh, loop_subdivide};
 
@@ -49,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             last = Some(mesh);
         }
         let mesh = last.ok_or("no run")?;
-        let median = median(&mut times);
+        let load = median(times);
         let mut builds = Vec::with_capacity(repeats);
         for _ in 0..repeats {
             let (positions, triangles) = (mesh.positions().to_vec(), mesh.triangles().to_vec());
@@ -64,17 +65,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             bytes / 1e6,
             mesh.vertex_count(),
             mesh.face_count(),
-            median * 1e3,
-            bytes / 1e6 / median,
-            self::median(&mut builds) * 1e3,
+            load * 1e3,
+            bytes / 1e6 / load,
+            median(builds) * 1e3,
         );
     }
     Ok(())
-}
-
-fn median(times: &mut [f64]) -> f64 {
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
 }
 
 /// A plain OBJ: `v x y z` with 6 decimals, then `f a b c` (1-based).

@@ -56,6 +56,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
+use strata_bench::median;
 use strata_engine::sample::lod::{Budget, FrameUpdate, LodError, ViewLod};
 use strata_engine::sample::{DRAW_AHEAD, LodPool, PoolChange, SampleSite, Sampler};
 
@@ -157,11 +158,6 @@ fn leaving(
 
 /// A camera path: frame `t`'s view and base count.
 type Path<'a> = Box<dyn Fn(i32) -> (ViewLod, f64) + 'a>;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// The base count under which `first` shows about [`SHOWN`] samples, from a small
 /// pool's: visible samples grow linearly with the base count.

@@ -31,6 +31,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
+use strata_bench::median;
 use strata_engine::sample::lod::{Budget, Placement, ViewLod};
 use strata_engine::sample::{LodPool, SampleSite, Sampler};
 use strata_systems::gpu::{GpuContext, GpuLodPool, GpuSampleBuffer, GpuSampler};
@@ -74,11 +75,6 @@ const SEED: u64 = 3;
 const WARM_UP: i32 = 30;
 
 type Path<'a> = Box<dyn Fn(i32) -> (ViewLod, f64) + 'a>;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
 
 fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
     let mesh = sampler.mesh();

@@ -22,17 +22,13 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
+use strata_bench::median;
 use strata_engine::sample::{Sample, SampleSite, stratified_value};
 use strata_systems::config::SceneConfig;
 use strata_systems::scene::Scene;
 
 const N: usize = 1_000_000;
 const CHUNK: usize = 4096;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn time(repeats: usize, mut f: impl FnMut()) -> f64 {
     f(); // warm-up: pages touched, pool started

@@ -21,6 +21,7 @@ use std::io::Write;
 use std::sync::Arc;
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::mesh::{TriMesh, loop_subdivide};
 use strata_engine::surface::Preprocessed;
 use strata_systems::config::SceneConfig;
@@ -30,11 +31,6 @@ const SCENES: [(&str, &str); 3] = [
     ("smooth curvature-aligned 3:1", "stanford-bunny-smooth.ron"),
     ("isotropic", "stanford-bunny-isotropic.ron"),
 ];
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn row(
     name: &str,

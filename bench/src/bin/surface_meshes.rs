@@ -8,14 +8,10 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::field::FieldSpec;
 use strata_engine::sample::Sample;
 use strata_engine::surface::{Preprocessed, SurfaceOptions};
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = strata_bench::repeats_arg(3)?;

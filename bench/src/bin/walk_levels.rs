@@ -16,6 +16,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use strata_bench::median;
 use strata_engine::mesh::{NONE, TriMesh, loop_subdivide};
 use strata_engine::segment::{
     FaceField, WalkSystem, connected_parts, face_frames, place_seeds, random_walk, walk_weights,
@@ -25,11 +26,6 @@ const SCENES: [(&str, &str); 2] = [
     ("constant 3:1", "stanford-bunny-anisotropic.ron"),
     ("smooth curvature-aligned 3:1", "stanford-bunny-smooth.ron"),
 ];
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// Mean line angle between each face's major direction and its label's seed's.
 fn mean_turn(frames: &FaceField, labels: &[u32], seeds: &[u32]) -> f64 {
