@@ -199,10 +199,7 @@ fn a_deformed_mesh_carries_its_samples() {
     assert_eq!(back.len(), pool.len());
     for (i, (got, site)) in back.iter().zip(pool.sites()).enumerate() {
         assert_eq!(got.index, pool.ranks()[i], "entry {i} carries its rank");
-        let [a, b, c] =
-            deformed.triangles()[site.face as usize].map(|v| deformed.positions()[v as usize]);
-        let w = site.barycentric().map(f64::from);
-        let expected = a * w[0] + b * w[1] + c * w[2];
+        let expected = site.position_on(&deformed).expect("a face of the mesh");
         let p = DVec3::from(got.position.map(f64::from));
         assert!(
             p.distance(expected) < 1e-5,

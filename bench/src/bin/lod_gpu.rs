@@ -29,11 +29,10 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use glam::DVec3;
 use strata_bench::lod_camera::{LodCamera, lod_scene};
 use strata_bench::median;
 use strata_engine::sample::lod::{Budget, Placement, ViewLod};
-use strata_engine::sample::{LodPool, SampleSite, Sampler};
+use strata_engine::sample::{LodPool, Sampler};
 use strata_systems::gpu::{GpuContext, GpuLodPool, GpuSampleBuffer, GpuSampler};
 
 /// The system allocator, counting allocations (all threads).
@@ -75,15 +74,6 @@ const SEED: u64 = 3;
 const WARM_UP: i32 = 30;
 
 type Path<'a> = Box<dyn Fn(i32) -> (ViewLod, f64) + 'a>;
-
-fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
-    let mesh = sampler.mesh();
-    let tri = mesh.triangles()[s.face as usize];
-    let b = s.barycentric().map(f64::from);
-    (0..3).fold(DVec3::ZERO, |acc, k| {
-        acc + mesh.positions()[tri[k] as usize] * b[k]
-    })
-}
 
 /// The base count whose first frame shows about `shown` samples (the `lod` bench's
 /// calibration).
@@ -187,7 +177,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (mut faces, mut beyond, mut worst) = (0, 0, 0.0f64);
         for (g, c) in sites.iter().zip(pool.sites()) {
             faces += usize::from(g.face != c.face || g.segment != c.segment);
-            let d = point(s, g).distance(point(s, c)) / diagonal;
+            let d = (g.position_on(s.mesh()).zip(c.position_on(s.mesh())))
+                .map_or(f64::INFINITY, |(p, q)| p.distance(q) / diagonal);
             worst = worst.max(d);
             beyond += usize::from(d > 1e-5);
         }

@@ -4,7 +4,10 @@
 
 use std::sync::Arc;
 
+use glam::DVec3;
+
 use crate::curve::SegmentCurve;
+use crate::mesh::TriMesh;
 
 /// One segment ready for sampling: its cells and the mesh face of each domain triangle.
 #[derive(Clone, Debug)]
@@ -82,6 +85,21 @@ impl SampleSite {
             self.bary[1],
         ]
     }
+
+    /// The site's point on `mesh` (the mesh it was drawn on, or a deformation of it
+    /// with the same triangles): its face's corners weighted by
+    /// [`barycentric`](Self::barycentric) in `f64`. `None` when `face` is not one of
+    /// `mesh`'s faces.
+    pub fn position_on(&self, mesh: &TriMesh) -> Option<DVec3> {
+        let corners = mesh.triangles().get(self.face as usize)?;
+        let w = self.barycentric().map(f64::from);
+        let p = mesh.positions();
+        Some(
+            p[corners[0] as usize] * w[0]
+                + p[corners[1] as usize] * w[1]
+                + p[corners[2] as usize] * w[2],
+        )
+    }
 }
 
 const _: () = assert!(std::mem::size_of::<SampleSite>() == 16);
@@ -96,5 +114,34 @@ impl Sample {
             self.bary[0],
             self.bary[1],
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::SampleSite;
+    use crate::mesh::TriMesh;
+
+    #[test]
+    fn a_site_s_position_weights_its_face_s_corners() {
+        let positions = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 2.0)];
+        let mesh = TriMesh::new(positions, vec![[0, 1, 2], [1, 3, 2]]).expect("two triangles");
+        let site = |face, bary| SampleSite {
+            face,
+            segment: 0,
+            bary,
+        };
+        // Corner 0 of face 1 is vertex 1; corners 1 and 2 are vertices 3 and 2.
+        assert_eq!(site(1, [0.0, 0.0]).position_on(&mesh), Some(DVec3::X));
+        assert_eq!(
+            site(1, [1.0, 0.0]).position_on(&mesh),
+            Some(DVec3::new(1.0, 1.0, 2.0))
+        );
+        let p = site(1, [0.25, 0.5]).position_on(&mesh).expect("face 1");
+        let expected = DVec3::X * 0.25 + DVec3::new(1.0, 1.0, 2.0) * 0.25 + DVec3::Y * 0.5;
+        assert!(p.distance(expected) < 1e-12, "{p} against {expected}");
+        assert_eq!(site(2, [0.0, 0.0]).position_on(&mesh), None);
     }
 }

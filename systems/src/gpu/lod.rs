@@ -571,9 +571,9 @@ mod gpu_tests {
     use std::io::Write;
     use std::path::Path;
 
-    use glam::{DVec3, Vec3};
+    use glam::Vec3;
     use strata_engine::sample::lod::Placement;
-    use strata_engine::sample::{Budget, LodPool, PoolChange, SampleSite, Sampler};
+    use strata_engine::sample::{Budget, LodPool, PoolChange, SampleSite};
 
     use super::GpuLodPool;
     use crate::config::SceneConfig;
@@ -581,15 +581,6 @@ mod gpu_tests {
     use crate::scene::Scene;
 
     const BASE: f64 = 20_000.0;
-
-    fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
-        let mesh = sampler.mesh();
-        let tri = mesh.triangles()[s.face as usize];
-        let b = s.barycentric().map(f64::from);
-        (0..3).fold(DVec3::ZERO, |acc, k| {
-            acc + mesh.positions()[tri[k] as usize] * b[k]
-        })
-    }
 
     /// A pool that lists ranks only, synced with GPU placement, holds the sites of a
     /// pool placed on the CPU (the sampler check's tolerances: at most 1 in 10^4
@@ -672,7 +663,8 @@ mod gpu_tests {
             let (mut faces, mut beyond, mut worst) = (0, 0, 0.0f64);
             for (g, c) in sites.iter().zip(pool.sites()) {
                 faces += usize::from(g.face != c.face || g.segment != c.segment);
-                let d = point(s, g).distance(point(s, c)) / diagonal;
+                let at = |x: &SampleSite| x.position_on(s.mesh()).expect("a face of the mesh");
+                let d = at(g).distance(at(c)) / diagonal;
                 worst = worst.max(d);
                 beyond += usize::from(d > 1e-5);
             }
@@ -687,7 +679,7 @@ mod gpu_tests {
             assert_eq!(records.len(), n);
             for (k, (r, site)) in records.iter().zip(&sites).enumerate().step_by(97) {
                 assert_eq!((r.face, r.segment), (site.face, site.segment), "record {k}");
-                let p = point(s, site).as_vec3();
+                let p = site.position_on(s.mesh()).expect("a face").as_vec3();
                 let dist = Vec3::from(r.position).distance(p);
                 assert!(dist <= 1e-5 * diagonal as f32, "record {k}: {dist}");
             }
