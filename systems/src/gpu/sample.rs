@@ -20,7 +20,7 @@
 //!
 //! The progressive order (`shaders/progressive.wgsl`,
 //! [`GpuSampler::sample_progressive_sites`]) needs no per-request table: the CPU
-//! computes the scramble's six words ([`progressive_scramble`]) and the pass maps each
+//! computes the scramble's six words ([`progressive_scramble`](strata_engine::sample::flat::progressive_scramble)) and the pass maps each
 //! rank's value through the cumulative measures of all leaves to a leaf, as
 //! [`Sampler::progressive_sites_into`] does. Its boundary leaves descend twelve levels
 //! whatever the count, too deep to unroll into trees, so the pass runs the descent
@@ -31,7 +31,7 @@
 //! as a list in a buffer, which is how a level-of-detail pool's new entries are placed
 //! ([`GpuLodPool::sync_placed`](super::lod::GpuLodPool::sync_placed)).
 
-use strata_engine::sample::flat::{FlatError, FlatProgressive, FlatSampler, progressive_scramble};
+use strata_engine::sample::flat::{FlatError, FlatProgressive, FlatSampler};
 use strata_engine::sample::{SampleSite, Sampler};
 use wgpu::util::DeviceExt;
 
@@ -43,6 +43,11 @@ use super::pipeline::{
     uniform_buffer,
 };
 use super::shaders;
+
+mod progressive;
+
+pub(crate) use progressive::Ranks;
+use progressive::progressive_overflow;
 
 /// Samples per workgroup of the sampling pass (the shader's `@workgroup_size`).
 const WORKGROUP: u32 = 64;
@@ -87,7 +92,7 @@ pub struct SampleParams {
     pub out_at: u32,
     /// Leaves in the table.
     pub leaves: u32,
-    /// Progressive: the scramble's words ([`progressive_scramble`]).
+    /// Progressive: the scramble's words ([`progressive_scramble`](strata_engine::sample::flat::progressive_scramble)).
     pub scramble: [u32; 6],
     /// First word of the density planes in the table.
     pub planes_at: u32,
@@ -95,15 +100,6 @@ pub struct SampleParams {
     pub prog_levels_at: u32,
     /// Padding to 16 bytes.
     pub _pad: [u32; 3],
-}
-
-/// Where a progressive pass takes its ranks ([`GpuSampler::encode_progressive`]).
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Ranks<'a> {
-    /// Ranks `first..first + count`.
-    From(u32),
-    /// The ranks in a buffer of `u32`, from entry `first` on.
-    Listed(&'a wgpu::Buffer, u32),
 }
 
 /// The flat tables of `flat` and `prog` as one array of 32-bit words, and where each
@@ -181,6 +177,9 @@ struct Growable {
     label: &'static str,
     usage: wgpu::BufferUsages,
     buffer: Option<wgpu::Buffer>,
+    /// Counts the buffers made: a bind group made with generation `g` holds the
+    /// current buffer while this is `g`.
+    generation: u64,
 }
 
 impl Growable {
@@ -189,6 +188,7 @@ impl Growable {
             label,
             usage,
             buffer: None,
+            generation: 0,
         }
     }
 
@@ -212,6 +212,7 @@ impl Growable {
                 usage: self.usage,
                 mapped_at_creation: false,
             }));
+            self.generation += 1;
         }
         // Set just above when it was missing or short.
         self.buffer.as_ref().ok_or(GpuError::Limit {
@@ -240,11 +241,25 @@ pub struct GpuSampler {
     params: wgpu::Buffer,
     table: wgpu::Buffer,
     table_bytes: u64,
+    /// Counts the cell tables uploaded (a deeper request uploads them again).
+    table_generation: u64,
     offsets: SampleParams,
     request: Growable,
     sites: Growable,
+    /// The request table's words, kept so that a request allocates nothing once it
+    /// has grown to the largest.
+    words: Vec<u32>,
+    /// The `(count, seed)` whose request table and uniforms the GPU holds, with the
+    /// table generation they were computed for: a repeated request uploads nothing.
+    uploaded: Option<(u32, u64, u64)>,
+    /// The sites pass's bind group and the generations (table, request, sites) of the
+    /// buffers it binds: made again only when one of them was reallocated.
+    bind_group: Option<(wgpu::BindGroup, [u64; 3])>,
     /// Sites written by the last request.
     count: u32,
+    /// [`progressive_overflow`] of the tables: the progressive order is refused when
+    /// any leaf overflows.
+    overflow: (u32, u32),
     expander: SiteExpander,
     /// Where the device has timestamp queries: the begin and end of the sites pass and
     /// of the expansion, and the buffer they resolve into.
@@ -259,6 +274,7 @@ impl GpuSampler {
     /// passes (the expander uploads the mesh table).
     pub fn new(device: &wgpu::Device, sampler: &Sampler) -> Result<Self, GpuError> {
         let flat = FlatSampler::new(sampler)?;
+        let overflow = progressive_overflow(&flat);
         let prog = FlatProgressive::new(sampler);
         let (table, table_bytes, offsets) = upload_table(device, &flat, &prog)?;
         let expander = SiteExpander::new(device, sampler)?;
@@ -301,7 +317,11 @@ impl GpuSampler {
                 ),
                 table,
                 table_bytes,
+                table_generation: 0,
                 offsets,
+                words: Vec::new(),
+                uploaded: None,
+                bind_group: None,
                 request: Growable::new(
                     "strata sample request",
                     wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -311,6 +331,7 @@ impl GpuSampler {
                     wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 ),
                 count: 0,
+                overflow,
                 expander,
                 timer: device
                     .features()
@@ -429,17 +450,101 @@ impl GpuSampler {
         if count == 0 {
             return Ok(());
         }
-        let request = match self.flat.request(&self.sampler, n as u64, seed) {
+        let groups = count.div_ceil(WORKGROUP);
+        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
+        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
+        if self.uploaded != Some((count, seed, self.table_generation)) {
+            self.upload_request(device, queue, (count, seed), gx)?;
+        }
+        // A handle (no copy of the buffer).
+        let sites = self
+            .sites
+            .at_least(device, u64::from(count) * SITE_BYTES)?
+            .clone();
+        let generations = [
+            self.table_generation,
+            self.request.generation,
+            self.sites.generation,
+        ];
+        if self
+            .bind_group
+            .as_ref()
+            .is_none_or(|(_, made)| *made != generations)
+        {
+            let request = self.request.buffer.as_ref().unwrap_or(&self.table);
+            let bind_group = scoped(device, "binding the sampling pass", || {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("strata sample"),
+                    layout: &self.layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: self.params.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: self.table.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: request.as_entire_binding(),
+                        },
+                        // The whole buffer: the pass writes the first `count` entries
+                        // (its uniform), so one bind group serves every count it holds.
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: sites.as_entire_binding(),
+                        },
+                    ],
+                })
+            })?;
+            self.bind_group = Some((bind_group, generations));
+        }
+        let Some((bind_group, _)) = &self.bind_group else {
+            return Ok(());
+        };
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("strata sample"),
+            timestamp_writes: self.timer.as_ref().map(|(set, _)| {
+                wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }
+            }),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(gx, gy, 1);
+        Ok(())
+    }
+
+    /// Computes the `(count, seed)` request (deepening and uploading the tables again
+    /// when it needs deeper descent trees) and writes its table and the pass's
+    /// uniforms (`gx` workgroups per row) with `queue`. Allocates only while the
+    /// request table grows past its largest so far (and in the engine's request).
+    fn upload_request(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (count, seed): (u32, u64),
+        gx: u32,
+    ) -> Result<(), GpuError> {
+        let n = u64::from(count);
+        let request = match self.flat.request(&self.sampler, n, seed) {
             Err(FlatError::Shallow { .. }) => {
                 // Deeper descent trees for this count: built once, uploaded again.
-                self.flat.deepen(&self.sampler, n as u64)?;
+                self.flat.deepen(&self.sampler, n)?;
                 (self.table, self.table_bytes, self.offsets) =
                     upload_table(device, &self.flat, &self.prog)?;
-                self.flat.request(&self.sampler, n as u64, seed)?
+                self.table_generation += 1;
+                self.flat.request(&self.sampler, n, seed)?
             }
             other => other?,
         };
-        let mut words: Vec<u32> = request.groups.iter().flatten().copied().collect();
+        let words = &mut self.words;
+        words.clear();
+        words.extend(request.groups.iter().flatten());
         let levels_at = words.len() as u32;
         words.extend(&request.levels);
         let thresholds_at = words.len() as u32;
@@ -449,9 +554,6 @@ impl GpuSampler {
                 .iter()
                 .flat_map(|&t| [t as u32, (t >> 32) as u32]),
         );
-        let groups = count.div_ceil(WORKGROUP);
-        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
-        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
         let params = SampleParams {
             count,
             groups: request.groups.len() as u32,
@@ -464,164 +566,9 @@ impl GpuSampler {
         let request_buffer = self
             .request
             .at_least(device, std::mem::size_of_val(words.as_slice()) as u64)?;
-        queue.write_buffer(request_buffer, 0, bytemuck::cast_slice(&words));
+        queue.write_buffer(request_buffer, 0, bytemuck::cast_slice(words));
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let sites = self.sites.at_least(device, u64::from(count) * SITE_BYTES)?;
-        let bind_group = scoped(device, "binding the sampling pass", || {
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("strata sample"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: self.params.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: self.table.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: request_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: sites,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(u64::from(count) * SITE_BYTES),
-                        }),
-                    },
-                ],
-            })
-        })?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("strata sample"),
-            timestamp_writes: self.timer.as_ref().map(|(set, _)| {
-                wgpu::ComputePassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }
-            }),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
-        Ok(())
-    }
-
-    /// Draws the sites of progressive ranks `first_rank..first_rank + n` for `seed` on
-    /// the GPU (kept in the sampler's sites buffer, [`read_sites`](Self::read_sites)):
-    /// the sites of [`Sampler::progressive_sites_into`], so every prefix of a request
-    /// is the request of that count. The CPU computes the scramble's six words; the
-    /// pass places every rank. Records and submits; never waits.
-    pub fn sample_progressive_sites(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        first_rank: u32,
-        n: usize,
-        seed: u64,
-    ) -> Result<(), GpuError> {
-        let count = u32::try_from(n)
-            .ok()
-            .filter(|&c| u64::from(first_rank) + u64::from(c) <= 1 << 32)
-            .ok_or(FlatError::TooLarge {
-                what: "progressive ranks (past 2^32)",
-                value: u64::from(first_rank) + n as u64,
-            })?;
-        self.count = count;
-        if count == 0 {
-            return Ok(());
-        }
-        let sites = self
-            .sites
-            .at_least(device, u64::from(count) * SITE_BYTES)?
-            .clone();
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("strata progressive sample"),
-        });
-        let stamps = self.stamps(0);
-        self.encode_progressive(
-            device,
-            queue,
-            &mut encoder,
-            (Ranks::From(first_rank), count, seed),
-            (&sites, 0),
-            stamps,
-        )?;
-        scoped(device, "sampling progressively on the GPU", || {
-            queue.submit([encoder.finish()]);
-        })
-    }
-
-    /// Timestamp writes at `first` and `first + 1`, where the device has them.
-    fn stamps(&self, first: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.timer
-            .as_ref()
-            .map(|(set, _)| wgpu::ComputePassTimestampWrites {
-                query_set: set,
-                beginning_of_pass_write_index: Some(first),
-                end_of_pass_write_index: Some(first + 1),
-            })
-    }
-
-    /// Records the progressive pass: the sites of `count` ranks (`ranks`) for `seed`,
-    /// written into `sites` from entry `out_at` on (the buffer must hold them). Its
-    /// uniforms are written with `queue`: submit before the next progressive pass.
-    pub(crate) fn encode_progressive(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        encoder: &mut wgpu::CommandEncoder,
-        (ranks, count, seed): (Ranks<'_>, u32, u64),
-        (sites, out_at): (&wgpu::Buffer, u32),
-        stamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) -> Result<(), GpuError> {
-        if count == 0 {
-            return Ok(());
-        }
-        let groups = count.div_ceil(WORKGROUP);
-        let max = device.limits().max_compute_workgroups_per_dimension.max(1);
-        let (gx, gy) = (groups.min(max), groups.div_ceil(max));
-        let (list, first, listed) = match ranks {
-            Ranks::From(first) => (&self.table, first, 0),
-            Ranks::Listed(buffer, first) => (buffer, first, 1),
-        };
-        let params = SampleParams {
-            count,
-            row: gx * WORKGROUP,
-            first,
-            listed,
-            out_at,
-            scramble: progressive_scramble(seed),
-            ..self.offsets
-        };
-        queue.write_buffer(&self.prog_params, 0, bytemuck::bytes_of(&params));
-        let bind_group = scoped(device, "binding the progressive pass", || {
-            let entries = [&self.prog_params, &self.table, list, sites];
-            let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
-                .iter()
-                .enumerate()
-                .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                    binding: binding as u32,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("strata progressive sample"),
-                layout: &self.layout,
-                entries: &entries,
-            })
-        })?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("strata progressive sample"),
-            timestamp_writes: stamps,
-        });
-        pass.set_pipeline(&self.progressive);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
+        self.uploaded = Some((count, seed, self.table_generation));
         Ok(())
     }
 
@@ -1076,6 +1023,44 @@ mod gpu_tests {
             let at = format!("bunny, n {n}");
             check_progressive(&ctx, &mut gpu, &bunny.sampler, (0, n, 1), &at);
         }
+    }
+
+    /// On a scene whose boundary leaves are cut by more triangles than the progressive
+    /// pass keeps per node (coarse cells), the progressive order is refused with one
+    /// clear error at every count, never drawn wrong; the stratified order still
+    /// matches the CPU there.
+    #[test]
+    fn gpu_progressive_refuses_leaves_it_cannot_place() {
+        let Some(ctx) = gpu("gpu_progressive_refuses_leaves_it_cannot_place") else {
+            return;
+        };
+        let coarse = scene(COARSE);
+        let sampler = &coarse.sampler;
+        let mut gpu = GpuSampler::new(&ctx.device, sampler).expect("GPU sampler");
+        let refused = gpu.progressive_exact().expect_err("coarse cells refused");
+        let message = refused.to_string();
+        assert!(
+            message.contains("progressive order on the GPU") && message.contains("on the CPU"),
+            "{message}"
+        );
+        for n in [1usize, 7, 4096, 100_000] {
+            let err = gpu
+                .sample_progressive_sites(&ctx.device, &ctx.queue, 0, n, 7)
+                .expect_err("refused");
+            assert_eq!(err.to_string(), message, "n {n}");
+        }
+        check(
+            &ctx,
+            &mut gpu,
+            sampler,
+            4096,
+            5,
+            "coarse, stratified, n 4096",
+        );
+        let default = scene(DEFAULT);
+        let gpu = GpuSampler::new(&ctx.device, &default.sampler).expect("GPU sampler");
+        gpu.progressive_exact()
+            .expect("the default scene is placed exactly");
     }
 
     /// `strata bench --gpu` prints the check and succeeds on a scene within tolerance.
