@@ -690,7 +690,6 @@ mod gpu_tests {
     use std::io::Write;
     use std::path::Path;
 
-    use glam::DVec3;
     use strata_engine::sample::{SampleSite, Sampler};
 
     use super::GpuSampler;
@@ -749,15 +748,6 @@ mod gpu_tests {
         beyond: usize,
     }
 
-    fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
-        let mesh = sampler.mesh();
-        let tri = mesh.triangles()[s.face as usize];
-        let b = s.barycentric().map(f64::from);
-        (0..3).fold(DVec3::ZERO, |acc, k| {
-            acc + mesh.positions()[tri[k] as usize] * b[k]
-        })
-    }
-
     fn compare(sampler: &Sampler, gpu: &[SampleSite], cpu: &[SampleSite]) -> Difference {
         let (lo, hi) = sampler.mesh().bounds();
         let diagonal = (hi - lo).length();
@@ -766,7 +756,8 @@ mod gpu_tests {
         for (g, c) in gpu.iter().zip(cpu) {
             d.faces += usize::from(g.face != c.face);
             d.segments += usize::from(g.segment != c.segment);
-            let dist = point(sampler, g).distance(point(sampler, c)) / diagonal;
+            let at = |x: &SampleSite| x.position_on(sampler.mesh()).expect("a face of the mesh");
+            let dist = at(g).distance(at(c)) / diagonal;
             d.position = d.position.max(dist);
             d.beyond += usize::from(dist > 1e-5);
         }

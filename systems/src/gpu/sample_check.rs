@@ -12,7 +12,6 @@
 
 use std::time::Instant;
 
-use glam::DVec3;
 use strata_engine::sample::{SampleSite, Sampler};
 
 use super::buffers::GpuSampleBuffer;
@@ -112,15 +111,6 @@ pub struct GpuSampleCheck {
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
-
-fn point(sampler: &Sampler, s: &SampleSite) -> DVec3 {
-    let mesh = sampler.mesh();
-    let tri = mesh.triangles()[s.face as usize];
-    let b = s.barycentric().map(f64::from);
-    (0..3).fold(DVec3::ZERO, |acc, k| {
-        acc + mesh.positions()[tri[k] as usize] * b[k]
-    })
 }
 
 impl GpuSampleCheck {
@@ -271,7 +261,10 @@ impl GpuSampleCheck {
         for (g, c) in got.iter().zip(cpu) {
             check.faces_differ += usize::from(g.face != c.face);
             check.segments_differ += usize::from(g.segment != c.segment);
-            let d = point(sampler, g).distance(point(sampler, c)) / diagonal;
+            let d = (g
+                .position_on(sampler.mesh())
+                .zip(c.position_on(sampler.mesh())))
+            .map_or(f64::INFINITY, |(p, q)| p.distance(q) / diagonal);
             check.deviation = check.deviation.max(d);
             check.beyond += usize::from(d > POSITION_TOLERANCE);
         }
