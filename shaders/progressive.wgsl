@@ -314,14 +314,14 @@ fn piece_in_node(leaf: Leaf, i: u32, lo: vec2<f32>, size: f32) {
 }
 
 // Stores the pieces of `leaf` inside its node at `lo`, side `size`, in the node's
-// unit square, and their area in `node_area`; false when more than MAX_PIECES have
-// area (then the descent streams them from the table).
-fn enter_node(leaf: Leaf, lo: vec2<f32>, size: f32) -> bool {
+// unit square, and their area in `node_area`. A leaf has at most MAX_PIECES pieces:
+// the sampler refuses the progressive order for tables with more
+// (gpu/sample/progressive.rs).
+fn enter_node(leaf: Leaf, lo: vec2<f32>, size: f32) {
     pieces = 0u;
     node_area = 0.0;
     node_count = 0u;
-    var fits = true;
-    for (var i = 0u; i < leaf.n; i = i + 1u) {
+    for (var i = 0u; i < min(leaf.n, MAX_PIECES); i = i + 1u) {
         piece_in_node(leaf, i, lo, size);
         cut_n = src_n;
         for (var k = 0u; k < src_n; k = k + 1u) {
@@ -334,10 +334,6 @@ fn enter_node(leaf: Leaf, lo: vec2<f32>, size: f32) -> bool {
         }
         node_area = node_area + am.x;
         node_count = node_count + 1u;
-        if pieces == MAX_PIECES {
-            fits = false;
-            continue;
-        }
         for (var k = 0u; k < cut_n; k = k + 1u) {
             piece_pts[pieces][k] = cut[k];
         }
@@ -346,27 +342,6 @@ fn enter_node(leaf: Leaf, lo: vec2<f32>, size: f32) -> bool {
         piece_plane[pieces] = plane;
         pieces = pieces + 1u;
     }
-    return fits;
-}
-
-// side_measures for a node whose pieces do not fit: every piece of the leaf clipped to
-// the node at `lo`, side `size`, and when `half` < 2 to its half on side `upper` of
-// the midline along `half`.
-fn streamed_measures(leaf: Leaf, lo: vec2<f32>, size: f32, axis: u32, half: u32, upper: bool) -> vec2<f32> {
-    var m = vec2<f32>(0.0, 0.0);
-    for (var i = 0u; i < leaf.n; i = i + 1u) {
-        piece_in_node(leaf, i, lo, size);
-        if half < 2u {
-            clip_line(half, 0.5, upper);
-            cut_to_src();
-        }
-        let plane = node_plane(leaf, i, lo, size);
-        clip_line(axis, 0.5, false);
-        m.x = m.x + cut_measure(plane).y;
-        clip_line(axis, 0.5, true);
-        m.y = m.y + cut_measure(plane).y;
-    }
-    return m;
 }
 
 // Rescales the stored pieces into the unit square of their quarter `off`.
@@ -381,10 +356,8 @@ fn into_quarter(off: vec2<f32>) {
 }
 
 // A boundary leaf: the exact descent through its sub-cells for `levels` levels of
-// quarters from the fraction `q` of its measure (boundary.rs `descend_pieces`). The
-// node's pieces are kept in private memory when they fit (MAX_PIECES), else measured
-// from the leaf's pieces clipped to the node at every step (as `descend_partial`
-// clips the candidates), until a node's fit.
+// quarters from the fraction `q` of its measure (boundary.rs `descend_pieces`), the
+// node's pieces kept in private memory.
 fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Located {
     let w = params.leaves_at + 5u * leaf_index;
     let info = table[w + 2u];
@@ -399,7 +372,7 @@ fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Lo
     var lo = vec2<f32>(0.0, 0.0);
     var size = 1.0;
     var state = (info >> 5u) & 3u;
-    var stored = enter_node(leaf, lo, size);
+    enter_node(leaf, lo, size);
     var q = q0;
     for (var depth = 0u; depth < levels; depth = depth + 1u) {
         let c0 = hilbert_child(state, 0u);
@@ -408,12 +381,7 @@ fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Lo
         // quarters of the chosen half along the other axis.
         let first_axis = select(1u, 0u, c0.x == c1.x);
         let upper_first = select(c0.y == 1u, c0.x == 1u, first_axis == 0u);
-        var m: vec2<f32>;
-        if stored {
-            m = side_measures(first_axis);
-        } else {
-            m = streamed_measures(leaf, lo, size, first_axis, 2u, false);
-        }
+        var m = side_measures(first_axis);
         if upper_first {
             m = m.yx;
         }
@@ -432,13 +400,8 @@ fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Lo
         let cq = hilbert_child(state, rank0);
         let second_axis = 1u - first_axis;
         let upper_second = select(cq.x == 1u, cq.y == 1u, first_axis == 0u);
-        var m2: vec2<f32>;
-        if stored {
-            keep_side(first_axis, half_upper);
-            m2 = side_measures(second_axis);
-        } else {
-            m2 = streamed_measures(leaf, lo, size, second_axis, first_axis, half_upper);
-        }
+        keep_side(first_axis, half_upper);
+        var m2 = side_measures(second_axis);
         if upper_second {
             m2 = m2.yx;
         }
@@ -451,37 +414,26 @@ fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Lo
         size = 0.5 * size;
         lo = lo + off * size;
         state = c.z;
-        if stored {
-            keep_side(second_axis, (second == 0u) == upper_second);
-            into_quarter(off);
-            node_area = 0.0;
-            node_count = pieces;
-            for (var i = 0u; i < pieces; i = i + 1u) {
-                cut_n = piece_n[i];
-                for (var k = 0u; k < cut_n; k = k + 1u) {
-                    cut[k] = piece_pts[i][k];
-                }
-                node_area = node_area + cut_measure(piece_plane[i]).x;
+        keep_side(second_axis, (second == 0u) == upper_second);
+        into_quarter(off);
+        node_area = 0.0;
+        node_count = pieces;
+        for (var i = 0u; i < pieces; i = i + 1u) {
+            cut_n = piece_n[i];
+            for (var k = 0u; k < cut_n; k = k + 1u) {
+                cut[k] = piece_pts[i][k];
             }
-        } else {
-            stored = enter_node(leaf, lo, size);
+            node_area = node_area + cut_measure(piece_plane[i]).x;
         }
         // Full (boundary.rs: area at least 1 - 1e-9 of the square) within the f32
         // round-off of the pieces' areas summed.
         if node_area >= 1.0 - 2.5e-7 * f32(max(node_count, 4u)) {
             let local = hilbert_point(state, q, levels - depth - 1u);
             let uv = leaf.origin + (lo + local * size) * leaf.size;
-            if stored {
-                return locate_among_pieces(uv);
-            }
-            return point_location(leaf.first, leaf.n, 20u, uv);
+            return locate_among_pieces(uv);
         }
     }
-    let origin = leaf.origin + lo * leaf.size;
-    if stored {
-        return place_in_current(q, origin, size * leaf.size);
-    }
-    return point_location(leaf.first, leaf.n, 20u, origin + vec2<f32>(0.5 * size * leaf.size));
+    return place_in_current(q, leaf.origin + lo * leaf.size, size * leaf.size);
 }
 
 // The 32-bit bijection P of the scramble (progressive.rs `Scramble::permute`).
