@@ -66,6 +66,9 @@ pub struct SiteExpander {
     offsets: ExpandParams,
     total_measure: f64,
     sites: StreamedBuffer,
+    /// The resident pass's bind group and what it binds (sites, samples, count), kept
+    /// while a caller expands the same buffers at the same count frame after frame.
+    resident: Option<(wgpu::BindGroup, [wgpu::Buffer; 2], u32)>,
 }
 
 /// The mesh table of `sampler` as 32-bit words (layout: `ExpandParams`), and the
@@ -199,6 +202,7 @@ impl SiteExpander {
                 offsets,
                 total_measure: sampler.total_measure(),
                 sites,
+                resident: None,
             }
         })
     }
@@ -302,10 +306,11 @@ impl SiteExpander {
     /// `n` records), each sample's index its place. The parameters go through the
     /// expander's uniform buffer written with `queue`: submit `encoder` before the next
     /// expansion. `timestamps`, where the device has timestamp queries, times the
-    /// pass.
+    /// pass. The pass's bind group is kept for the next call with the same buffers and
+    /// count.
     #[allow(clippy::too_many_arguments)]
     pub fn expand_resident(
-        &self,
+        &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
@@ -328,42 +333,54 @@ impl SiteExpander {
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let bytes = |count: u64| wgpu::BufferSize::new(u64::from(n) * count);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("strata expand resident"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: self.params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: sites,
-                        offset: 0,
-                        size: bytes(SITE_BYTES),
-                    }),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: self.mesh.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: samples,
-                        offset: 0,
-                        size: bytes(std::mem::size_of::<strata_engine::sample::Sample>() as u64),
-                    }),
-                },
-            ],
+        let bound = self.resident.as_ref().is_some_and(|(_, buffers, count)| {
+            *count == n && buffers[0] == *sites && buffers[1] == *samples
         });
+        if !bound {
+            let bind_group =
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("strata expand resident"),
+                    layout: &self.layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: self.params.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: sites,
+                                offset: 0,
+                                size: bytes(SITE_BYTES),
+                            }),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: self.mesh.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer: samples,
+                                offset: 0,
+                                size: bytes(
+                                    std::mem::size_of::<strata_engine::sample::Sample>() as u64
+                                ),
+                            }),
+                        },
+                    ],
+                });
+            self.resident = Some((bind_group, [sites.clone(), samples.clone()], n));
+        }
+        let Some((bind_group, _, _)) = &self.resident else {
+            return;
+        };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("strata expand resident"),
             timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(1, &bind_group, &[]);
+        pass.set_bind_group(1, bind_group, &[]);
         pass.dispatch_workgroups(gx, gy, 1);
     }
 
