@@ -5,7 +5,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::chains::link_chains;
-use super::faces::{FaceTensors, face_point};
+use super::faces::{FaceTensors, Staged, expand_staged, face_record};
 use super::stratified::{Allocation, stratified_value_keyed};
 // `SegmentSampling` lives below both this module and `chains.rs`; `sample/mod.rs`
 // re-exports it from here.
@@ -389,12 +389,23 @@ impl Sampler {
         self.fill_chunk_body(req, start, dst);
     }
 
+    /// The records of `dst` in two passes: the per-sample loop
+    /// ([`place_chunk`](Self::place_chunk)) writes what [`Record::Placed`] says into
+    /// the same memory, then [`Record::finish`] completes the records (for full
+    /// samples, in a second loop over the chunk while it is in cache). Always inlined,
+    /// so that each caller's target features apply to all of it.
+    #[inline(always)]
+    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+        self.place_chunk(req, start, T::placed(dst));
+        T::finish(self, dst, start, req.scale);
+    }
+
     /// Section 6.2: segments are sampled one by one unless they are many relative to
     /// the samples (t / N >= 1/3), where rounding per segment would show; then chains
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn place_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         let Request {
             groups,
             seed,
@@ -578,28 +589,32 @@ impl Sampler {
         index: u32,
         scale: f64,
     ) -> Sample {
-        let fp = face_point(&self.mesh, &self.face_tensors, face, bary);
-        let spacing = [
-            (scale / fp.l1.sqrt()) as f32,
-            (scale / fp.l2.max(f64::MIN_POSITIVE).sqrt()) as f32,
-        ];
-        let b = bary.map(|x| x as f32);
-        Sample {
-            position: fp.position.as_vec3().to_array(),
+        face_record(
+            &self.mesh,
+            &self.face_tensors,
             face,
-            normal: fp.normal.as_vec3().to_array(),
+            bary,
             segment,
-            major_axis: fp.major.as_vec3().to_array(),
             index,
-            bary: [b[1], b[2]],
-            spacing,
-        }
+            scale,
+        )
     }
 }
 
 /// A record the per-chunk loop writes for each sample: a full [`Sample`] or only its
 /// [`SampleSite`] (one loop, compiled once per record type).
 pub(super) trait Record: Copy + Send {
+    /// What the per-sample loop of [`Sampler::fill_chunk_body`] writes for this record
+    /// (the record itself, or a [`Staged`] place that [`finish`](Self::finish) expands
+    /// in the same slot).
+    type Placed: Record;
+
+    /// The output buffer as the per-sample loop writes it (the same memory).
+    fn placed(dst: &mut [Self]) -> &mut [Self::Placed];
+
+    /// Turns what the per-sample loop left in `dst` (samples `start..`) into records.
+    fn finish(sampler: &Sampler, dst: &mut [Self], start: u64, scale: f64);
+
     /// The record of domain point `p` of `seg`, sample `index` of a request whose
     /// spacing scale is `scale`.
     fn make(
@@ -612,6 +627,19 @@ pub(super) trait Record: Copy + Send {
 }
 
 impl Record for Sample {
+    type Placed = Staged;
+
+    #[inline(always)]
+    fn placed(dst: &mut [Self]) -> &mut [Staged] {
+        // The same size, and `Staged` has alignment 1: the cast always succeeds.
+        bytemuck::cast_slice_mut(dst)
+    }
+
+    #[inline(always)]
+    fn finish(sampler: &Sampler, dst: &mut [Self], start: u64, scale: f64) {
+        expand_staged(&sampler.mesh, &sampler.face_tensors, dst, start, scale);
+    }
+
     #[inline(always)]
     fn make(
         sampler: &Sampler,
@@ -624,7 +652,34 @@ impl Record for Sample {
     }
 }
 
+impl Record for Staged {
+    type Placed = Staged;
+
+    #[inline(always)]
+    fn placed(dst: &mut [Self]) -> &mut [Staged] {
+        dst
+    }
+
+    #[inline(always)]
+    fn finish(_: &Sampler, _: &mut [Self], _: u64, _: f64) {}
+
+    #[inline(always)]
+    fn make(_: &Sampler, seg: &SegmentSampling, p: &DomainPoint, _: u32, _: f64) -> Self {
+        Staged::new(seg.faces[p.triangle as usize], seg.segment, p.bary)
+    }
+}
+
 impl Record for SampleSite {
+    type Placed = SampleSite;
+
+    #[inline(always)]
+    fn placed(dst: &mut [Self]) -> &mut [SampleSite] {
+        dst
+    }
+
+    #[inline(always)]
+    fn finish(_: &Sampler, _: &mut [Self], _: u64, _: f64) {}
+
     /// The fields of [`Sampler::make_sample`]'s record that say where the sample is,
     /// computed the same way.
     #[inline(always)]
