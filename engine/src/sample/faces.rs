@@ -261,7 +261,7 @@ impl<'a> Tables<'a> {
             scaled(&m, 1.0 / s.sqrt())
         } else {
             let n = DVec3::new(n[0], n[1], n[2]);
-            lanes(major_degenerate(p, &tri, n, v, vlen2))
+            lanes(major_degenerate(p, tri, n, v, vlen2))
         };
         let spacing = [
             (scale / l1.sqrt()) as f32,
@@ -333,8 +333,8 @@ impl Geometry<'_> {
 /// cannot be normalised: a fallback frame or the frame's first axis.
 #[cold]
 #[inline(never)]
-fn major_degenerate(p: &[DVec3], tri: &[u32; 3], n: DVec3, v: DVec2, len2: f64) -> DVec3 {
-    let (e1, e2) = face_frame(p, tri, n);
+fn major_degenerate(p: &[DVec3], tri: [u32; 3], n: DVec3, v: DVec2, len2: f64) -> DVec3 {
+    let (e1, e2) = face_frame(p, &tri, n);
     let v = if usable(len2) {
         v * (1.0 / len2.sqrt())
     } else {
@@ -406,7 +406,7 @@ mod tests {
         let major = if usable(s) {
             (u * v.x + n.cross(u) * v.y) * (1.0 / s.sqrt())
         } else {
-            major_degenerate(p, tri, n, v, len2)
+            major_degenerate(p, *tri, n, v, len2)
         };
         Sample {
             position: position.as_vec3().to_array(),

@@ -473,10 +473,11 @@ impl Sampler {
                 let w = &cum[leaf..leaf + 2];
                 let (w0, w1) = (w[0], w[1]);
                 if curve.leaf_is_full(leaf) {
-                    // Values in this leaf: the leaf's data is read once for all.
+                    // Values in this leaf: the leaf's data is read once for all. `ml`
+                    // is carried from the exit test below to the next point.
                     let view = curve.full_leaf(leaf, levels);
+                    let mut ml = ml;
                     loop {
-                        let ml = (m - before).clamp(0.0, top);
                         let p = view.point(curve, (ml - w0) / (w1 - w0));
                         dst[(g - start) as usize] = T::make(self, seg, &p, g as u32, scale);
                         g += 1;
@@ -484,7 +485,7 @@ impl Sampler {
                             break 'group;
                         }
                         m = value(g);
-                        let ml = (m - before).clamp(0.0, top);
+                        ml = (m - before).clamp(0.0, top);
                         if ml >= w1 || m >= member_end {
                             break;
                         }
@@ -700,8 +701,13 @@ impl Record for SampleSite {
 /// ([`SegmentCurve::point_in_leaf_with`]), which costs one pass over the pieces
 /// instead of two polygon splits per piece and level. At 10^6 samples on the bunny,
 /// boundary leaves expect about one sample each.
+/// A leaf expecting at most one sample takes no level without calling `log2` (the
+/// same 0 that `log2(1) = 0` gives), the usual case at high counts.
 #[inline]
 fn boundary_levels(expected: f64) -> u32 {
+    if expected <= 1.0 {
+        return 0;
+    }
     (expected.max(1.0).log2() * 0.5).ceil() as u32
 }
 
