@@ -155,7 +155,7 @@ fn share64(m: f64, whole: f64) -> u64 {
 }
 
 /// The sequential sampler's levels of descent through a boundary leaf expecting
-/// `expected` samples (`sampler.rs`'s `boundary_levels`; the tests compare the two
+/// `expected` samples (`leaves.rs`'s `boundary_levels`; the tests compare the two
 /// samplers, so a change there shows here).
 fn descent_levels(expected: f64) -> u32 {
     (expected.max(1.0).log2() * 0.5).ceil() as u32

@@ -11,6 +11,7 @@
 mod chains;
 pub(crate) mod faces;
 pub mod flat;
+mod leaves;
 pub mod lod;
 pub mod progressive;
 mod sampler;

@@ -5,7 +5,8 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::chains::link_chains;
-use super::faces::{FaceTensors, face_point};
+use super::faces::{FaceTensors, Staged, expand_staged, face_record};
+use super::leaves::{advance, boundary_levels};
 use super::stratified::{Allocation, stratified_value_keyed};
 // `SegmentSampling` lives below both this module and `chains.rs`; `sample/mod.rs`
 // re-exports it from here.
@@ -389,12 +390,23 @@ impl Sampler {
         self.fill_chunk_body(req, start, dst);
     }
 
+    /// The records of `dst` in two passes: the per-sample loop
+    /// ([`place_chunk`](Self::place_chunk)) writes what [`Record::Placed`] says into
+    /// the same memory, then [`Record::finish`] completes the records (for full
+    /// samples, in a second loop over the chunk while it is in cache). Always inlined,
+    /// so that each caller's target features apply to all of it.
+    #[inline(always)]
+    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+        self.place_chunk(req, start, T::placed(dst));
+        T::finish(self, dst, start, req.scale);
+    }
+
     /// Section 6.2: segments are sampled one by one unless they are many relative to
     /// the samples (t / N >= 1/3), where rounding per segment would show; then chains
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn place_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
         let Request {
             groups,
             seed,
@@ -462,10 +474,11 @@ impl Sampler {
                 let w = &cum[leaf..leaf + 2];
                 let (w0, w1) = (w[0], w[1]);
                 if curve.leaf_is_full(leaf) {
-                    // Values in this leaf: the leaf's data is read once for all.
+                    // Values in this leaf: the leaf's data is read once for all. `ml`
+                    // is carried from the exit test below to the next point.
                     let view = curve.full_leaf(leaf, levels);
+                    let mut ml = ml;
                     loop {
-                        let ml = (m - before).clamp(0.0, top);
                         let p = view.point(curve, (ml - w0) / (w1 - w0));
                         dst[(g - start) as usize] = T::make(self, seg, &p, g as u32, scale);
                         g += 1;
@@ -473,7 +486,7 @@ impl Sampler {
                             break 'group;
                         }
                         m = value(g);
-                        let ml = (m - before).clamp(0.0, top);
+                        ml = (m - before).clamp(0.0, top);
                         if ml >= w1 || m >= member_end {
                             break;
                         }
@@ -578,28 +591,32 @@ impl Sampler {
         index: u32,
         scale: f64,
     ) -> Sample {
-        let fp = face_point(&self.mesh, &self.face_tensors, face, bary);
-        let spacing = [
-            (scale / fp.l1.sqrt()) as f32,
-            (scale / fp.l2.max(f64::MIN_POSITIVE).sqrt()) as f32,
-        ];
-        let b = bary.map(|x| x as f32);
-        Sample {
-            position: fp.position.as_vec3().to_array(),
+        face_record(
+            &self.mesh,
+            &self.face_tensors,
             face,
-            normal: fp.normal.as_vec3().to_array(),
+            bary,
             segment,
-            major_axis: fp.major.as_vec3().to_array(),
             index,
-            bary: [b[1], b[2]],
-            spacing,
-        }
+            scale,
+        )
     }
 }
 
 /// A record the per-chunk loop writes for each sample: a full [`Sample`] or only its
 /// [`SampleSite`] (one loop, compiled once per record type).
 pub(super) trait Record: Copy + Send {
+    /// What the per-sample loop of [`Sampler::fill_chunk_body`] writes for this record
+    /// (the record itself, or a [`Staged`] place that [`finish`](Self::finish) expands
+    /// in the same slot).
+    type Placed: Record;
+
+    /// The output buffer as the per-sample loop writes it (the same memory).
+    fn placed(dst: &mut [Self]) -> &mut [Self::Placed];
+
+    /// Turns what the per-sample loop left in `dst` (samples `start..`) into records.
+    fn finish(sampler: &Sampler, dst: &mut [Self], start: u64, scale: f64);
+
     /// The record of domain point `p` of `seg`, sample `index` of a request whose
     /// spacing scale is `scale`.
     fn make(
@@ -612,6 +629,19 @@ pub(super) trait Record: Copy + Send {
 }
 
 impl Record for Sample {
+    type Placed = Staged;
+
+    #[inline(always)]
+    fn placed(dst: &mut [Self]) -> &mut [Staged] {
+        // The same size, and `Staged` has alignment 1: the cast always succeeds.
+        bytemuck::cast_slice_mut(dst)
+    }
+
+    #[inline(always)]
+    fn finish(sampler: &Sampler, dst: &mut [Self], start: u64, scale: f64) {
+        expand_staged(&sampler.mesh, &sampler.face_tensors, dst, start, scale);
+    }
+
     #[inline(always)]
     fn make(
         sampler: &Sampler,
@@ -624,7 +654,34 @@ impl Record for Sample {
     }
 }
 
+impl Record for Staged {
+    type Placed = Staged;
+
+    #[inline(always)]
+    fn placed(dst: &mut [Self]) -> &mut [Staged] {
+        dst
+    }
+
+    #[inline(always)]
+    fn finish(_: &Sampler, _: &mut [Self], _: u64, _: f64) {}
+
+    #[inline(always)]
+    fn make(_: &Sampler, seg: &SegmentSampling, p: &DomainPoint, _: u32, _: f64) -> Self {
+        Staged::new(seg.faces[p.triangle as usize], seg.segment, p.bary)
+    }
+}
+
 impl Record for SampleSite {
+    type Placed = SampleSite;
+
+    #[inline(always)]
+    fn placed(dst: &mut [Self]) -> &mut [SampleSite] {
+        dst
+    }
+
+    #[inline(always)]
+    fn finish(_: &Sampler, _: &mut [Self], _: u64, _: f64) {}
+
     /// The fields of [`Sampler::make_sample`]'s record that say where the sample is,
     /// computed the same way.
     #[inline(always)]
@@ -638,55 +695,10 @@ impl Record for SampleSite {
     }
 }
 
-/// Exact levels of the descent through a boundary leaf expected to receive
-/// `expected` samples: until a sub-cell expects at most one sample (log4 of the
-/// expectation, none for a leaf that expects at most one). There a sample is placed
-/// by area in the triangle piece of the sub-cell that its measure falls in
-/// ([`SegmentCurve::point_in_leaf_with`]), which costs one pass over the pieces
-/// instead of two polygon splits per piece and level. At 10^6 samples on the bunny,
-/// boundary leaves expect about one sample each.
-#[inline]
-fn boundary_levels(expected: f64) -> u32 {
-    (expected.max(1.0).log2() * 0.5).ceil() as u32
-}
-
-/// The leaf holding cumulative measure `m`, searching forward from `leaf`: the first
-/// leaf `l >= leaf` with `cum[l + 1] > m` (the last leaf if none). A few linear steps
-/// first (consecutive samples are usually in the same or the next leaf), then a
-/// galloping search (probes at doubling distances, then a binary search between the
-/// last two), so that a jump of `d` leaves reads about `2 log2 d` entries near the
-/// current leaf, not `log2` of the whole segment's entries spread over it: at small
-/// counts, where consecutive samples are many leaves apart, each of those reads is a
-/// cache miss.
-#[inline]
-fn advance(cum: &[f64], mut leaf: usize, m: f64) -> usize {
-    let last = cum.len() - 2;
-    for _ in 0..8 {
-        if leaf >= last || cum[leaf + 1] > m {
-            return leaf.min(last);
-        }
-        leaf += 1;
-    }
-    // Every leaf before `lo` ends at or below `m`.
-    let mut lo = leaf;
-    let mut step = 8;
-    let hi = loop {
-        let probe = lo + step;
-        if probe >= last || cum[probe + 1] > m {
-            break probe.min(last);
-        }
-        lo = probe + 1;
-        step *= 2;
-    };
-    // The answer is in `lo..=hi` (`hi` if no entry there exceeds `m`).
-    let ends = &cum[lo + 1..=hi + 1];
-    (lo + ends.partition_point(|&c| c <= m)).min(last)
-}
-
 #[cfg(test)]
 mod tests {
-    use super::advance;
     use crate::fixtures::along_x_2to1;
+    use crate::sample::leaves::advance;
 
     #[test]
     fn a_field_of_another_mesh_is_an_error_not_a_panic() {
