@@ -7,45 +7,26 @@
 //! the pool, each call hands its work over through rayon's queue, which allocates a
 //! block every 63 calls.
 
-#![allow(unsafe_code)] // A global allocator; each block says why it holds.
+#![allow(unsafe_code)] // Calls through the C interface; each block says why it holds.
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::alloc::System;
+
+use stats_alloc::{INSTRUMENTED_SYSTEM, StatsAlloc};
 
 use common::*;
 use strata::sample::{STRATA_PROGRESSIVE, STRATA_STRATIFIED, StrataSample};
 
 /// The system allocator, counting allocations and reallocations.
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: every method forwards to `System` with the same arguments, so `System`'s
-// guarantees hold; the counter has no effect on the memory returned.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded with the caller's layout (the caller upholds `alloc`'s
-        // contract).
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from `System` through this allocator with `layout`.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: as `dealloc`, with the caller's new size.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
+
+/// Allocations so far, reallocations included.
+fn allocations() -> usize {
+    let stats = GLOBAL.stats();
+    stats.allocations + stats.reallocations
+}
 
 #[test]
 fn sampling_calls_allocate_nothing_in_steady_state() {
@@ -76,18 +57,18 @@ fn sampling_calls_allocate_nothing_in_steady_state() {
         for seed in 0..3 {
             ok(sample(sampler, &request(mode, n, seed, 0), out));
         }
-        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        let before = allocations();
         for seed in 0..20 {
             let count = n - seed as usize * 100;
             ok(sample(sampler, &request(mode, count, seed, 0), out));
         }
-        let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        let allocations = allocations() - before;
         assert_eq!(allocations, 0, "mode {mode}: allocations in 20 calls");
     }
     // The counter does count: a failing call allocates its message.
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = allocations();
     let status = sample(sampler, &request(7, n, 0, 0), &with_records);
     assert_ne!(status, strata::StrataStatus::Ok);
-    assert!(ALLOCATIONS.load(Ordering::Relaxed) > before);
+    assert!(allocations() > before);
     ok(free_sampler(sampler));
 }

@@ -18,14 +18,12 @@
 //! CPU's sampler). The binary holds this one test, so no other test allocates while
 //! it counts.
 
-#![allow(unsafe_code)] // A global allocator; each block says why it holds.
-
-use std::alloc::{GlobalAlloc, Layout, System};
+use std::alloc::System;
 use std::io::Write;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use bevy_ecs::prelude::*;
+use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
 use strata_engine::field::FieldSpec;
 use strata_engine::mesh::shapes;
 use strata_engine::sample::Sample;
@@ -36,49 +34,19 @@ use strata_systems::ecs::{
 use strata_systems::gpu::backend::{self, GpuSampling};
 use strata_systems::gpu::{GpuContext, GpuSplats, HeadlessTarget, SplatRenderer};
 
-/// The system allocator, counting allocations, reallocations and their bytes.
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-static BYTES: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: every method forwards to `System` with the same arguments, so `System`'s
-// guarantees hold; the counters have no effect on the memory returned.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        BYTES.fetch_add(layout.size(), Ordering::Relaxed);
-        // SAFETY: forwarded with the caller's layout (the caller upholds `alloc`'s
-        // contract).
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from `System` through this allocator with `layout`.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        BYTES.fetch_add(new_size, Ordering::Relaxed);
-        // SAFETY: as `dealloc`, with the caller's new size.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
+/// The system allocator, counting allocations, reallocations and bytes.
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 
-/// Allocations and bytes allocated while `f` runs.
+/// Allocations (reallocations included) and bytes allocated (a reallocation's growth)
+/// while `f` runs.
 fn counted(f: impl FnOnce()) -> (usize, usize) {
-    let (a, b) = (
-        ALLOCATIONS.load(Ordering::Relaxed),
-        BYTES.load(Ordering::Relaxed),
-    );
+    let region = Region::new(GLOBAL);
     f();
+    let change = region.change();
     (
-        ALLOCATIONS.load(Ordering::Relaxed) - a,
-        BYTES.load(Ordering::Relaxed) - b,
+        change.allocations + change.reallocations,
+        change.bytes_allocated,
     )
 }
 

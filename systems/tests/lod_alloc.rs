@@ -5,51 +5,24 @@
 //! the system's, both pools updated along the same orbit, listing the same ranks. The
 //! binary holds this one test, so no other test allocates while it counts.
 
-#![allow(unsafe_code)] // A global allocator; each block says why it holds.
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::alloc::System;
 
 use glam::DVec3;
+use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
 use strata_engine::fixtures::lod::view;
 use strata_engine::fixtures::torus_sampler;
 use strata_engine::sample::lod::{Budget, LodPool, Placement, PoolChange};
 
 /// The system allocator, counting allocations and reallocations.
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: every method forwards to `System` with the same arguments, so `System`'s
-// guarantees hold; the counter has no effect on the memory returned.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: forwarded with the caller's layout (the caller upholds `alloc`'s
-        // contract).
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from `System` through this allocator with `layout`.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: as `dealloc`, with the caller's new size.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 
-/// Allocations while `f` runs, and its result.
+/// Allocations (reallocations included) while `f` runs, and its result.
 fn counted<T>(f: impl FnOnce() -> T) -> (usize, T) {
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let region = Region::new(GLOBAL);
     let out = f();
-    (ALLOCATIONS.load(Ordering::Relaxed) - before, out)
+    let change = region.change();
+    (change.allocations + change.reallocations, out)
 }
 
 #[test]

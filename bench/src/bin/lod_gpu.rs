@@ -25,10 +25,10 @@
 //! `lod` bench, the frame loop runs on a worker of rayon's global pool
 //! (`use_current_thread`); `LOD_OUTSIDE_POOL=1` calls from outside the pool.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::alloc::System;
 use std::time::Instant;
 
+use stats_alloc::{INSTRUMENTED_SYSTEM, StatsAlloc};
 use strata_bench::lod_camera::{LodCamera, lod_scene};
 use strata_bench::median;
 use strata_engine::sample::lod::{Budget, Placement, ViewLod};
@@ -36,38 +36,13 @@ use strata_engine::sample::{LodPool, Sampler};
 use strata_systems::gpu::{GpuContext, GpuLodPool, GpuSampleBuffer, GpuSampler};
 
 /// The system allocator, counting allocations (all threads).
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: every call is forwarded to the system allocator unchanged; the counter is
-// an atomic add.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: the caller's contract is the system allocator's.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from `System.alloc` with this layout.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: `ptr` came from `System.alloc` with this layout.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 
-/// Allocations so far.
+/// Allocations so far, reallocations included.
 fn allocations() -> usize {
-    ALLOCATIONS.load(Ordering::Relaxed)
+    let stats = GLOBAL.stats();
+    stats.allocations + stats.reallocations
 }
 
 const SEED: u64 = 3;
