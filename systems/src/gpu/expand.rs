@@ -254,36 +254,12 @@ impl SiteExpander {
             });
             self.sites.write(device, &mut encoder, sites)?;
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("strata expand"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: self.params.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: self.sites.buffer(),
-                            offset: 0,
-                            size: wgpu::BufferSize::new(self.sites.bytes()),
-                        }),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: self.mesh.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: samples.buffer(),
-                            offset: 0,
-                            size: wgpu::BufferSize::new(out_bytes),
-                        }),
-                    },
-                ],
-            });
+            let bind_group = self.bind_group(
+                device,
+                "strata expand",
+                (self.sites.buffer(), self.sites.bytes()),
+                (samples.buffer(), out_bytes),
+            );
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("strata expand"),
@@ -332,44 +308,17 @@ impl SiteExpander {
             ..self.offsets
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let bytes = |count: u64| wgpu::BufferSize::new(u64::from(n) * count);
         let bound = self.resident.as_ref().is_some_and(|(_, buffers, count)| {
             *count == n && buffers[0] == *sites && buffers[1] == *samples
         });
         if !bound {
-            let bind_group =
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("strata expand resident"),
-                    layout: &self.layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: self.params.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: sites,
-                                offset: 0,
-                                size: bytes(SITE_BYTES),
-                            }),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: self.mesh.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                buffer: samples,
-                                offset: 0,
-                                size: bytes(
-                                    std::mem::size_of::<strata_engine::sample::Sample>() as u64
-                                ),
-                            }),
-                        },
-                    ],
-                });
+            let record_bytes = std::mem::size_of::<strata_engine::sample::Sample>() as u64;
+            let bind_group = self.bind_group(
+                device,
+                "strata expand resident",
+                (sites, u64::from(n) * SITE_BYTES),
+                (samples, u64::from(n) * record_bytes),
+            );
             self.resident = Some((bind_group, [sites.clone(), samples.clone()], n));
         }
         let Some((bind_group, _, _)) = &self.resident else {
@@ -382,6 +331,46 @@ impl SiteExpander {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(1, bind_group, &[]);
         pass.dispatch_workgroups(gx, gy, 1);
+    }
+
+    /// The expansion pass's bind group: its uniforms and mesh table, the first
+    /// `site_bytes` of `sites` and the first `sample_bytes` of `samples`.
+    fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        (sites, site_bytes): (&wgpu::Buffer, u64),
+        (samples, sample_bytes): (&wgpu::Buffer, u64),
+    ) -> wgpu::BindGroup {
+        let part = |buffer, bytes| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: 0,
+                size: wgpu::BufferSize::new(bytes),
+            })
+        };
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: self.params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: part(sites, site_bytes),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: self.mesh.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: part(samples, sample_bytes),
+                },
+            ],
+        })
     }
 
     /// Replaces the positions and normals of the mesh table with those of `mesh`, a
