@@ -26,13 +26,13 @@ use bevy_ecs::prelude::*;
 use stats_alloc::{INSTRUMENTED_SYSTEM, Region, StatsAlloc};
 use strata_engine::field::FieldSpec;
 use strata_engine::mesh::shapes;
-use strata_engine::sample::Sample;
+use strata_engine::sample::{Sample, Sampler};
 use strata_engine::surface::SurfaceOptions;
 use strata_systems::ecs::{
     self, EngineSettings, MeshBundle, MeshSampler, SampleBuffer, SamplerBackend, SamplingSettings,
 };
 use strata_systems::gpu::backend::{self, GpuSampling};
-use strata_systems::gpu::{GpuContext, GpuSplats, HeadlessTarget, SplatRenderer};
+use strata_systems::gpu::{GpuContext, GpuSampler, GpuSplats, HeadlessTarget, SplatRenderer};
 
 /// The system allocator, counting allocations, reallocations and bytes.
 #[global_allocator]
@@ -126,9 +126,8 @@ const FRAME_ALLOCATIONS: usize = 120;
 /// Bytes allocated per resampling frame at most.
 const FRAME_BYTES: usize = 24 * 1024;
 
-/// Allocations and bytes of the engine's request table for `(count, seed)` alone
-/// (`FlatSampler::request`, what a resampling frame computes on the CPU).
-fn request_cost(engine: &Engine, count: usize, seed: u64) -> (usize, usize) {
+/// The engine's GPU sampler and the mesh's CPU sampler it was built from.
+fn samplers(engine: &Engine) -> (&GpuSampler, &Sampler) {
     let state = engine.world.resource::<GpuSampling>();
     let gpu = state.sampler().expect("a GPU sampler");
     let sampler = engine
@@ -136,6 +135,13 @@ fn request_cost(engine: &Engine, count: usize, seed: u64) -> (usize, usize) {
         .get::<MeshSampler>(engine.mesh)
         .and_then(|s| s.0.as_ref())
         .expect("sampler");
+    (gpu, sampler)
+}
+
+/// Allocations and bytes of the engine's request table for `(count, seed)` alone
+/// (`FlatSampler::request`, what a resampling frame computes on the CPU).
+fn request_cost(engine: &Engine, count: usize, seed: u64) -> (usize, usize) {
+    let (gpu, sampler) = samplers(engine);
     let flat = gpu.flat();
     counted(|| {
         let request = flat.request(sampler, count as u64, seed).expect("request");
@@ -187,13 +193,7 @@ fn bare_writes(engine: &Engine, bytes: usize) -> (usize, usize) {
 /// request table of per-segment counts and levels (its words, as the GPU sampler
 /// writes them), the sites pass's uniforms (64 bytes) and the expansion's (32 bytes).
 fn upload_bytes(engine: &Engine, count: usize, seed: u64) -> usize {
-    let state = engine.world.resource::<GpuSampling>();
-    let gpu = state.sampler().expect("a GPU sampler");
-    let sampler = engine
-        .world
-        .get::<MeshSampler>(engine.mesh)
-        .and_then(|s| s.0.as_ref())
-        .expect("sampler");
+    let (gpu, sampler) = samplers(engine);
     let request = gpu
         .flat()
         .request(sampler, count as u64, seed)
