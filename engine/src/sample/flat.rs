@@ -358,59 +358,32 @@ impl FlatSampler {
     /// boundary leaf rebuilt when any must grow.
     pub fn deepen(&mut self, sampler: &Sampler, n: u64) -> Result<bool, FlatError> {
         let mut changed = false;
-        for (slot_lo, slot_hi, count, group_measure) in self.runs(sampler, n) {
+        let (slots, leaves, depths) = (&self.slots, &self.leaves, &mut self.depths);
+        for_each_run(sampler, n, |_, slot_lo, slot_hi, count, group_measure| {
             let per_sample = count as f64 / group_measure;
-            for slot in &self.slots[slot_lo as usize..slot_hi as usize] {
+            for slot in &slots[slot_lo as usize..slot_hi as usize] {
                 let curve = &sampler.segments[slot.segment_index].curve;
                 let cap = u32::from(curve.options().leaf_levels).min(MAX_DEPTH as u32);
                 let cum = curve.cumulative();
                 for l in slot.leaf_lo as usize..slot.leaf_hi as usize {
-                    if self.leaves[l][2] & 128 != 0 {
+                    if leaves[l][2] & 128 != 0 {
                         continue;
                     }
                     let local = l - slot.leaf_lo as usize;
                     let w = cum[local + 1] - cum[local];
                     let need = descent_levels(w * per_sample).min(cap) as u8;
-                    if need > self.depths[l] {
-                        self.depths[l] = need;
+                    if need > depths[l] {
+                        depths[l] = need;
                         changed = true;
                     }
                 }
             }
-        }
+            Ok(())
+        })?;
         if changed {
             self.build_trees(sampler)?;
         }
         Ok(changed)
-    }
-
-    /// The groups of an `n`-sample request with samples: `(first slot, slot end,
-    /// count, measure)`, the measures summed as the sampler sums them.
-    fn runs(&self, sampler: &Sampler, n: u64) -> Vec<(u32, u32, u64, f64)> {
-        let linked = sampler.uses_chains(n as usize);
-        let segments = sampler.segments();
-        let measure = |i: u32| segments[i as usize].curve.measure();
-        let groups: Vec<(u32, u32, f64)> = if linked {
-            let mut at = 0u32;
-            sampler
-                .chains_iter()
-                .map(|members| {
-                    let lo = at;
-                    at += members.len() as u32;
-                    (lo, at, members.iter().map(|&i| measure(i)).sum())
-                })
-                .collect()
-        } else {
-            (0..segments.len() as u32)
-                .map(|i| {
-                    let slot = sampler.chain_slot[i as usize];
-                    (slot, slot + 1, measure(i))
-                })
-                .collect()
-        };
-        Allocation::new(n, groups.iter().map(|g| g.2))
-            .map(|(i, count)| (groups[i].0, groups[i].1, count, groups[i].2))
-            .collect()
     }
 
     /// Bytes of the tables (what a GPU holds of them).
@@ -430,6 +403,21 @@ impl FlatSampler {
     /// [`FlatError::Shallow`] when a boundary leaf's tree is shallower than the
     /// request's descent in it ([`deepen`](Self::deepen) first).
     pub fn request(&self, sampler: &Sampler, n: u64, seed: u64) -> Result<FlatRequest, FlatError> {
+        let mut request = FlatRequest::default();
+        self.request_into(sampler, n, seed, &mut request)?;
+        Ok(request)
+    }
+
+    /// [`request`](Self::request) written into `request`, whose vectors are reused:
+    /// the same table, and no allocation once they have grown to the largest request
+    /// (what a per-frame caller keeps). On an error `request` is left unspecified.
+    pub fn request_into(
+        &self,
+        sampler: &Sampler,
+        n: u64,
+        seed: u64,
+        request: &mut FlatRequest,
+    ) -> Result<(), FlatError> {
         if n > u64::from(u32::MAX) {
             return Err(FlatError::TooLarge {
                 what: "samples per request",
@@ -438,19 +426,17 @@ impl FlatSampler {
         }
         let segments = sampler.segments();
         let depth = u32::from(self.depths.iter().copied().max().unwrap_or(0));
-        let mut request = FlatRequest {
-            groups: Vec::new(),
-            levels: vec![0; self.slots.len()],
-            depth,
-            thresholds: Vec::new(),
-        };
+        request.groups.clear();
+        request.levels.clear();
+        request.levels.resize(self.slots.len(), 0);
+        request.depth = depth;
+        request.thresholds.clear();
         let mut first = 0u64;
-        let runs = self.runs(sampler, n);
-        for (i, &(slot_lo, slot_hi, count, group_measure)) in runs.iter().enumerate() {
+        for_each_run(sampler, n, |i, slot_lo, slot_hi, count, group_measure| {
             let start = first;
             first += count;
             if count == 0 {
-                continue;
+                return Ok(());
             }
             let per_sample = count as f64 / group_measure;
             for slot in slot_lo..slot_hi {
@@ -492,9 +478,40 @@ impl FlatSampler {
                 g_len[0],
                 g_len[1],
             ]);
-        }
-        Ok(request)
+            Ok(())
+        })
     }
+}
+
+/// Calls `f(group, first slot, slot end, count, measure)` for every group of an
+/// `n`-sample request in output order (segments, or chains where the sampler links
+/// them), its count from the sampler's allocation and its measure summed as the
+/// sampler sums it; stops at `f`'s first error. Allocates nothing.
+fn for_each_run(
+    sampler: &Sampler,
+    n: u64,
+    mut f: impl FnMut(usize, u32, u32, u64, f64) -> Result<(), FlatError>,
+) -> Result<(), FlatError> {
+    let segments = sampler.segments();
+    let measure = |i: u32| segments[i as usize].curve.measure();
+    if sampler.uses_chains(n as usize) {
+        let chains = &sampler.chains;
+        let group = move |i: usize| chains.members(i).iter().map(|&s| measure(s)).sum::<f64>();
+        let groups = (0..sampler.chains_iter().len()).map(group);
+        let mut at = 0u32;
+        for (i, count) in Allocation::new(n, groups) {
+            let lo = at;
+            at += chains.members(i).len() as u32;
+            f(i, lo, at, count, group(i))?;
+        }
+    } else {
+        let groups = (0..segments.len() as u32).map(measure);
+        for (i, count) in Allocation::new(n, groups) {
+            let slot = sampler.chain_slot[i];
+            f(i, slot, slot + 1, count, measure(i as u32))?;
+        }
+    }
+    Ok(())
 }
 
 /// Levels of the continuous map and of the boundary descent for progressive samples:
@@ -643,6 +660,40 @@ mod tests {
             flat.request(sampler, 1 << 33, 3),
             Err(FlatError::TooLarge { .. })
         ));
+    }
+
+    /// A request written into a reused table is the fresh request, whatever came
+    /// before it (larger and smaller counts, segments and chains, other seeds), and
+    /// once the table has grown to the largest request it is not reallocated.
+    #[test]
+    fn requests_into_a_reused_table_are_fresh_requests() {
+        let pre = torus();
+        let sampler = &pre.sampler;
+        let mut flat = FlatSampler::new(sampler).expect("flat");
+        flat.deepen(sampler, 200_000).expect("deepen");
+        let counts = [1u64, 2, 5, 200_000, 3, 4096, 7, 100, 0, 99_999, 1];
+        assert!(counts.iter().any(|&n| sampler.uses_chains(n as usize)));
+        assert!(counts.iter().any(|&n| !sampler.uses_chains(n as usize)));
+        let mut reused = FlatRequest::default();
+        let mut held = None;
+        for round in 0..2 {
+            for (k, &n) in counts.iter().enumerate() {
+                let seed = (round * 31 + k as u64) ^ 0x5eed;
+                flat.request_into(sampler, n, seed, &mut reused)
+                    .expect("request");
+                let fresh = flat.request(sampler, n, seed).expect("request");
+                assert_eq!(reused, fresh, "n {n}, seed {seed}");
+            }
+            let buffers = [
+                reused.groups.as_ptr() as usize,
+                reused.levels.as_ptr() as usize,
+                reused.thresholds.as_ptr() as usize,
+            ];
+            if round == 1 {
+                assert_eq!(Some(buffers), held, "the table was reallocated");
+            }
+            held = Some(buffers);
+        }
     }
 
     /// The scramble words give the progressive sequence's values: the top 32 bits of
