@@ -252,7 +252,11 @@ pub fn sample_on_gpu(
         return;
     }
     let t = Instant::now();
-    let drawn = gpu_sampler.sample(device, queue, count, seed, gpu.renderer.samples_mut());
+    // A resample the GPU sampler submits without error scopes (its bindings were
+    // checked before) reports an error through the device's uncaptured-error sink.
+    let drawn = gpu_sampler
+        .sample(device, queue, count, seed, gpu.renderer.samples_mut())
+        .and_then(|()| gpu.ctx.take_uncaptured("sampling on the GPU"));
     let record = t.elapsed();
     match drawn {
         Ok(()) => {

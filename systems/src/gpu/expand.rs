@@ -69,6 +69,9 @@ pub struct SiteExpander {
     /// The resident pass's bind group and what it binds (sites, samples, count), kept
     /// while a caller expands the same buffers at the same count frame after frame.
     resident: Option<(wgpu::BindGroup, [wgpu::Buffer; 2], u32)>,
+    /// The uniforms as last written to `params` (an expansion of the same count does
+    /// not write them again).
+    written: Option<ExpandParams>,
 }
 
 /// The mesh table of `sampler` as 32-bit words (layout: `ExpandParams`), and the
@@ -203,6 +206,7 @@ impl SiteExpander {
                 total_measure: sampler.total_measure(),
                 sites,
                 resident: None,
+                written: None,
             }
         })
     }
@@ -254,6 +258,7 @@ impl SiteExpander {
             });
             self.sites.write(device, &mut encoder, sites)?;
             queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            self.written = Some(params);
             let bind_group = self.bind_group(
                 device,
                 "strata expand",
@@ -307,7 +312,10 @@ impl SiteExpander {
             row: gx * WORKGROUP,
             ..self.offsets
         };
-        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        if self.written != Some(params) {
+            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            self.written = Some(params);
+        }
         let bound = self.resident.as_ref().is_some_and(|(_, buffers, count)| {
             *count == n && buffers[0] == *sites && buffers[1] == *samples
         });
@@ -325,7 +333,8 @@ impl SiteExpander {
             return;
         };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("strata expand resident"),
+            // Unlabelled: wgpu copies a per-frame pass's label into a new string.
+            label: None,
             timestamp_writes: timestamps,
         });
         pass.set_pipeline(&self.pipeline);

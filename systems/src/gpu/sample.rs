@@ -31,7 +31,7 @@
 //! as a list in a buffer, which is how a level-of-detail pool's new entries are placed
 //! ([`GpuLodPool::sync_placed`](super::lod::GpuLodPool::sync_placed)).
 
-use strata_engine::sample::flat::{FlatError, FlatProgressive, FlatSampler};
+use strata_engine::sample::flat::{FlatError, FlatProgressive, FlatRequest, FlatSampler};
 use strata_engine::sample::{SampleSite, Sampler};
 use wgpu::util::DeviceExt;
 
@@ -246,15 +246,23 @@ pub struct GpuSampler {
     offsets: SampleParams,
     request: Growable,
     sites: Growable,
-    /// The request table's words, kept so that a request allocates nothing once it
-    /// has grown to the largest.
+    /// The request table and its words, kept so that a request allocates nothing
+    /// once they have grown to the largest.
+    groups: FlatRequest,
     words: Vec<u32>,
+    /// The sites pass's uniforms as last written (a request that leaves them as they
+    /// are does not write them again).
+    written: Option<SampleParams>,
     /// The `(count, seed)` whose request table and uniforms the GPU holds, with the
     /// table generation they were computed for: a repeated request uploads nothing.
     uploaded: Option<(u32, u64, u64)>,
     /// The sites pass's bind group and the generations (table, request, sites) of the
     /// buffers it binds: made again only when one of them was reallocated.
     bind_group: Option<(wgpu::BindGroup, [u64; 3])>,
+    /// What the last submission checked in error scopes bound: the sites pass's
+    /// buffer generations, the count and the records buffer. A resample binding the
+    /// same is submitted without scopes ([`sample`](Self::sample)).
+    checked: Option<([u64; 3], u32, wgpu::Buffer)>,
     /// Sites written by the last request.
     count: u32,
     /// [`progressive_overflow`] of the tables: the progressive order is refused when
@@ -319,9 +327,12 @@ impl GpuSampler {
                 table_bytes,
                 table_generation: 0,
                 offsets,
+                groups: FlatRequest::default(),
                 words: Vec::new(),
+                written: None,
                 uploaded: None,
                 bind_group: None,
+                checked: None,
                 request: Growable::new(
                     "strata sample request",
                     wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -365,6 +376,12 @@ impl GpuSampler {
         self.table_bytes
     }
 
+    /// Whether the passes write timestamps (where the device has timestamp queries;
+    /// [`pass_times`](Self::pass_times) reads them).
+    pub fn times_passes(&self) -> bool {
+        self.timer.is_some()
+    }
+
     /// The expander whose mesh table the records are made with.
     pub fn expander(&self) -> &SiteExpander {
         &self.expander
@@ -379,9 +396,8 @@ impl GpuSampler {
         n: usize,
         seed: u64,
     ) -> Result<(), GpuError> {
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("strata sample"),
-        });
+        // Unlabelled: wgpu copies a per-frame object's label into a new string.
+        let mut encoder = device.create_command_encoder(&Default::default());
         self.encode_sites(device, queue, &mut encoder, n, seed)?;
         queue.submit([encoder.finish()]);
         Ok(())
@@ -399,9 +415,7 @@ impl GpuSampler {
         samples: &mut GpuSampleBuffer,
     ) -> Result<(), GpuError> {
         samples.resize(device, n)?;
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("strata sample"),
-        });
+        let mut encoder = device.create_command_encoder(&Default::default());
         self.encode_sites(device, queue, &mut encoder, n, seed)?;
         if let Some(sites) = &self.sites.buffer {
             let stamps = self
@@ -427,9 +441,28 @@ impl GpuSampler {
                 encoder.resolve_query_set(set, 0..STAMPS, resolve, 0);
             }
         }
+        // The same bindings and count as a submission already checked: wgpu validates
+        // these commands as it did then, so no error scopes (popping them allocates);
+        // an error (out of memory) reaches the device's uncaptured-error handler.
+        let checked = (
+            [
+                self.table_generation,
+                self.request.generation,
+                self.sites.generation,
+            ],
+            self.count,
+            samples.buffer().clone(),
+        );
+        if self.checked.as_ref() == Some(&checked) {
+            queue.submit([encoder.finish()]);
+            return Ok(());
+        }
+        self.checked = None;
         scoped(device, "sampling on the GPU", || {
             queue.submit([encoder.finish()]);
-        })
+        })?;
+        self.checked = Some(checked);
+        Ok(())
     }
 
     /// Records the sites pass of an `(n, seed)` request into `encoder`; its uniforms
@@ -504,7 +537,7 @@ impl GpuSampler {
             return Ok(());
         };
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("strata sample"),
+            label: None,
             timestamp_writes: self.timer.as_ref().map(|(set, _)| {
                 wgpu::ComputePassTimestampWrites {
                     query_set: set,
@@ -531,17 +564,18 @@ impl GpuSampler {
         gx: u32,
     ) -> Result<(), GpuError> {
         let n = u64::from(count);
-        let request = match self.flat.request(&self.sampler, n, seed) {
+        let request = &mut self.groups;
+        match self.flat.request_into(&self.sampler, n, seed, request) {
             Err(FlatError::Shallow { .. }) => {
                 // Deeper descent trees for this count: built once, uploaded again.
                 self.flat.deepen(&self.sampler, n)?;
                 (self.table, self.table_bytes, self.offsets) =
                     upload_table(device, &self.flat, &self.prog)?;
                 self.table_generation += 1;
-                self.flat.request(&self.sampler, n, seed)?
+                self.flat.request_into(&self.sampler, n, seed, request)?;
             }
             other => other?,
-        };
+        }
         let words = &mut self.words;
         words.clear();
         words.extend(request.groups.iter().flatten());
@@ -567,7 +601,11 @@ impl GpuSampler {
             .request
             .at_least(device, std::mem::size_of_val(words.as_slice()) as u64)?;
         queue.write_buffer(request_buffer, 0, bytemuck::cast_slice(words));
-        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        // The uniforms depend on the count, not the seed: a new seed leaves them.
+        if self.written != Some(params) {
+            queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            self.written = Some(params);
+        }
         self.uploaded = Some((count, seed, self.table_generation));
         Ok(())
     }
