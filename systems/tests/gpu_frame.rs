@@ -11,8 +11,9 @@
 //! table (nothing: `FlatSampler::request_into` reuses the GPU sampler's table), and
 //! wgpu, which is held against a floor measured in the same process (one
 //! `write_buffer`, an encoder with one compute pass and one dispatch, one submission:
-//! at most [`WGPU_MARGIN`] more) and against the same shape of frame bare (two passes
-//! and their timestamps: at most [`SHAPE_MARGIN`] more). It uploads only the
+//! at most [`WGPU_MARGIN`] more) and against the same shape of frame bare (one pass,
+//! two dispatches: at most [`SHAPE_MARGIN`] more); on bevy_ecs's single-threaded
+//! executor the frame allocates wgpu's part alone. It uploads only the
 //! per-segment request table (the uniforms only when the count changes), against 16
 //! bytes per sample for sites and 64 for records; a frame that repeats count and seed
 //! neither recomputes nor uploads anything and allocates less; a frame with nothing
@@ -124,22 +125,22 @@ impl Engine {
     }
 }
 
-/// Allocations per resampling frame at most (measured on the software adapter: 86-88,
+/// Allocations per resampling frame at most (measured on the software adapter: 71,
 /// 12 of them bevy_ecs's schedule; see the assertions).
-const FRAME_ALLOCATIONS: usize = 92;
-/// Bytes allocated per resampling frame at most (measured: about 12.7 KB).
-const FRAME_BYTES: usize = 16 * 1024;
+const FRAME_ALLOCATIONS: usize = 76;
+/// Bytes allocated per resampling frame at most (measured: 12-16 KB, as wgpu's
+/// internal vectors happen to grow).
+const FRAME_BYTES: usize = 20 * 1024;
 /// What strata's frame may allocate in wgpu beyond the floor (one `write_buffer`, an
-/// encoder with one compute pass and one dispatch, one submission): its second compute
-/// pass (the expansion) and, where the device has timestamp queries, the passes'
-/// timestamps (together 20 bare on the software adapter, [`SHAPE_MARGIN`] more in
-/// strata's frame; 24 measured).
-const WGPU_MARGIN: usize = 26;
-/// What strata's frame may allocate in wgpu beyond the same shape of frame bare (two
-/// passes, timestamps where the device has them, one `write_buffer`): its passes bind
-/// four buffers and two bind group slots where the bare pass binds one buffer (4
-/// measured on the software adapter).
-const SHAPE_MARGIN: usize = 6;
+/// encoder with one compute pass and one dispatch, one submission): the expansion's
+/// dispatch in the same pass, with its own pipeline and bind group (7 measured on the
+/// software adapter).
+const WGPU_MARGIN: usize = 10;
+/// What strata's frame may allocate in wgpu beyond the same shape of frame bare (one
+/// pass, two dispatches of two pipelines, one `write_buffer`): the barrier wgpu
+/// records between strata's two dependent dispatches and the sites pass's four
+/// bindings where the bare dispatches bind one buffer (2-4 measured).
+const SHAPE_MARGIN: usize = 4;
 
 /// The engine's GPU sampler and the mesh's CPU sampler it was built from.
 fn samplers(engine: &Engine) -> (&GpuSampler, &Sampler) {
@@ -176,8 +177,10 @@ fn request_cost(engine: &Engine, count: usize, seed: u64) -> ((usize, usize), us
 /// The shape of a bare wgpu frame ([`bare_frame`]).
 #[derive(Clone, Copy, Debug)]
 struct Shape {
-    /// Compute passes, one dispatch each.
+    /// Compute passes.
     passes: usize,
+    /// Dispatches in each pass (set pipeline, set bind group, dispatch).
+    dispatches: usize,
     /// Timestamps at each pass's begin and end, resolved into a buffer.
     timestamps: bool,
 }
@@ -192,7 +195,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 
 /// Allocations and bytes of a frame of wgpu alone, at most over a few frames after a
 /// warm-up: one `queue.write_buffer` of `upload` bytes, a command encoder with
-/// `shape`'s compute passes (set pipeline, set bind group, one dispatch each) on an
+/// `shape`'s compute passes and dispatches on an
 /// unlabelled encoder and passes, finished and submitted (waiting for the device
 /// outside the count, as in an engine frame). One pass without timestamps is the
 /// floor of any frame that uploads parameters and runs a compute pass.
@@ -203,28 +206,34 @@ fn bare_frame(engine: &Engine, shape: Shape, upload: usize) -> (usize, usize) {
         label: Some("bare frame"),
         source: wgpu::ShaderSource::Wgsl(BARE_SHADER.into()),
     });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("bare frame"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("bare frame"),
         size: upload.next_multiple_of(4).max(4096) as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("bare frame"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: buffer.as_entire_binding(),
-        }],
-    });
+    // A pipeline and a bind group per dispatch, as strata's dispatches have theirs.
+    let dispatches: Vec<(wgpu::ComputePipeline, wgpu::BindGroup)> = (0..shape.dispatches)
+        .map(|_| {
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("bare frame"),
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("bare frame"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            });
+            (pipeline, bind_group)
+        })
+        .collect();
     let timer = (shape.timestamps && device.features().contains(wgpu::Features::TIMESTAMP_QUERY))
         .then(|| {
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -255,9 +264,11 @@ fn bare_frame(engine: &Engine, shape: Shape, upload: usize) -> (usize, usize) {
                         end_of_pass_write_index: Some(2 * p + 1),
                     }),
             });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups(16, 1, 1);
+            for (pipeline, bind_group) in &dispatches {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind_group, &[]);
+                pass.dispatch_workgroups(16, 1, 1);
+            }
         }
         if let Some((set, resolve)) = &timer {
             encoder.resolve_query_set(set, 0..2 * shape.passes as u32, resolve, 0);
@@ -333,19 +344,20 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
             &engine,
             Shape {
                 passes: 1,
+                dispatches: 1,
                 timestamps: false,
             },
             upload,
         );
+        // Strata's shape: the sites and their expansion as two dispatches of one
+        // pass (two passes with their timestamps where the sampler times them).
         let timed = samplers(&engine).0.times_passes();
-        let shape = bare_frame(
-            &engine,
-            Shape {
-                passes: 2,
-                timestamps: timed,
-            },
-            upload,
-        );
+        let shape = Shape {
+            passes: if timed { 2 } else { 1 },
+            dispatches: if timed { 1 } else { 2 },
+            timestamps: timed,
+        };
+        let bare = bare_frame(&engine, shape, upload);
         let wgpu = worst.0.saturating_sub(schedule.0 + request.0);
         // A frame that repeats count and seed: no request computed, nothing uploaded.
         let before = engine.gpu_frames();
@@ -353,7 +365,7 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
         assert_eq!(engine.gpu_frames() - before, 3, "repeated frames resampled");
         let _ = writeln!(
             std::io::stderr(),
-            "{count} samples: per frame at most {} allocations ({} bytes), {upload} bytes uploaded; of these bevy_ecs's schedule {} ({} bytes, as in an idle frame), the engine's request {} ({} bytes), wgpu {wgpu}; wgpu's floor (one write_buffer, an encoder with one compute pass and one dispatch, submitted) {} allocations ({} bytes), strata's shape bare (two passes{}) {} ({} bytes); a frame repeating count and seed {} allocations ({} bytes), nothing uploaded; the last took the CPU {:.3} ms to record and submit",
+            "{count} samples: per frame at most {} allocations ({} bytes), {upload} bytes uploaded; of these bevy_ecs's schedule {} ({} bytes, as in an idle frame), the engine's request {} ({} bytes), wgpu {wgpu}; wgpu's floor (one write_buffer, an encoder with one compute pass and one dispatch, submitted) {} allocations ({} bytes), the same shape bare ({shape:?}) {} ({} bytes); a frame repeating count and seed {} allocations ({} bytes), nothing uploaded; the last took the CPU {:.3} ms to record and submit",
             worst.0,
             worst.1,
             schedule.0,
@@ -362,14 +374,13 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
             request.1,
             floor.0,
             floor.1,
-            if timed { ", timestamps" } else { "" },
-            shape.0,
-            shape.1,
+            bare.0,
+            bare.1,
             repeat.0,
             repeat.1,
             record.as_secs_f64() * 1e3
         );
-        cost.push((worst, upload, request, wgpu, floor, shape, repeat));
+        cost.push((worst, upload, request, wgpu, floor, bare, repeat));
     }
     let [(small, small_up, ..), (large, large_up, ..)] = cost[..] else {
         unreachable!()
@@ -380,7 +391,7 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
         large.0 <= small.0 + 4 && large.1 <= small.1 + 4096,
         "per frame: {small:?} at 10^3, {large:?} at 10^5"
     );
-    for &(frame, _, request, wgpu, floor, shape, repeat) in &cost {
+    for &(frame, _, request, wgpu, floor, bare, repeat) in &cost {
         assert!(
             frame.0 <= FRAME_ALLOCATIONS && frame.1 <= FRAME_BYTES,
             "{frame:?}"
@@ -394,8 +405,8 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
             "wgpu allocated {wgpu} in a frame, its floor is {floor:?}"
         );
         assert!(
-            wgpu <= shape.0 + SHAPE_MARGIN,
-            "strata allocated {wgpu} in wgpu, the same passes bare {shape:?}"
+            wgpu <= bare.0 + SHAPE_MARGIN,
+            "strata allocated {wgpu} in wgpu, the same passes bare {bare:?}"
         );
         // A repeated request is neither recomputed nor uploaded again.
         assert!(
@@ -403,6 +414,38 @@ fn gpu_frames_cost_the_cpu_nothing_per_sample() {
             "a frame repeating count and seed allocated as much: {repeat:?}, {frame:?}"
         );
     }
+    // bevy_ecs's part is its multi-threaded executor's (a task per system): a host
+    // that runs the schedule on the single-threaded executor allocates none of it.
+    engine
+        .schedule
+        .set_executor(bevy_ecs::schedule::SingleThreadedExecutor::new());
+    let single = (20..28)
+        .map(|seed| {
+            engine.set(100_000, seed);
+            engine.frame()
+        })
+        .skip(3)
+        .max()
+        .expect("frames");
+    let (single_idle, _) = idle_frame(&mut engine);
+    let _ = writeln!(
+        std::io::stderr(),
+        "with bevy_ecs's single-threaded executor: per frame at most {} allocations ({} bytes), an idle frame {} ({} bytes)",
+        single.0,
+        single.1,
+        single_idle.0,
+        single_idle.1
+    );
+    let (_, _, _, wgpu, ..) = cost[1];
+    assert!(
+        single.0 <= wgpu + 1,
+        "single-threaded, a frame allocated beyond wgpu's part: {single:?}"
+    );
+    engine
+        .schedule
+        .set_executor(bevy_ecs::schedule::MultiThreadedExecutor::new());
+    engine.set(100_000, 19);
+    engine.frame();
     // Only parameters: the per-segment table, nothing per sample.
     assert!(large_up <= small_up + 1024 && large_up < 16 * 100_000 / 100);
     // The CPU drew nothing; the renderer's buffer holds the CPU's samples.

@@ -300,8 +300,31 @@ impl SiteExpander {
         n: u32,
         timestamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) {
-        if n == 0 {
+        let Some(groups) = self.prepare_resident(device, queue, sites, samples, n) else {
             return;
+        };
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            // Unlabelled: wgpu copies a per-frame pass's label into a new string.
+            label: None,
+            timestamp_writes: timestamps,
+        });
+        self.record_resident(&mut pass, groups);
+    }
+
+    /// Prepares [`expand_resident`](Self::expand_resident)'s dispatch without recording
+    /// it: writes the uniforms with `queue` where they changed and makes the bind group
+    /// where the buffers or the count changed. The workgroups for
+    /// [`record_resident`](Self::record_resident), `None` for no sites.
+    pub fn prepare_resident(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        sites: &wgpu::Buffer,
+        samples: &wgpu::Buffer,
+        n: u32,
+    ) -> Option<(u32, u32)> {
+        if n == 0 {
+            return None;
         }
         let groups = n.div_ceil(WORKGROUP);
         let max = device.limits().max_compute_workgroups_per_dimension.max(1);
@@ -329,17 +352,18 @@ impl SiteExpander {
             );
             self.resident = Some((bind_group, [sites.clone(), samples.clone()], n));
         }
-        let Some((bind_group, _, _)) = &self.resident else {
-            return;
-        };
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            // Unlabelled: wgpu copies a per-frame pass's label into a new string.
-            label: None,
-            timestamp_writes: timestamps,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(1, bind_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
+        Some((gx, gy))
+    }
+
+    /// Records the dispatch that [`prepare_resident`](Self::prepare_resident) prepared
+    /// (`groups` workgroups) into `pass`, which may hold other dispatches before it
+    /// (wgpu orders a dispatch's reads after an earlier one's writes).
+    pub fn record_resident(&self, pass: &mut wgpu::ComputePass<'_>, (gx, gy): (u32, u32)) {
+        if let Some((bind_group, _, _)) = &self.resident {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(1, bind_group, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
     }
 
     /// The expansion pass's bind group: its uniforms and mesh table, the first

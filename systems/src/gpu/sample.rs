@@ -272,6 +272,8 @@ pub struct GpuSampler {
     /// Where the device has timestamp queries: the begin and end of the sites pass and
     /// of the expansion, and the buffer they resolve into.
     timer: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    /// Whether the passes write their timestamps ([`set_timing`](Self::set_timing)).
+    timing: bool,
 }
 
 /// Timestamps per request: the sites pass's begin and end, the expansion's.
@@ -344,6 +346,7 @@ impl GpuSampler {
                 count: 0,
                 overflow,
                 expander,
+                timing: false,
                 timer: device
                     .features()
                     .contains(wgpu::Features::TIMESTAMP_QUERY)
@@ -376,10 +379,25 @@ impl GpuSampler {
         self.table_bytes
     }
 
-    /// Whether the passes write timestamps (where the device has timestamp queries;
-    /// [`pass_times`](Self::pass_times) reads them).
+    /// Whether the passes write timestamps ([`set_timing`](Self::set_timing) on a device
+    /// with timestamp queries; [`pass_times`](Self::pass_times) reads them).
     pub fn times_passes(&self) -> bool {
-        self.timer.is_some()
+        self.timer().is_some()
+    }
+
+    /// Times the passes from now on (`on`, where the device has timestamp queries:
+    /// [`pass_times`](Self::pass_times), [`sites_pass_time`](Self::sites_pass_time)) or
+    /// not (the default). Untimed, [`sample`](Self::sample) records the sites and their
+    /// expansion as two dispatches of one compute pass; timed, as two passes, each
+    /// with its timestamps (each pass and its timestamps cost wgpu allocations on the
+    /// CPU every frame).
+    pub fn set_timing(&mut self, on: bool) {
+        self.timing = on;
+    }
+
+    /// The timestamp queries and their resolve buffer while the passes are timed.
+    fn timer(&self) -> Option<&(wgpu::QuerySet, wgpu::Buffer)> {
+        self.timer.as_ref().filter(|_| self.timing)
     }
 
     /// The expander whose mesh table the records are made with.
@@ -404,8 +422,9 @@ impl GpuSampler {
     }
 
     /// Draws an `n`-sample stratified request for `seed` on the GPU into `samples`
-    /// (resized to `n`): the sites pass, then the expansion into records, one
-    /// submission; never waits.
+    /// (resized to `n`): the sites, then their expansion into records, as two
+    /// dispatches of one compute pass (two passes with their timestamps while the
+    /// passes are timed), one submission; never waits.
     pub fn sample(
         &mut self,
         device: &wgpu::Device,
@@ -416,29 +435,20 @@ impl GpuSampler {
     ) -> Result<(), GpuError> {
         samples.resize(device, n)?;
         let mut encoder = device.create_command_encoder(&Default::default());
-        self.encode_sites(device, queue, &mut encoder, n, seed)?;
-        if let Some(sites) = &self.sites.buffer {
-            let stamps = self
-                .timer
-                .as_ref()
-                .map(|(set, _)| wgpu::ComputePassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: Some(2),
-                    end_of_pass_write_index: Some(3),
-                });
-            self.expander.expand_resident(
-                device,
-                queue,
-                &mut encoder,
-                sites,
-                samples.buffer(),
-                self.count,
-                stamps,
-            );
-            if let Some((set, resolve)) = &self.timer
-                && self.count > 0
-            {
-                encoder.resolve_query_set(set, 0..STAMPS, resolve, 0);
+        if self.timer().is_some() {
+            self.encode_timed(device, queue, &mut encoder, (n, seed), samples.buffer())?;
+        } else if let Some((gx, gy)) = self.prepare_sites(device, queue, n, seed)?
+            && let Some(sites) = &self.sites.buffer
+        {
+            // One pass: wgpu puts a barrier between the two dispatches (the sites are
+            // written by the first and read by the second).
+            let expand =
+                self.expander
+                    .prepare_resident(device, queue, sites, samples.buffer(), self.count);
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.record_sites(&mut pass, gx, gy);
+            if let Some(groups) = expand {
+                self.expander.record_resident(&mut pass, groups);
             }
         }
         // The same bindings and count as a submission already checked: wgpu validates
@@ -465,8 +475,40 @@ impl GpuSampler {
         Ok(())
     }
 
-    /// Records the sites pass of an `(n, seed)` request into `encoder`; its uniforms
-    /// and request table are written with `queue` (submit before the next request).
+    /// [`sample`](Self::sample)'s passes, timed: the sites pass and the expansion each
+    /// in its own pass with its timestamps, resolved into the timer's buffer.
+    fn encode_timed(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        (n, seed): (usize, u64),
+        samples: &wgpu::Buffer,
+    ) -> Result<(), GpuError> {
+        self.encode_sites(device, queue, encoder, n, seed)?;
+        let Some(sites) = &self.sites.buffer else {
+            return Ok(());
+        };
+        // The fields, not `timer()`: the expander is borrowed mutably beside them.
+        let timer = self.timer.as_ref().filter(|_| self.timing);
+        let stamps = timer.map(|(set, _)| wgpu::ComputePassTimestampWrites {
+            query_set: set,
+            beginning_of_pass_write_index: Some(2),
+            end_of_pass_write_index: Some(3),
+        });
+        self.expander
+            .expand_resident(device, queue, encoder, sites, samples, self.count, stamps);
+        if let Some((set, resolve)) = timer
+            && self.count > 0
+        {
+            encoder.resolve_query_set(set, 0..STAMPS, resolve, 0);
+        }
+        Ok(())
+    }
+
+    /// Records the sites pass of an `(n, seed)` request into `encoder` in a pass of
+    /// its own (timed where the passes are); its uniforms and request table are
+    /// written with `queue` (submit before the next request).
     fn encode_sites(
         &mut self,
         device: &wgpu::Device,
@@ -475,13 +517,50 @@ impl GpuSampler {
         n: usize,
         seed: u64,
     ) -> Result<(), GpuError> {
+        let Some((gx, gy)) = self.prepare_sites(device, queue, n, seed)? else {
+            return Ok(());
+        };
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: None,
+            timestamp_writes: self
+                .timer()
+                .map(|(set, _)| wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+        });
+        self.record_sites(&mut pass, gx, gy);
+        Ok(())
+    }
+
+    /// Records the sites pass's dispatch (`gx` by `gy` workgroups) into `pass`.
+    fn record_sites(&self, pass: &mut wgpu::ComputePass<'_>, gx: u32, gy: u32) {
+        if let Some((bind_group, _)) = &self.bind_group {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+    }
+
+    /// Prepares the sites pass of an `(n, seed)` request: writes its uniforms and
+    /// request table with `queue` where they changed and makes its bind group where a
+    /// buffer it binds was reallocated. The workgroups to dispatch, `None` for no
+    /// samples.
+    fn prepare_sites(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        n: usize,
+        seed: u64,
+    ) -> Result<Option<(u32, u32)>, GpuError> {
         let count = u32::try_from(n).map_err(|_| FlatError::TooLarge {
             what: "samples per request",
             value: n as u64,
         })?;
         self.count = count;
         if count == 0 {
-            return Ok(());
+            return Ok(None);
         }
         let groups = count.div_ceil(WORKGROUP);
         let max = device.limits().max_compute_workgroups_per_dimension.max(1);
@@ -533,23 +612,7 @@ impl GpuSampler {
             })?;
             self.bind_group = Some((bind_group, generations));
         }
-        let Some((bind_group, _)) = &self.bind_group else {
-            return Ok(());
-        };
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: None,
-            timestamp_writes: self.timer.as_ref().map(|(set, _)| {
-                wgpu::ComputePassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: Some(0),
-                    end_of_pass_write_index: Some(1),
-                }
-            }),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
-        Ok(())
+        Ok(Some((gx, gy)))
     }
 
     /// Computes the `(count, seed)` request (deepening and uploading the tables again
@@ -611,14 +674,15 @@ impl GpuSampler {
     }
 
     /// The GPU time in seconds of the last sites pass alone (stratified or
-    /// progressive), from timestamp queries (waits for the device); `None` where the
-    /// device has no timestamp queries.
+    /// progressive), from timestamp queries (waits for the device); `None` while the
+    /// passes are not timed ([`set_timing`](Self::set_timing)) or where the device has
+    /// no timestamp queries.
     pub fn sites_pass_time(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<f64>, GpuError> {
-        let Some((set, resolve)) = &self.timer else {
+        let Some((set, resolve)) = self.timer() else {
             return Ok(None);
         };
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -632,14 +696,15 @@ impl GpuSampler {
 
     /// The GPU times in seconds of the last [`sample`](Self::sample)'s sites pass (the
     /// stratified values, the leaf search and the points, one pass) and its expansion
-    /// into records, from timestamp queries (waits for the device); `None` where the
-    /// device has no timestamp queries.
+    /// into records, from timestamp queries (waits for the device); `None` while the
+    /// passes are not timed ([`set_timing`](Self::set_timing)) or where the device has
+    /// no timestamp queries.
     pub fn pass_times(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<[f64; 2]>, GpuError> {
-        let Some((_, resolve)) = &self.timer else {
+        let Some((_, resolve)) = self.timer() else {
             return Ok(None);
         };
         let bytes = read_buffer(device, queue, resolve, u64::from(STAMPS) * 8)?;
@@ -832,6 +897,17 @@ mod gpu_tests {
                 gpu.sample(device, queue, n, seed, &mut buffer)
                     .expect("samples");
                 let records = buffer.read_back(device, queue).expect("read back");
+                // Timed, the two dispatches run as two passes: the same records.
+                gpu.set_timing(true);
+                gpu.sample(device, queue, n, seed, &mut buffer)
+                    .expect("samples");
+                let timed = buffer.read_back(device, queue).expect("read back");
+                gpu.set_timing(false);
+                assert!(
+                    bytemuck::cast_slice::<_, u8>(&timed)
+                        == bytemuck::cast_slice::<_, u8>(&records),
+                    "{at}: the timed passes wrote other records"
+                );
                 let want = sampler.sample(n, seed);
                 let (lo, hi) = sampler.mesh().bounds();
                 let diagonal = (hi - lo).length() as f32;

@@ -139,6 +139,7 @@ impl GpuSampleCheck {
         }
         let (device, queue) = (&ctx.device, &ctx.queue);
         let mut gpu = GpuSampler::new(device, sampler)?;
+        gpu.set_timing(true);
         let mut buffer = GpuSampleBuffer::new(device)?;
         let (mut request, mut sites, mut samples, mut cpu_sites) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -192,6 +193,7 @@ impl GpuSampleCheck {
     ) -> Result<Self, GpuError> {
         let (device, queue) = (&ctx.device, &ctx.queue);
         let mut gpu = GpuSampler::new(device, sampler)?;
+        gpu.set_timing(true);
         let (mut request, mut sites, mut passes, mut cpu_sites) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut cpu = vec![SampleSite::default(); n];

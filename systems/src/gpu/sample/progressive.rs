@@ -113,8 +113,7 @@ impl GpuSampler {
 
     /// Timestamp writes at `first` and `first + 1`, where the device has them.
     fn stamps(&self, first: u32) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.timer
-            .as_ref()
+        self.timer()
             .map(|(set, _)| wgpu::ComputePassTimestampWrites {
                 query_set: set,
                 beginning_of_pass_write_index: Some(first),
