@@ -564,7 +564,8 @@ pub const PROGRESSIVE_TREE_LEVEL: u8 = 4;
 /// whether one is full (the CPU's is 1e-9 of its area), that differs from the CPU's:
 /// on coarse cells (boundary leaves at level 3, up to 255 pieces) continuing from
 /// level 5 put 16 of 4096 samples beyond 1e-5 of the diagonal (up to 5e-5), from
-/// level 8 one of 10^5, from level 9 none (largest deviation 7e-7).
+/// level 8 one of 10^5, from level 9 none (largest deviation 7e-7). Each level more
+/// about doubles the trees.
 pub const PROGRESSIVE_FRONTIER_LEVEL: u8 = 9;
 
 impl FlatProgressive {
