@@ -140,6 +140,8 @@ impl GpuSampler {
 
 #[cfg(test)]
 mod tests {
+    use std::io::Write;
+
     use strata_engine::sample::flat::{FlatProgressive, PROGRESSIVE_PIECES};
 
     use crate::gpu::shaders;
@@ -164,9 +166,20 @@ mod tests {
              field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0)";
         let fine = build(&format!("({shape})"));
         assert!(fine.trees.is_empty() && fine.nodes.is_empty());
-        let coarse = build(&format!(
-            "({shape}, curve: (max_cell_share: 0.02, boundary_level: 3))"
-        ));
+        let config = crate::config::SceneConfig::from_ron(
+            &format!("({shape}, curve: (max_cell_share: 0.02, boundary_level: 3))"),
+            std::path::Path::new("t.ron"),
+        )
+        .expect("scene parses");
+        let scene = crate::scene::Scene::build(&config).expect("scene builds");
+        let start = std::time::Instant::now();
+        let coarse = FlatProgressive::new(&scene.sampler);
+        let _ = writeln!(
+            std::io::stderr(),
+            "coarse cells: progressive tables built in {:.1} ms, {} bytes",
+            start.elapsed().as_secs_f64() * 1e3,
+            coarse.bytes()
+        );
         assert!(coarse.trees.len() > 100, "{} trees", coarse.trees.len());
         assert!(coarse.trees.windows(2).all(|w| w[0][0] < w[1][0]));
         assert!(
