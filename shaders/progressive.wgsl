@@ -8,7 +8,10 @@
 // Sampler::progressive_sites_of up to f32 round-off in the point: the leaf is found in
 // 64-bit fixed point, the target is carried down as a 64-bit fraction of the node, and
 // only the children's shares of a node are f32 (a choice can differ from the CPU's
-// where the target lies within about 1e-6 of a node's measure of a cut).
+// where the target lies within about 1e-6 of a node's measure of a cut). A coarse
+// boundary leaf (flat.rs `FlatProgressive::trees`) is descended first over its tree
+// of exact measures unrolled in f64, down to a frontier square from which the f32
+// descent goes on.
 
 // Pieces of the current node of a descent, in the node's unit square: corners, corner
 // counts, triangles and density planes (a, b, c: density a u + b v + c, up to a
@@ -355,18 +358,20 @@ fn into_quarter(off: vec2<f32>) {
     }
 }
 
-// A boundary leaf: the exact descent through its sub-cells for `levels` levels of
+// The exact descent through the sub-cells of a boundary square for `levels` levels of
 // quarters from the fraction `q` of its measure (boundary.rs `descend_pieces`), the
-// node's pieces kept in private memory.
-fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Located {
-    let w = params.leaves_at + 5u * leaf_index;
-    let info = table[w + 2u];
-    let root = params.nodes_at + 13u * table[w + 3u];
+// node's pieces kept in private memory: the square is node `node` of a descent tree
+// (a boundary leaf's root, or a frontier square of a progressive tree) whose nodes
+// start at word `nodes_at` of the table and pieces at `pieces_at`. Its pieces (at most
+// MAX_PIECES with area) are in its own unit square.
+fn progressive_boundary_point(nodes_at: u32, pieces_at: u32, node: u32, q0: vec2<u32>, levels: u32) -> Located {
+    let root = nodes_at + 13u * node;
+    let info = table[root];
     let leaf_size = exp2(-f32(info & 31u));
     let leaf = Leaf(
-        params.pieces_at + 20u * table[root + 3u],
+        pieces_at + 20u * table[root + 3u],
         table[root + 4u],
-        vec2<f32>(f32(table[w]), f32(table[w + 1u])) * leaf_size,
+        vec2<f32>(f32(table[root + 1u]), f32(table[root + 2u])) * leaf_size,
         leaf_size,
     );
     var lo = vec2<f32>(0.0, 0.0);
@@ -436,6 +441,74 @@ fn progressive_boundary_point(leaf_index: u32, q0: vec2<u32>, levels: u32) -> Lo
     return place_in_current(q, leaf.origin + lo * leaf.size, size * leaf.size);
 }
 
+// The root of leaf `leaf`'s progressive tree (a leaf with more than MAX_PIECES pieces
+// or coarser than the frontier level, flat.rs `FlatProgressive::trees`), or all ones
+// when it has none: a binary search of the list at `trees_at`.
+fn progressive_tree(leaf: u32) -> u32 {
+    let n = table[params.trees_at];
+    var lo = 0u;
+    var hi = n;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if table[params.trees_at + 1u + 2u * mid] < leaf {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    if lo < n && table[params.trees_at + 1u + 2u * lo] == leaf {
+        return table[params.trees_at + 2u + 2u * lo];
+    }
+    return 0xffffffffu;
+}
+
+// A boundary leaf with a progressive tree: the descent replayed over the tree's exact
+// measures (sample.wgsl `boundary_leaf_point`) down to a full square, the last level,
+// or a frontier square (not full, no children), from which `progressive_boundary_point`
+// descends the remaining levels in `f32`.
+fn progressive_tree_point(root: u32, q0: vec2<u32>, levels: u32) -> Located {
+    let nodes_at = params.prog_nodes_at;
+    let pieces_at = params.prog_pieces_at;
+    var node = root;
+    var q = q0;
+    var depth = 0u;
+    let ones = vec2<u32>(0xffffffffu, 0xffffffffu);
+    for (var step = 0u; step < 2u * levels; step = step + 1u) {
+        let w = nodes_at + 13u * node;
+        let a = t64(w + 5u);
+        let b = t64(w + 7u);
+        let a_empty = a.x == 0u && a.y == 0u;
+        let b_empty = b.x == 0u && b.y == 0u;
+        var child: u32;
+        if !a_empty && (lt64(q, a) || b_empty) {
+            child = table[w + 9u];
+            q = select(ones, fraction64(q, a), lt64(q, a));
+        } else if !b_empty {
+            child = table[w + 10u];
+            let r = sub64(q, a);
+            q = select(ones, fraction64(r, b), lt64(r, b));
+        } else {
+            break;
+        }
+        if child == 0xffffffffu {
+            break;
+        }
+        node = child;
+        let c = nodes_at + 13u * node;
+        let kind = table[c];
+        if (kind & 256u) != 0u {
+            depth = depth + 1u;
+            if (kind & 128u) != 0u {
+                return full_node_point(nodes_at, pieces_at, node, q, levels - depth);
+            }
+            if depth < levels && table[c + 9u] == 0xffffffffu && table[c + 10u] == 0xffffffffu {
+                return progressive_boundary_point(nodes_at, pieces_at, node, q, levels - depth);
+            }
+        }
+    }
+    return node_pieces_point(nodes_at, pieces_at, node, q);
+}
+
 // The 32-bit bijection P of the scramble (progressive.rs `Scramble::permute`).
 fn permute(x0: u32) -> u32 {
     var x = x0 + params.add;
@@ -465,14 +538,20 @@ fn cs_progressive(@builtin(global_invocation_id) id: vec3<u32>) {
     let found = leaf_at(v, 0u, params.leaves - 1u);
     let leaf = found.leaf;
     let q = found.q;
-    let info = table[params.leaves_at + 5u * leaf + 2u];
+    let w = params.leaves_at + 5u * leaf;
+    let info = table[w + 2u];
     let slot = info >> 8u;
     let levels = table[params.prog_levels_at + slot];
     var p: Located;
     if (info & 128u) != 0u {
         p = full_leaf_point(leaf, q, levels);
     } else {
-        p = progressive_boundary_point(leaf, q, levels);
+        let tree = progressive_tree(leaf);
+        if tree != 0xffffffffu {
+            p = progressive_tree_point(tree, q, levels);
+        } else {
+            p = progressive_boundary_point(params.nodes_at, params.pieces_at, table[w + 3u], q, levels);
+        }
     }
     let face = table[params.tris_at + 7u * p.tri + 6u];
     sites[params.out_at + k] = Site(face, table[params.slots_at + slot], p.bary.yz);

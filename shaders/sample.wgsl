@@ -18,7 +18,10 @@ struct Site {
 // leaves (5 words) from `leaves_at`, candidates (1) from `cands_at`, pieces (20) from
 // `pieces_at`, triangles (7) from `tris_at`, segment ids per slot from `slots_at`,
 // descent-tree nodes (13) from `nodes_at`, density planes (3 per triangle) from
-// `planes_at` and progressive levels per slot from `prog_levels_at`. A stratified
+// `planes_at`, progressive levels per slot from `prog_levels_at`, the progressive
+// order's descent-tree nodes (13) from `prog_nodes_at` with their pieces (20) from
+// `prog_pieces_at`, and its list of leaves with such a tree (a count, then `[leaf,
+// root]` pairs in increasing leaf order) from `trees_at`. A stratified
 // request holds its groups (10 words each) from word 0, the levels per slot from
 // `levels_at` and `depth` descent thresholds per group (2 words each) from
 // `thresholds_at`. A progressive request (progressive.wgsl) draws ranks `first +
@@ -51,9 +54,9 @@ struct SampleParams {
     jitter_hi: u32,
     planes_at: u32,
     prog_levels_at: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    prog_nodes_at: u32,
+    prog_pieces_at: u32,
+    trees_at: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SampleParams;
@@ -419,13 +422,14 @@ fn point_at(n: u32, g: vec2<f32>) -> vec3<f32> {
 // The point at the fraction `q` of descent-tree node `node`'s measure in its pieces:
 // the piece holding it and the point at the rest of it, by area
 // (curve/boundary.rs `place_in_pieces`); the square's centre located among the
-// pieces' triangles when no piece has measure. Measures in 2^62 fixed point.
-fn node_pieces_point(node: u32, q: vec2<u32>) -> Located {
-    let w = params.nodes_at + 13u * node;
+// pieces' triangles when no piece has measure. Measures in 2^62 fixed point. The
+// nodes start at word `nodes_at` of the table, their pieces at `pieces_at`.
+fn node_pieces_point(nodes_at: u32, pieces_at: u32, node: u32, q: vec2<u32>) -> Located {
+    let w = nodes_at + 13u * node;
     let level = table[w] & 31u;
     let size = exp2(-f32(level));
     let origin = vec2<f32>(f32(table[w + 1u]), f32(table[w + 2u])) * size;
-    let first = params.pieces_at + 20u * table[w + 3u];
+    let first = pieces_at + 20u * table[w + 3u];
     let n = table[w + 4u];
     var want = shr64(q, 2u);
     var chosen = n;
@@ -464,15 +468,16 @@ fn node_pieces_point(node: u32, q: vec2<u32>) -> Located {
 
 // A full quarter of a descent: the centre of the sub-cell `levels` levels down that
 // the continuous Hilbert map reaches at the fraction `q`, located among the node's
-// pieces' triangles (curve/boundary.rs, `point_in_node` in a full sub-cell).
-fn full_node_point(node: u32, q: vec2<u32>, levels: u32) -> Located {
-    let w = params.nodes_at + 13u * node;
+// pieces' triangles (curve/boundary.rs, `point_in_node` in a full sub-cell). Tables
+// as in `node_pieces_point`.
+fn full_node_point(nodes_at: u32, pieces_at: u32, node: u32, q: vec2<u32>, levels: u32) -> Located {
+    let w = nodes_at + 13u * node;
     let info = table[w];
     let level = info & 31u;
     let state = (info >> 5u) & 3u;
     let local = hilbert_point(state, q, levels);
     let uv = (vec2<f32>(f32(table[w + 1u]), f32(table[w + 2u])) + local) * exp2(-f32(level));
-    return point_location(params.pieces_at + 20u * table[w + 3u], table[w + 4u], 20u, uv);
+    return point_location(pieces_at + 20u * table[w + 3u], table[w + 4u], 20u, uv);
 }
 
 // A boundary leaf: the sequential descent (curve/boundary.rs `descend_pieces`)
@@ -511,11 +516,11 @@ fn boundary_leaf_point(root: u32, q0: vec2<u32>, levels: u32) -> Located {
         if (kind & 256u) != 0u {
             depth = depth + 1u;
             if (kind & 128u) != 0u {
-                return full_node_point(node, q, levels - depth);
+                return full_node_point(params.nodes_at, params.pieces_at, node, q, levels - depth);
             }
         }
     }
-    return node_pieces_point(node, q);
+    return node_pieces_point(params.nodes_at, params.pieces_at, node, q);
 }
 
 // The levels of descent through a boundary leaf whose tree starts at node `root`, in

@@ -112,6 +112,23 @@ impl SegmentCurve {
     /// [`leaf_pieces`](Self::leaf_pieces). Cost: two polygon splits per part and
     /// level, over about `2^depth` boundary squares per level.
     pub fn descent_tree(&self, leaf: usize, depth: u32) -> Vec<DescentNode> {
+        self.descent_tree_to(leaf, depth, (0, 0))
+    }
+
+    /// [`descent_tree`](Self::descent_tree) expanded only where a sampler that
+    /// continues the descent itself from a square (a GPU pass measuring the pieces of
+    /// a node in `f32`) cannot: a square that is not full is expanded while it holds
+    /// more than `max_parts` triangle parts with area or lies above level
+    /// `min_level` (coarser), and `depth` levels of quarters at most. Its other
+    /// squares are the tree's frontier: not full, no children built, their parts
+    /// listed. The same nodes, measures and parts as `descent_tree` where both have
+    /// them. Cost: as `descent_tree`, over the expanded squares only.
+    pub fn descent_tree_to(
+        &self,
+        leaf: usize,
+        depth: u32,
+        (max_parts, min_level): (usize, u8),
+    ) -> Vec<DescentNode> {
         let key = self.keys[leaf];
         let (lo, size) = (key.origin(), key.size());
         let mut root = Parts::default();
@@ -140,24 +157,26 @@ impl SegmentCurve {
             children: [(0.0, None); 2],
             parts: all,
         }];
-        self.expand(&mut nodes, 0, &root, (lo, size), depth);
+        let stop = (max_parts, min_level);
+        self.expand(&mut nodes, 0, &root, (lo, size), (depth, stop));
         nodes
     }
 
     /// Adds the halves and quarters below square node `at` (its parts `parts`, its
-    /// square `lo, size`), `depth` levels of quarters.
+    /// square `lo, size`), `depth` levels of quarters, squares of at most `stop.0`
+    /// parts at level `stop.1` or finer left unexpanded.
     fn expand(
         &self,
         nodes: &mut Vec<DescentNode>,
         at: usize,
         parts: &Parts,
         (lo, size): (glam::DVec2, f64),
-        depth: u32,
+        (depth, stop): (u32, (usize, u8)),
     ) {
-        if depth == 0 {
+        let (x, y, level) = (nodes[at].x, nodes[at].y, nodes[at].level);
+        if depth == 0 || (parts.parts.len() <= stop.0 && level >= stop.1) {
             return;
         }
-        let (x, y, level) = (nodes[at].x, nodes[at].y, nodes[at].level);
         let state = super::hilbert::State(nodes[at].state);
         let half = 0.5 * size;
         let (x0, y0, _) = state.child(0);
@@ -214,7 +233,7 @@ impl SegmentCurve {
                     parts: Self::listed(quarter),
                 });
                 if !full {
-                    self.expand(nodes, qi, quarter, (q_lo, half), depth - 1);
+                    self.expand(nodes, qi, quarter, (q_lo, half), (depth - 1, stop));
                 }
             }
         }

@@ -189,6 +189,65 @@ fn threshold(per_sample: f64, k: u32, cap: u32) -> u64 {
     w.to_bits()
 }
 
+/// Appends `node` of a tree whose root is node `root` to `nodes`, with its pieces to
+/// `pieces` ([`FlatNode`], [`FlatPiece`]); domain triangles are numbered from
+/// `tri_base`.
+fn push_node(
+    (nodes, pieces): (&mut Vec<FlatNode>, &mut Vec<FlatPiece>),
+    node: &DescentNode,
+    root: u32,
+    tri_base: u32,
+) {
+    let size = (-f64::from(node.level)).exp2();
+    let origin = glam::DVec2::new(f64::from(node.x), f64::from(node.y)) * size;
+    let first = pieces.len() as u32;
+    for (tri, poly, m) in &node.parts {
+        let mut row = [0u32; 20];
+        row[0] = tri_base + tri;
+        let pts = poly.points();
+        row[1] = pts.len().min(8) as u32;
+        let share = if node.measure > 0.0 {
+            m / node.measure
+        } else {
+            0.0
+        };
+        [row[2], row[3]] = split((share * 4_611_686_018_427_387_904.0) as u64);
+        for (k, p) in pts.iter().take(8).enumerate() {
+            let q = (*p - origin) / size;
+            row[4 + 2 * k] = f32_bits(q.x);
+            row[5 + 2 * k] = f32_bits(q.y);
+        }
+        pieces.push(row);
+    }
+    let meta = u32::from(node.level)
+        | u32::from(node.state) << 5
+        | u32::from(node.full) << 7
+        | u32::from(node.square) << 8;
+    let [(m0, c0), (m1, c1)] = node.children;
+    let child = |c: Option<u32>| c.map_or(u32::MAX, |c| root + c);
+    let (a, b) = (
+        split(share64(m0, node.measure)),
+        split(share64(m1, node.measure)),
+    );
+    let w = split(node.measure.to_bits());
+    let len = pieces.len() as u32 - first;
+    nodes.push([
+        meta,
+        node.x,
+        node.y,
+        first,
+        len,
+        a[0],
+        a[1],
+        b[0],
+        b[1],
+        child(c0),
+        child(c1),
+        w[0],
+        w[1],
+    ]);
+}
+
 impl FlatSampler {
     /// Flattens `sampler`'s cells, with descent trees of depth 0 (requests that put at
     /// most one sample in a boundary leaf; [`deepen`](Self::deepen) for more).
@@ -301,54 +360,7 @@ impl FlatSampler {
     /// Appends `node` of a tree whose root is node `root`, with its pieces; domain
     /// triangles are numbered from `tri_base`.
     fn push_node(&mut self, node: &DescentNode, root: u32, tri_base: u32) {
-        let size = (-f64::from(node.level)).exp2();
-        let origin = glam::DVec2::new(f64::from(node.x), f64::from(node.y)) * size;
-        let first = self.pieces.len() as u32;
-        for (tri, poly, m) in &node.parts {
-            let mut row = [0u32; 20];
-            row[0] = tri_base + tri;
-            let pts = poly.points();
-            row[1] = pts.len().min(8) as u32;
-            let share = if node.measure > 0.0 {
-                m / node.measure
-            } else {
-                0.0
-            };
-            [row[2], row[3]] = split((share * 4_611_686_018_427_387_904.0) as u64);
-            for (k, p) in pts.iter().take(8).enumerate() {
-                let q = (*p - origin) / size;
-                row[4 + 2 * k] = f32_bits(q.x);
-                row[5 + 2 * k] = f32_bits(q.y);
-            }
-            self.pieces.push(row);
-        }
-        let meta = u32::from(node.level)
-            | u32::from(node.state) << 5
-            | u32::from(node.full) << 7
-            | u32::from(node.square) << 8;
-        let [(m0, c0), (m1, c1)] = node.children;
-        let child = |c: Option<u32>| c.map_or(u32::MAX, |c| root + c);
-        let (a, b) = (
-            split(share64(m0, node.measure)),
-            split(share64(m1, node.measure)),
-        );
-        let w = split(node.measure.to_bits());
-        let len = self.pieces.len() as u32 - first;
-        self.nodes.push([
-            meta,
-            node.x,
-            node.y,
-            first,
-            len,
-            a[0],
-            a[1],
-            b[0],
-            b[1],
-            child(c0),
-            child(c1),
-            w[0],
-            w[1],
-        ]);
+        push_node((&mut self.nodes, &mut self.pieces), node, root, tri_base);
     }
 
     /// Deepens the descent trees so that an `n`-sample request of `sampler` (the one
@@ -537,7 +549,41 @@ pub struct FlatProgressive {
     /// the descent in boundary leaves: [`PROGRESSIVE_LEVELS`] capped at the segment's
     /// `leaf_levels`.
     pub levels: Vec<u32>,
+    /// The top of the descent through the boundary leaves that a pass measuring
+    /// pieces in `f32` cannot descend as the CPU does (more than
+    /// [`PROGRESSIVE_PIECES`] triangle parts, or coarser than
+    /// [`PROGRESSIVE_TREE_LEVEL`]), unrolled in `f64` as in the stratified order's
+    /// trees ([`FlatNode`], each leaf's in one run, child indices global within these
+    /// nodes) until a square is full, holds at most [`PROGRESSIVE_PIECES`] parts at
+    /// [`PROGRESSIVE_FRONTIER_LEVEL`] or finer (the frontier, from which the pass
+    /// descends itself), or the levels run out. Only full and frontier squares keep
+    /// their pieces.
+    pub nodes: Vec<FlatNode>,
+    /// Clipped pieces of [`nodes`](Self::nodes) ([`FlatPiece`]).
+    pub pieces: Vec<FlatPiece>,
+    /// Per leaf with such a tree, in increasing leaf order: `[leaf, root]`, the leaf's
+    /// index in [`FlatSampler::leaves`] and its root in [`nodes`](Self::nodes).
+    pub trees: Vec<[u32; 2]>,
 }
+
+/// Triangle parts of a node that the progressive pass measures itself in `f32` at
+/// most (`MAX_PIECES` in `shaders/progressive.wgsl`).
+pub const PROGRESSIVE_PIECES: usize = 12;
+
+/// Boundary leaves coarser than this level get a progressive tree whatever their
+/// pieces: the pass's `f32` descent was measured to place the CPU's points within
+/// 1e-5 of the diagonal from leaves of this level and finer (the default scene, the
+/// bunny), not from coarser ones.
+pub const PROGRESSIVE_TREE_LEVEL: u8 = 4;
+
+/// The coarsest level at which the progressive pass continues a descent of a leaf with
+/// a tree itself in `f32`. Each `f32` level risks a choice of sub-cell, or a test of
+/// whether one is full (the CPU's is 1e-9 of its area), that differs from the CPU's:
+/// on coarse cells (boundary leaves at level 3, up to 255 pieces) continuing from
+/// level 5 put 16 of 4096 samples beyond 1e-5 of the diagonal (up to 5e-5), from
+/// level 8 one of 10^5, from level 9 none (largest deviation 7e-7). Each level more
+/// about doubles the trees.
+pub const PROGRESSIVE_FRONTIER_LEVEL: u8 = 9;
 
 impl FlatProgressive {
     /// The planes and levels of `sampler` (the sampler [`FlatSampler::new`] flattened).
@@ -557,12 +603,56 @@ impl FlatProgressive {
             let cap = u32::from(curve.options().leaf_levels);
             flat.levels.push(PROGRESSIVE_LEVELS.min(cap));
         }
+        flat.build_trees(sampler);
         flat
+    }
+
+    /// The trees of [`nodes`](Self::nodes): per boundary leaf in chain order, its
+    /// descent tree to the frontier when the leaf itself lies beyond it. O(boundary
+    /// leaves' candidates) plus the expanded squares.
+    fn build_trees(&mut self, sampler: &Sampler) {
+        let (mut leaf_base, mut tri_base) = (0u32, 0u32);
+        for (slot, &si) in sampler.chains.order.iter().enumerate() {
+            let curve = &sampler.segments[si as usize].curve;
+            let stop = (PROGRESSIVE_PIECES, PROGRESSIVE_FRONTIER_LEVEL);
+            for (l, key) in curve.cells().iter().enumerate() {
+                if key.full() {
+                    continue;
+                }
+                if key.level() >= PROGRESSIVE_TREE_LEVEL {
+                    let mut parts = 0;
+                    curve.leaf_pieces(l, |_, poly, _| {
+                        parts += usize::from(poly.area_moment().0 > 0.0)
+                    });
+                    if parts <= PROGRESSIVE_PIECES {
+                        continue;
+                    }
+                }
+                let tree = curve.descent_tree_to(l, self.levels[slot], stop);
+                let root = self.nodes.len() as u32;
+                self.trees.push([leaf_base + l as u32, root]);
+                for mut node in tree {
+                    // A descent passes through a node with children (a half, or a
+                    // square not full and above the frontier) without reading its
+                    // pieces: only full and frontier squares keep theirs.
+                    if !node.full && node.children.iter().any(|c| c.1.is_some()) {
+                        node.parts.clear();
+                    }
+                    push_node((&mut self.nodes, &mut self.pieces), &node, root, tri_base);
+                }
+            }
+            leaf_base += curve.cell_count() as u32;
+            tri_base += curve.triangle_count() as u32;
+        }
     }
 
     /// Bytes of the tables.
     pub fn bytes(&self) -> usize {
-        self.planes.len() * 12 + self.levels.len() * 4
+        self.planes.len() * 12
+            + self.levels.len() * 4
+            + self.nodes.len() * 52
+            + self.pieces.len() * 80
+            + self.trees.len() * 8
     }
 }
 

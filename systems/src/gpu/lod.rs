@@ -585,18 +585,29 @@ mod gpu_tests {
     /// A pool that lists ranks only, synced with GPU placement, holds the sites of a
     /// pool placed on the CPU (the sampler check's tolerances: at most 1 in 10^4
     /// beyond 1e-5 of the diagonal, none beyond 1e-4, at most 1 in 10^3 in another
-    /// face) along a dolly in and an orbit on the default scene, uploading 4 bytes per
-    /// new entry, and the expanded records follow the sites. Synced with its sites
-    /// instead, it is refused.
+    /// face) along a dolly in and an orbit on the default scene and on the same shape
+    /// with coarse cells (boundary leaves at level 3, placed over the progressive
+    /// trees), uploading 4 bytes per new entry, and the expanded records follow the
+    /// sites. Synced with its sites instead, it is refused.
     #[test]
     fn placed_pool_holds_the_cpu_pools_sites() {
         let Some(ctx) = GpuContext::headless_or_skip("placed_pool_holds_the_cpu_pools_sites")
         else {
             return;
         };
+        let shape = "mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
+             field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0)";
+        placed_pool_follows(&ctx, &format!("({shape})"), "default");
+        placed_pool_follows(
+            &ctx,
+            &format!("({shape}, curve: (max_cell_share: 0.02, boundary_level: 3))"),
+            "coarse",
+        );
+    }
+
+    /// `placed_pool_holds_the_cpu_pools_sites` on the scene `ron` (`name` in messages).
+    fn placed_pool_follows(ctx: &GpuContext, ron: &str, name: &str) {
         let (device, queue) = (&ctx.device, &ctx.queue);
-        let ron = "(mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
-             field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0))";
         let config = SceneConfig::from_ron(ron, Path::new("test.ron")).expect("parses");
         let scene = Scene::build(&config).expect("builds");
         let s = &scene.sampler;
@@ -642,8 +653,8 @@ mod gpu_tests {
                 .update(s, &view, Budget::Base(BASE))
                 .expect("the pool's sampler");
             let change = listed.update(s, &view, Budget::Base(BASE)).expect("same");
-            assert_eq!(change, update, "frame {frame}");
-            assert_eq!(listed.ranks(), pool.ranks(), "frame {frame}");
+            assert_eq!(change, update, "{name}, frame {frame}");
+            assert_eq!(listed.ranks(), pool.ranks(), "{name}, frame {frame}");
             let change = change.change;
             let held = gpu_pool.len();
             let bytes = gpu_pool
@@ -654,7 +665,7 @@ mod gpu_tests {
             } else {
                 pool.len() - held
             };
-            assert_eq!(bytes, sent as u64 * 4, "frame {frame}: only ranks are sent");
+            assert_eq!(bytes, sent as u64 * 4, "{name}, frame {frame}: ranks only");
             if frame > 0 && matches!(change, PoolChange::Appended(_)) {
                 appended += sent;
             }
@@ -671,10 +682,13 @@ mod gpu_tests {
             let n = sites.len();
             let _ = writeln!(
                 std::io::stderr(),
-                "frame {frame}: {n} entries, {faces} in another face, largest deviation {worst:.2e} ({beyond} beyond 1e-5)"
+                "{name}, frame {frame}: {n} entries, {faces} in another face, largest deviation {worst:.2e} ({beyond} beyond 1e-5)"
             );
-            assert!(faces * 1000 <= n, "frame {frame}: {faces} of {n}");
-            assert!(beyond * 10_000 <= n && worst <= 1e-4, "frame {frame}");
+            assert!(faces * 1000 <= n, "{name}, frame {frame}: {faces} of {n}");
+            assert!(
+                beyond * 10_000 <= n && worst <= 1e-4,
+                "{name}, frame {frame}"
+            );
             let records = samples.read_back(device, queue).expect("records");
             assert_eq!(records.len(), n);
             for (k, (r, site)) in records.iter().zip(&sites).enumerate().step_by(97) {
@@ -684,6 +698,9 @@ mod gpu_tests {
                 assert!(dist <= 1e-5 * diagonal as f32, "record {k}: {dist}");
             }
         }
-        assert!(appended > 1000, "the path appended {appended} entries");
+        assert!(
+            appended > 1000,
+            "{name}: the path appended {appended} entries"
+        );
     }
 }

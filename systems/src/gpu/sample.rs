@@ -27,7 +27,9 @@
 //! itself in `f32` from the leaf's clipped pieces and the triangles' density planes
 //! ([`FlatProgressive`], 12 bytes per domain triangle, uploaded with the table),
 //! carrying the target as a 64-bit fraction: the same sub-cells as the CPU but where
-//! the target lies within `f32` round-off of a cut. Ranks come either as a range or
+//! the target lies within `f32` round-off of a cut. Boundary leaves too coarse for
+//! that (or cut by more triangles than the pass keeps) start over the top of their
+//! descent unrolled in `f64` ([`FlatProgressive::nodes`]), to level 9. Ranks come either as a range or
 //! as a list in a buffer, which is how a level-of-detail pool's new entries are placed
 //! ([`GpuLodPool::sync_placed`](super::lod::GpuLodPool::sync_placed)).
 
@@ -48,7 +50,6 @@ mod progressive;
 mod timing;
 
 pub(crate) use progressive::Ranks;
-use progressive::progressive_overflow;
 
 /// Samples per workgroup of the sampling pass (the shader's `@workgroup_size`).
 const WORKGROUP: u32 = 64;
@@ -99,8 +100,13 @@ pub struct SampleParams {
     pub planes_at: u32,
     /// First word of the progressive levels per slot in the table.
     pub prog_levels_at: u32,
-    /// Padding to 16 bytes.
-    pub _pad: [u32; 3],
+    /// First word of the progressive order's descent-tree nodes in the table.
+    pub prog_nodes_at: u32,
+    /// First word of those nodes' pieces.
+    pub prog_pieces_at: u32,
+    /// First word of the list of leaves with a progressive tree (a count, then
+    /// `[leaf, root]` pairs).
+    pub trees_at: u32,
 }
 
 /// The flat tables of `flat` and `prog` as one array of 32-bit words, and where each
@@ -130,10 +136,20 @@ fn table_words(flat: &FlatSampler, prog: &FlatProgressive) -> (Vec<u32>, SampleP
     words.extend(prog.planes.iter().flatten());
     let prog_levels_at = at(&words);
     words.extend(&prog.levels);
+    let prog_nodes_at = at(&words);
+    words.extend(prog.nodes.iter().flatten());
+    let prog_pieces_at = at(&words);
+    words.extend(prog.pieces.iter().flatten());
+    let trees_at = at(&words);
+    words.push(prog.trees.len() as u32);
+    words.extend(prog.trees.iter().flatten());
     let offsets = SampleParams {
         nodes_at,
         planes_at,
         prog_levels_at,
+        prog_nodes_at,
+        prog_pieces_at,
+        trees_at,
         leaves: flat.leaves.len() as u32,
         cum_at,
         leaves_at,
@@ -266,9 +282,6 @@ pub struct GpuSampler {
     checked: Option<([u64; 3], u32, wgpu::Buffer)>,
     /// Sites written by the last request.
     count: u32,
-    /// [`progressive_overflow`] of the tables: the progressive order is refused when
-    /// any leaf overflows.
-    overflow: (u32, u32),
     expander: SiteExpander,
     /// Where the device has timestamp queries: the begin and end of the sites pass and
     /// of the expansion, and the buffer they resolve into.
@@ -285,7 +298,6 @@ impl GpuSampler {
     /// passes (the expander uploads the mesh table).
     pub fn new(device: &wgpu::Device, sampler: &Sampler) -> Result<Self, GpuError> {
         let flat = FlatSampler::new(sampler)?;
-        let overflow = progressive_overflow(&flat);
         let prog = FlatProgressive::new(sampler);
         let (table, table_bytes, offsets) = upload_table(device, &flat, &prog)?;
         let expander = SiteExpander::new(device, sampler)?;
@@ -345,7 +357,6 @@ impl GpuSampler {
                     wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 ),
                 count: 0,
-                overflow,
                 expander,
                 timing: false,
                 timer: device
@@ -675,9 +686,9 @@ mod tests {
             ("jitter_hi", offset_of!(SampleParams, scramble) + 20),
             ("planes_at", offset_of!(SampleParams, planes_at)),
             ("prog_levels_at", offset_of!(SampleParams, prog_levels_at)),
-            ("_pad0", offset_of!(SampleParams, _pad)),
-            ("_pad1", offset_of!(SampleParams, _pad) + 4),
-            ("_pad2", offset_of!(SampleParams, _pad) + 8),
+            ("prog_nodes_at", offset_of!(SampleParams, prog_nodes_at)),
+            ("prog_pieces_at", offset_of!(SampleParams, prog_pieces_at)),
+            ("trees_at", offset_of!(SampleParams, trees_at)),
         ];
         let want: Vec<(String, usize)> = want.iter().map(|(n, o)| (n.to_string(), *o)).collect();
         assert_eq!(params, want);
@@ -1022,6 +1033,23 @@ mod gpu_tests {
         }
     }
 
+    /// Prints the bytes of the progressive trees on the GPU, per mesh face.
+    fn trees_line(gpu: &GpuSampler, at: &str) {
+        let prog = &gpu.prog;
+        let bytes = prog.nodes.len() * 52 + prog.pieces.len() * 80 + prog.trees.len() * 8 + 4;
+        let faces = gpu.sampler.mesh().face_count();
+        let _ = writeln!(
+            std::io::stderr(),
+            "{at}: progressive trees for {} leaves, {} nodes, {} pieces: {bytes} bytes, {:.1} per face ({faces} faces; the whole table {} bytes, {:.1} per face)",
+            prog.trees.len(),
+            prog.nodes.len(),
+            prog.pieces.len(),
+            bytes as f64 / faces as f64,
+            gpu.table_bytes(),
+            gpu.table_bytes() as f64 / faces as f64,
+        );
+    }
+
     /// The bunny (shared mesh, skipped without it) in progressive order at 10^5.
     #[test]
     fn gpu_progressive_bunny_matches_the_cpu() {
@@ -1032,35 +1060,38 @@ mod gpu_tests {
             return;
         };
         let mut gpu = GpuSampler::new(&ctx.device, &bunny.sampler).expect("GPU sampler");
+        trees_line(&gpu, "bunny");
         for n in [1usize, 7, 4096, 100_000] {
             let at = format!("bunny, n {n}");
             check_progressive(&ctx, &mut gpu, &bunny.sampler, (0, n, 1), &at);
         }
     }
 
-    /// On a scene whose boundary leaves are cut by more triangles than the progressive
-    /// pass keeps per node (coarse cells), the progressive order is refused with one
-    /// clear error at every count, never drawn wrong; the stratified order still
-    /// matches the CPU there.
+    /// On a scene whose boundary leaves are coarse and cut by many triangles (coarse
+    /// cells), the progressive order descends the top of those leaves over the trees
+    /// the engine unrolls in `f64` and matches the CPU at counts 1, 7, 4096 and 10^5:
+    /// the same faces and segments, every position within 1e-5 of the diagonal; the
+    /// stratified order still matches there.
     #[test]
-    fn gpu_progressive_refuses_leaves_it_cannot_place() {
-        let Some(ctx) = gpu("gpu_progressive_refuses_leaves_it_cannot_place") else {
+    fn gpu_progressive_coarse_cells_match_the_cpu() {
+        let Some(ctx) = gpu("gpu_progressive_coarse_cells_match_the_cpu") else {
             return;
         };
         let coarse = scene(COARSE);
         let sampler = &coarse.sampler;
         let mut gpu = GpuSampler::new(&ctx.device, sampler).expect("GPU sampler");
-        let refused = gpu.progressive_exact().expect_err("coarse cells refused");
-        let message = refused.to_string();
-        assert!(
-            message.contains("progressive order on the GPU") && message.contains("on the CPU"),
-            "{message}"
-        );
+        assert!(!gpu.prog.trees.is_empty(), "coarse leaves with trees");
+        trees_line(&gpu, "coarse");
         for n in [1usize, 7, 4096, 100_000] {
-            let err = gpu
-                .sample_progressive_sites(&ctx.device, &ctx.queue, 0, n, 7)
-                .expect_err("refused");
-            assert_eq!(err.to_string(), message, "n {n}");
+            let at = format!("coarse, n {n}");
+            let sites = check_progressive(&ctx, &mut gpu, sampler, (0, n, 7), &at);
+            let mut cpu = vec![SampleSite::default(); n];
+            sampler.progressive_sites_into(7, 0, &mut cpu);
+            let d = compare(sampler, &sites, &cpu);
+            assert!(
+                d.faces == 0 && d.segments == 0 && d.position <= 1e-5,
+                "{at}: {d:?}"
+            );
         }
         check(
             &ctx,
@@ -1070,10 +1101,6 @@ mod gpu_tests {
             5,
             "coarse, stratified, n 4096",
         );
-        let default = scene(DEFAULT);
-        let gpu = GpuSampler::new(&ctx.device, &default.sampler).expect("GPU sampler");
-        gpu.progressive_exact()
-            .expect("the default scene is placed exactly");
     }
 
     /// `strata bench --gpu` prints the check and succeeds on a scene within tolerance.

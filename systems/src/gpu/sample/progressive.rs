@@ -1,40 +1,16 @@
 //! The progressive order on the GPU ([`GpuSampler::sample_progressive_sites`]): the
-//! pass that places ranks of the progressive sequence, and the check, made when the
-//! tables are uploaded, that it can place every boundary leaf as the CPU does.
+//! pass that places ranks of the progressive sequence.
 //!
-//! Input: the sampler's uploaded tables and a `(ranks, seed)` request. Output: sites in
-//! the sampler's sites buffer (or one the caller names). Cost: the scramble's six words
-//! per request on the CPU; O(boundary pieces) once for the check.
+//! Input: the sampler's uploaded tables (with the progressive order's density planes
+//! and, for boundary leaves the pass cannot descend in `f32` alone, the top of their
+//! descent unrolled in `f64`: [`FlatProgressive`](strata_engine::sample::flat::FlatProgressive)) and a `(ranks, seed)`
+//! request. Output: sites in the sampler's sites buffer (or one the caller names).
+//! Cost: the scramble's six words per request on the CPU.
 
-use strata_engine::sample::flat::{FlatError, FlatSampler, progressive_scramble};
+use strata_engine::sample::flat::{FlatError, progressive_scramble};
 
 use super::{GpuSampler, SITE_BYTES, SampleParams, WORKGROUP};
 use crate::gpu::context::{GpuError, scoped};
-
-/// Pieces of a boundary leaf that the progressive pass keeps per node
-/// (`MAX_PIECES` in progressive.wgsl).
-const PROGRESSIVE_PIECES: usize = 12;
-
-/// The boundary leaves of `flat` whose clipped pieces (those with corners enough for
-/// area) exceed what the progressive pass keeps per node: how many, and the most pieces
-/// in one. The pass cannot place their samples as the CPU does (measured on a coarse
-/// scene: samples a tenth of the bounding-box diagonal from the CPU's), so a sampler
-/// with any refuses the progressive order. O(boundary pieces).
-pub(super) fn progressive_overflow(flat: &FlatSampler) -> (u32, u32) {
-    let (mut leaves, mut most) = (0u32, 0u32);
-    for leaf in flat.leaves.iter().filter(|l| l[2] & 128 == 0) {
-        let root = flat.nodes[leaf[3] as usize];
-        let pieces = flat.pieces[root[3] as usize..(root[3] + root[4]) as usize]
-            .iter()
-            .filter(|p| p[1] >= 3)
-            .count() as u32;
-        if pieces as usize > PROGRESSIVE_PIECES {
-            leaves += 1;
-            most = most.max(pieces);
-        }
-    }
-    (leaves, most)
-}
 
 /// Where a progressive pass takes its ranks ([`GpuSampler::encode_progressive`]).
 #[derive(Clone, Copy, Debug)]
@@ -46,30 +22,12 @@ pub(crate) enum Ranks<'a> {
 }
 
 impl GpuSampler {
-    /// Whether the progressive pass places this sampler's samples as the CPU does: an
-    /// error naming the boundary leaves it cannot place (leaves cut by more triangles
-    /// than the pass keeps per node, as on scenes with very coarse cells), where
-    /// [`sample_progressive_sites`](Self::sample_progressive_sites) refuses to draw
-    /// rather than return wrong samples. Checked once, when the tables are uploaded.
-    pub fn progressive_exact(&self) -> Result<(), GpuError> {
-        let (leaves, most) = self.overflow;
-        if leaves == 0 {
-            return Ok(());
-        }
-        Err(GpuError::Mismatch {
-            what: "the progressive order on the GPU",
-            detail: format!(
-                "{leaves} boundary leaves are cut by more than {PROGRESSIVE_PIECES} triangles (up to {most}), which the progressive pass cannot place as the CPU does; draw the progressive order on the CPU (finer cells, a smaller max_cell_share or a higher boundary_level, avoid such leaves)"
-            ),
-        })
-    }
-
     /// Draws the sites of progressive ranks `first_rank..first_rank + n` for `seed` on
     /// the GPU (kept in the sampler's sites buffer, [`read_sites`](Self::read_sites)):
     /// the sites of [`Sampler::progressive_sites_into`](strata_engine::sample::Sampler::progressive_sites_into), so every prefix of a request
     /// is the request of that count. The CPU computes the scramble's six words; the
-    /// pass places every rank. Records and submits; never waits. An error, before
-    /// anything is drawn, where [`progressive_exact`](Self::progressive_exact) is one.
+    /// pass places every rank. Records and submits; never waits. An error for ranks
+    /// past 2^32.
     pub fn sample_progressive_sites(
         &mut self,
         device: &wgpu::Device,
@@ -85,7 +43,6 @@ impl GpuSampler {
                 what: "progressive ranks (past 2^32)",
                 value: u64::from(first_rank) + n as u64,
             })?;
-        self.progressive_exact()?;
         self.count = count;
         if count == 0 {
             return Ok(());
@@ -124,7 +81,6 @@ impl GpuSampler {
     /// Records the progressive pass: the sites of `count` ranks (`ranks`) for `seed`,
     /// written into `sites` from entry `out_at` on (the buffer must hold them). Its
     /// uniforms are written with `queue`: submit before the next progressive pass.
-    /// The error of [`progressive_exact`](Self::progressive_exact) where it has one.
     pub(crate) fn encode_progressive(
         &self,
         device: &wgpu::Device,
@@ -134,7 +90,6 @@ impl GpuSampler {
         (sites, out_at): (&wgpu::Buffer, u32),
         stamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<(), GpuError> {
-        self.progressive_exact()?;
         if count == 0 {
             return Ok(());
         }
@@ -184,15 +139,18 @@ impl GpuSampler {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use std::io::Write;
+
+    use strata_engine::sample::flat::{FlatProgressive, PROGRESSIVE_PIECES};
+
     use crate::gpu::shaders;
 
-    /// The progressive pass refuses exactly the samplers with boundary leaves cut by
-    /// more triangles than it keeps per node: none on the default scene (finest
-    /// boundary leaves at level 4), most boundary leaves of the same shape with coarse
-    /// cells; the Rust limit is the shader's.
+    /// The pieces the engine leaves to the pass per node are what the pass keeps; the
+    /// default scene (boundary leaves at level 4) needs no progressive tree, the same
+    /// shape with coarse cells has trees for most boundary leaves, each a run of nodes
+    /// listed once, in leaf order.
     #[test]
-    fn progressive_overflow_flags_coarse_cells_only() {
+    fn progressive_trees_cover_coarse_cells_only() {
         assert!(
             shaders::SAMPLE.contains(&format!("const MAX_PIECES: u32 = {PROGRESSIVE_PIECES}u;")),
             "PROGRESSIVE_PIECES is progressive.wgsl's MAX_PIECES"
@@ -201,17 +159,33 @@ mod tests {
             let config = crate::config::SceneConfig::from_ron(ron, std::path::Path::new("t.ron"))
                 .expect("scene parses");
             let scene = crate::scene::Scene::build(&config).expect("scene builds");
-            progressive_overflow(&FlatSampler::new(&scene.sampler).expect("flat tables"))
+            FlatProgressive::new(&scene.sampler)
         };
         let shape = "mesh: Shape(Genus2(size: 2.0, resolution: 3)), \
              field: Constant(direction: (1.0, 0.3, 0.2), anisotropy: 3.0, density: 1.0)";
-        assert_eq!(build(&format!("({shape})")), (0, 0));
-        let (leaves, most) = build(&format!(
-            "({shape}, curve: (max_cell_share: 0.02, boundary_level: 3))"
-        ));
+        let fine = build(&format!("({shape})"));
+        assert!(fine.trees.is_empty() && fine.nodes.is_empty());
+        let config = crate::config::SceneConfig::from_ron(
+            &format!("({shape}, curve: (max_cell_share: 0.02, boundary_level: 3))"),
+            std::path::Path::new("t.ron"),
+        )
+        .expect("scene parses");
+        let scene = crate::scene::Scene::build(&config).expect("scene builds");
+        let start = std::time::Instant::now();
+        let coarse = FlatProgressive::new(&scene.sampler);
+        let _ = writeln!(
+            std::io::stderr(),
+            "coarse cells: progressive tables built in {:.1} ms, {} bytes",
+            start.elapsed().as_secs_f64() * 1e3,
+            coarse.bytes()
+        );
+        assert!(coarse.trees.len() > 100, "{} trees", coarse.trees.len());
+        assert!(coarse.trees.windows(2).all(|w| w[0][0] < w[1][0]));
         assert!(
-            leaves > 100 && most > 100,
-            "{leaves} leaves, up to {most} pieces"
+            coarse
+                .trees
+                .iter()
+                .all(|t| (t[1] as usize) < coarse.nodes.len())
         );
     }
 }
