@@ -24,6 +24,13 @@
 //! the records of about 2 * 10^6 pool entries, so use 2 * 10^5 there). As in the
 //! `lod` bench, the frame loop runs on a worker of rayon's global pool
 //! (`use_current_thread`); `LOD_OUTSIDE_POOL=1` calls from outside the pool.
+//!
+//! `LOD_GPU_CPU_ONLY=1` opens no adapter and runs the ranks-only pool's updates
+//! alone, printing each path's update times: the CPU side of a frame with GPU
+//! placement, for instruction counts under `valgrind --tool=callgrind` (with
+//! `RAYON_NUM_THREADS=1`: one run with `frames` steps less one with none, over the
+//! frames, is the instructions per timed frame). `LOD_GPU_PATH=name` runs only the
+//! paths whose name contains `name`.
 
 use std::alloc::System;
 use std::time::Instant;
@@ -61,6 +68,57 @@ fn calibrate_base(s: &Sampler, first: &ViewLod, shown_target: f64) -> f64 {
     probe * shown_target / shown
 }
 
+/// The `lod` bench's paths (view and base count at frame `t`) from base count `base`.
+fn paths(camera: &LodCamera, base: f64) -> [(&'static str, Path<'_>); 4] {
+    let (centre, start, first) = (camera.centre, camera.start, camera.view(camera.start));
+    let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
+    let orbit = Box::new(move |t| {
+        let turn = glam::DQuat::from_rotation_y(f64::from(t).to_radians());
+        (camera.view(centre + turn * (start - centre)), base)
+    });
+    [
+        (
+            "count +1%",
+            Box::new(move |t| (first, base * 1.01f64.powi(t))),
+        ),
+        ("dolly in 1%", dolly(0.99)),
+        ("dolly out 1%", dolly(1.01)),
+        ("orbit 1 degree", orbit),
+    ]
+}
+
+/// `LOD_GPU_CPU_ONLY`: the ranks-only pool's updates along the paths named `chosen`,
+/// without an adapter; prints each path's median update time.
+fn cpu_only(s: &Sampler, frames: usize, chosen: &str) -> Result<(), Box<dyn std::error::Error>> {
+    let camera = LodCamera::around(s.mesh().positions());
+    let shown: f64 = match std::env::var("LOD_GPU_SHOWN") {
+        Ok(v) => v.parse()?,
+        Err(_) => 1e6,
+    };
+    let base = calibrate_base(s, &camera.view(camera.start), shown);
+    let listing = LodPool::new_with(s, SEED, (base as u32, 8_000_000), Placement::Elsewhere);
+    println!("base count {base:.0}; {frames} frames per path, ranks only, no adapter.\n");
+    println!("| path | update, ranks only, ms | entries at end |");
+    println!("| --- | --- | --- |");
+    for (name, path) in paths(&camera, base)
+        .iter()
+        .filter(|(n, _)| n.contains(chosen))
+    {
+        let mut pool = listing.clone();
+        let mut times = Vec::new();
+        for t in -WARM_UP..=frames as i32 {
+            let (v, b) = path(t);
+            let clock = Instant::now();
+            pool.update(s, &v, Budget::Base(b))?;
+            if t > 0 {
+                times.push(clock.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        println!("| {name} | {:.3} | {} |", median(times), pool.len());
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames = strata_bench::repeats_arg(10)?.max(1);
     if std::env::var_os("LOD_OUTSIDE_POOL").is_none() {
@@ -70,6 +128,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let (file, scene) = lod_scene(SEED)?;
     let s = &scene.sampler;
+    let chosen = std::env::var("LOD_GPU_PATH").unwrap_or_default();
+    if std::env::var_os("LOD_GPU_CPU_ONLY").is_some() {
+        return cpu_only(s, frames, &chosen);
+    }
     let ctx = GpuContext::headless(&Default::default())?;
     let (device, queue) = (&ctx.device, &ctx.queue);
     let gpu = GpuSampler::new(device, s)?;
@@ -91,23 +153,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| path | update, CPU placement, ms | update, ranks only, ms | sync (GPU placement) ms | CPU per frame with GPU placement, ms | upload KB per frame, mean | allocations per update, placing / ranks only, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
     );
     println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
-    let (centre, start) = (camera.centre, camera.start);
-    let dolly = |factor: f64| -> Path { Box::new(move |t| (camera.dolly(factor, t), base)) };
-    let orbit = || -> Path {
-        Box::new(move |t| {
-            let turn = glam::DQuat::from_rotation_y(f64::from(t).to_radians());
-            (camera.view(centre + turn * (start - centre)), base)
-        })
-    };
-    let paths: [(&str, Path); 4] = [
-        ("count +1%", Box::new(|t| (first, base * 1.01f64.powi(t)))),
-        ("dolly in 1%", dolly(0.99)),
-        ("dolly out 1%", dolly(1.01)),
-        ("orbit 1 degree", orbit()),
-    ];
+    let paths = paths(&camera, base);
     let (lo, hi) = s.mesh().bounds();
     let diagonal = (hi - lo).length();
-    for (name, path) in &paths {
+    for (name, path) in paths.iter().filter(|(name, _)| name.contains(&chosen)) {
         let (mut pool, mut ranks_only) = (prefix.clone(), listing.clone());
         let mut gpu_pool = GpuLodPool::new(device, base)?;
         let mut samples = GpuSampleBuffer::new(device)?;

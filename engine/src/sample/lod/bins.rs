@@ -8,8 +8,11 @@
 //! from then on they hold its ranks, until [`unsplit`](Bins::unsplit).
 //!
 //! Input: a [`Sampler`], a seed and a view. Output: per bin, its bound, need and reach,
-//! read and raised by the pool's draws. Cost: O(cells) to build, O(bins) per view
-//! bounded (in parallel, branch-free), O(bins) per base count.
+//! read and raised by the pool's draws, and the lists of the bins that lack ranks and
+//! of those that ask for a split. Cost: O(cells) to build; per update one pass over
+//! the bins ([`Bins::survey`]: bounds, when the view moved, in a branch-free loop,
+//! then needs and lists, chunk by chunk in parallel), then in proportion to the bins
+//! listed.
 
 use std::ops::Range;
 
@@ -86,6 +89,66 @@ pub(super) struct Bins {
     /// The bins' bounds on a new geometry (kept, so that a deforming mesh's
     /// [`set_geometry`](Self::set_geometry) stops allocating them).
     rebound: Vec<RegionBound>,
+    /// The bins that lack ranks (need above reach), in order, as of the last
+    /// [`survey`](Self::survey) and the splits after it.
+    lacking: Vec<u32>,
+    /// The bins whose need asks for a split ([`SPLIT_ENTRIES`] entries or more), in
+    /// order, as of the last [`survey`](Self::survey).
+    heavy: Vec<u32>,
+    /// Per chunk of [`BOUND_CHUNK`] bins, what a survey listed there (kept, so that
+    /// surveys stop allocating).
+    listed: Vec<Listed>,
+    /// Whether every survey and split scans all bins in separate passes, as a
+    /// reference for the fused pass (tests only).
+    #[cfg(test)]
+    full_scans: bool,
+}
+
+/// The bins one chunk of a survey listed.
+#[derive(Clone, Debug, Default)]
+struct Listed {
+    /// Those that lack ranks.
+    lacking: Vec<u32>,
+    /// Those whose need asks for a split.
+    heavy: Vec<u32>,
+}
+
+impl Listed {
+    /// Sets the needs `needs` of bins `first..` from their bounds `multipliers` under
+    /// base count `base` (0 where `split`), and lists those whose need is above their
+    /// `reach` and those whose need times their `share` asks for a split.
+    fn survey(
+        &mut self,
+        first: usize,
+        multipliers: &[f64],
+        needs: &mut [u32],
+        (split, reach, shares): (&[bool], &[u32], &[f64]),
+        base: f64,
+    ) {
+        self.lacking.clear();
+        self.heavy.clear();
+        let n = multipliers.len();
+        // Room for every bin of the chunk, so that listing never allocates once warm.
+        self.lacking.reserve(n);
+        self.heavy.reserve(n);
+        let (split, reach, shares, needs) =
+            (&split[..n], &reach[..n], &shares[..n], &mut needs[..n]);
+        for i in 0..n {
+            let need = if split[i] {
+                0
+            } else {
+                need_of(base, multipliers[i])
+            };
+            needs[i] = need;
+            let b = (first + i) as u32;
+            if need > reach[i] {
+                self.lacking.push(b);
+            }
+            if f64::from(need) * shares[i] >= SPLIT_ENTRIES {
+                self.heavy.push(b);
+            }
+        }
+    }
 }
 
 impl Clone for Bins {
@@ -103,6 +166,11 @@ impl Clone for Bins {
             multipliers: self.multipliers.clone(),
             bounded: self.bounded,
             rebound: Vec::new(),
+            lacking: self.lacking.clone(),
+            heavy: self.heavy.clone(),
+            listed: self.listed.clone(),
+            #[cfg(test)]
+            full_scans: self.full_scans,
         }
     }
 }
@@ -162,6 +230,11 @@ impl Bins {
             bins,
             bounds,
             rebound: Vec::new(),
+            lacking: Vec::new(),
+            heavy: Vec::new(),
+            listed: Vec::new(),
+            #[cfg(test)]
+            full_scans: false,
         }
     }
 
@@ -232,7 +305,7 @@ impl Bins {
     }
 
     /// The rank bin `bin` needs under the view and base count of the last
-    /// [`set_needs`](Self::set_needs) (0 for a split bin).
+    /// [`survey`](Self::survey) (0 for a split bin).
     pub(super) fn need(&self, bin: usize) -> u32 {
         self.needs[bin]
     }
@@ -312,11 +385,106 @@ impl Bins {
         }
     }
 
-    /// Each bin's need under the bounded view with base count `base`.
-    pub(super) fn set_needs(&mut self, base: f64) {
+    /// Bounds every bin under `view` (unless the bins hold its bounds already), sets
+    /// each bin's need under base count `base`, and lists the bins that lack ranks
+    /// ([`lacking`](Self::lacking)) and those whose need asks for a split: one pass
+    /// over the bins, in parallel chunks (the roots' needs and lists in the same task
+    /// as their bounds; split bins' children after their parents' bounds).
+    pub(super) fn survey(&mut self, view: &ViewLod, base: f64) {
+        #[cfg(test)]
+        if self.full_scans {
+            self.bound_view(view);
+            self.rescan(base);
+            return;
+        }
+        let rebound = self.bounded.as_ref() != Some(view);
+        let frustum = Frustum::new(view);
+        let (n, roots) = (self.bins.len(), self.roots);
+        self.multipliers.resize(n, 0.0);
+        self.needs.resize(n, 0);
+        let chunks = n.div_ceil(BOUND_CHUNK);
+        let children = (n - roots).div_ceil(BOUND_CHUNK);
+        let mut listed = std::mem::take(&mut self.listed);
+        if listed.len() < chunks + children {
+            listed.resize_with(chunks + children, Default::default);
+        }
+        let (root_lists, child_lists) = listed.split_at_mut(chunks);
+        let columns = (&self.split[..], &self.reach[..], &self.shares[..]);
+        let bounds = &self.bounds;
+        (self.multipliers.par_chunks_mut(BOUND_CHUNK))
+            .zip(self.needs.par_chunks_mut(BOUND_CHUNK))
+            .zip(root_lists.par_iter_mut())
+            .enumerate()
+            .for_each(|(c, ((multipliers, needs), list))| {
+                let first = c * BOUND_CHUNK;
+                if rebound {
+                    bounds.multipliers_into(&frustum, first, multipliers);
+                }
+                let own = roots.saturating_sub(first).min(multipliers.len());
+                let columns = (
+                    &columns.0[first..],
+                    &columns.1[first..],
+                    &columns.2[first..],
+                );
+                list.survey(first, &multipliers[..own], needs, columns, base);
+            });
+        if rebound {
+            let mut multipliers = std::mem::take(&mut self.multipliers);
+            self.bound_by_parents(&mut multipliers);
+            self.multipliers = multipliers;
+            self.bounded = Some(*view);
+        }
+        // The children, now that their parents' bounds are final.
+        (self.multipliers[roots..].par_chunks(BOUND_CHUNK))
+            .zip(self.needs[roots..].par_chunks_mut(BOUND_CHUNK))
+            .zip(child_lists[..children].par_iter_mut())
+            .enumerate()
+            .for_each(|(c, ((multipliers, needs), list))| {
+                let first = roots + c * BOUND_CHUNK;
+                let columns = (
+                    &columns.0[first..],
+                    &columns.1[first..],
+                    &columns.2[first..],
+                );
+                list.survey(first, multipliers, needs, columns, base);
+            });
+        self.lacking.clear();
+        self.heavy.clear();
+        for list in root_lists.iter().chain(&child_lists[..children]) {
+            self.lacking.extend_from_slice(&list.lacking);
+            self.heavy.extend_from_slice(&list.heavy);
+        }
+        self.listed = listed;
+    }
+
+    /// The bins that lack ranks under the last [`survey`](Self::survey) and the
+    /// splits after it, in order.
+    pub(super) fn lacking(&self) -> &[u32] {
+        &self.lacking
+    }
+
+    /// Makes every survey and split scan all bins in separate passes (bounds, needs,
+    /// the bins that lack ranks, those that ask for a split), as the reference the
+    /// fused pass is checked against.
+    #[cfg(test)]
+    pub(super) fn set_full_scans(&mut self, full: bool) {
+        self.full_scans = full;
+    }
+
+    /// The reference's needs and lists: each in its own pass over all bins.
+    #[cfg(test)]
+    fn rescan(&mut self, base: f64) {
         let mut needs = std::mem::take(&mut self.needs);
         self.needs_from(&self.multipliers, base, &mut needs);
         self.needs = needs;
+        self.lacking = (0..self.bins.len())
+            .filter(|&b| self.needs[b] > self.reach[b])
+            .map(|b| b as u32)
+            .collect();
+        self.heavy = (0..self.bins.len())
+            .filter(|&b| f64::from(self.needs[b]) * self.shares[b] >= SPLIT_ENTRIES)
+            .map(|b| b as u32)
+            .collect();
     }
 
     /// Whether every bin reaches its need under `view` with base count `base`
@@ -379,30 +547,57 @@ impl Bins {
         let Some(view) = self.bounded.filter(|_| self.max_bins > self.roots) else {
             return;
         };
-        let mut from = 0;
+        let first_child = self.bins.len();
+        let mut from = None;
         loop {
             // Splits that fit however many children they make.
             let room = self.max_bins.saturating_sub(self.bins.len()) / SPLIT_WAYS;
-            // The columns first, in one pass: most bins are far from asking for many
-            // ranks, and a bin's record is a few cache lines.
-            let wanted: Vec<usize> = (self.needs[from..].iter())
-                .zip(&self.shares[from..])
-                .enumerate()
-                .filter(|(_, (need, share))| f64::from(**need) * **share >= SPLIT_ENTRIES)
-                .map(|(i, _)| from + i)
-                .filter(|&b| self.splits(b, &view))
-                .take(room)
-                .collect();
+            // The bins that ask for many ranks: listed by the survey, then among the
+            // children of the last round. Most bins are far from it, and a bin's
+            // record is a few cache lines.
+            let wanted = match from {
+                None => self.wanted(self.heavy.iter().map(|&b| b as usize), room, &view),
+                Some(from) => {
+                    let heavy = (self.needs[from..].iter())
+                        .zip(&self.shares[from..])
+                        .enumerate()
+                        .filter(|(_, (need, share))| f64::from(**need) * **share >= SPLIT_ENTRIES)
+                        .map(|(i, _)| from + i);
+                    self.wanted(heavy, room, &view)
+                }
+            };
             if wanted.is_empty() {
-                return;
+                break;
             }
-            from = self.bins.len();
+            from = Some(self.bins.len());
             let made = self.children(sampler, seed, &wanted, (geometry, tight));
             let frustum = Frustum::new(&view);
             for (&parent, children) in wanted.iter().zip(made) {
                 self.adopt(parent, children, &frustum, base);
             }
         }
+        if self.bins.len() > first_child {
+            // Split bins need nothing now; their children may lack ranks.
+            let (needs, reach) = (&self.needs, &self.reach);
+            self.lacking
+                .retain(|&b| needs[b as usize] > reach[b as usize]);
+            let lacking = (first_child..self.bins.len()).filter(|&b| needs[b] > reach[b]);
+            self.lacking.extend(lacking.map(|b| b as u32));
+        }
+        #[cfg(test)]
+        if self.full_scans {
+            self.rescan(base);
+        }
+    }
+
+    /// The first `room` bins of `heavy` that split under `view`.
+    fn wanted(
+        &self,
+        heavy: impl Iterator<Item = usize>,
+        room: usize,
+        view: &ViewLod,
+    ) -> Vec<usize> {
+        heavy.filter(|&b| self.splits(b, view)).take(room).collect()
     }
 
     /// The children of each bin of `wanted`: their bins, shares and bounds.

@@ -241,12 +241,11 @@ impl Entries {
         if self.extend_parallel(sampler, bins) {
             return true;
         }
-        // Within the budget only: every bin up to its need, in order.
-        for b in 0..bins.len() {
+        // Within the budget only: every bin that lacks ranks up to its need, in order
+        // (the parallel pass listed them).
+        for &b in &self.todo {
+            let b = b as usize;
             let need = bins.need(b);
-            if need <= bins.reach(b) {
-                continue;
-            }
             let listed = self.ranks.len();
             let room = self.budget - (listed - self.prefix as usize);
             let reach = sampler.progressive_ranks_in_cover(
@@ -275,14 +274,12 @@ impl Entries {
     fn extend_parallel(&mut self, sampler: &Sampler, bins: &mut Bins) -> bool {
         let room = self.budget - (self.ranks.len() - self.prefix as usize);
         self.todo.clear();
+        self.todo.extend_from_slice(bins.lacking());
         let mut expected = 0.0;
-        for (b, &share) in bins.shares().iter().enumerate() {
-            let (need, reach) = (bins.need(b), bins.reach(b));
-            if need > reach {
-                let target = self.ahead_of(bins, b, need);
-                expected += f64::from(target - reach) * share + COVER_SLACK;
-                self.todo.push(b as u32);
-            }
+        for &b in &self.todo {
+            let b = b as usize;
+            let target = self.ahead_of(bins, b, bins.need(b));
+            expected += f64::from(target - bins.reach(b)) * bins.shares()[b] + COVER_SLACK;
         }
         if expected * 2.0 > room as f64 {
             return false;

@@ -241,8 +241,7 @@ impl LodPool {
     fn draw(&mut self, sampler: &Sampler, view: &ViewLod, base: f64) -> PoolChange {
         let start = self.entries.len();
         self.entries.begin();
-        self.bins.bound_view(view);
-        self.bins.set_needs(base);
+        self.bins.survey(view, base);
         self.split(sampler, base);
         if self.entries.extend(sampler, &mut self.bins) {
             return self.entries.finish(sampler, &self.bins, start);
@@ -259,7 +258,7 @@ impl LodPool {
         }
         self.entries.truncate_to_prefix();
         self.bins.reset(prefix);
-        self.bins.set_needs(base);
+        self.bins.survey(view, base);
         self.split(sampler, base);
         self.entries.extend(sampler, &mut self.bins);
         self.entries.finish(sampler, &self.bins, prefix as usize);
@@ -539,6 +538,15 @@ impl LodPool {
     #[cfg(test)]
     pub(super) fn roots(&self) -> usize {
         self.bins.roots()
+    }
+
+    /// The same pool, surveying its bins in separate passes over all of them (bounds,
+    /// needs, the bins that lack ranks, those that ask for a split): the reference
+    /// the fused survey is checked against.
+    #[cfg(test)]
+    pub(super) fn with_full_scans(mut self) -> Self {
+        self.bins.set_full_scans(true);
+        self
     }
 
     /// Bin `bin`'s bound under the last view bounded (for tests of the splits).

@@ -623,3 +623,106 @@ mod placement {
         assert_eq!(listed.clone().placement(), Placement::Elsewhere);
     }
 }
+
+/// The fused survey of the bins against separate passes over all of them.
+mod survey {
+    use super::*;
+    use crate::fixtures::lod::{close_view, culled_view, view_at};
+    use crate::sample::lod::{Budget, Placement};
+
+    /// A generator of numbers in `[0, 1)` (a linear congruential one: the test needs
+    /// a fixed, varied path, not quality).
+    struct Walk(u64);
+
+    impl Walk {
+        fn next(&mut self) -> f64 {
+            self.0 = (self.0.wrapping_mul(6_364_136_223_846_793_005))
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn a_random_camera_path_updates_the_pool_as_separate_passes_do() {
+        let s = torus_sampler();
+        let (seed, prefix) = (11, 4_000);
+        // A roomy pool (appends, splits), and a tight one (the budget spent bin by
+        // bin, rebuilds), each against its reference; one of them lists ranks only.
+        let room = [usize::MAX / 4, 60_000];
+        let mut pools: Vec<(LodPool, LodPool)> = room
+            .iter()
+            .enumerate()
+            .map(|(i, &room)| {
+                let placement = [Placement::Cpu, Placement::Elsewhere][i];
+                let pool = LodPool::new_with(&s, seed, (prefix, room), placement);
+                (pool.clone(), pool.with_full_scans())
+            })
+            .collect();
+        let mut walk = Walk(0x5eed);
+        // Spherical camera coordinates around the torus, a base count, a budget.
+        let (mut azimuth, mut height, mut distance) = (0.3f64, 0.4f64, 3.0f64);
+        let mut base = 5_000.0f64;
+        let mut changes = [0usize; 3];
+        let mut split = false;
+        for frame in 0..160 {
+            let r = walk.next();
+            match (r * 6.0) as u32 {
+                // Dollies of a few percent, in and out, down to close views.
+                0 | 1 => distance = (distance * (0.9 + 0.2 * walk.next())).clamp(0.05, 6.0),
+                // Orbits.
+                2 => azimuth += 0.2 * (walk.next() - 0.5),
+                3 => height = (height + 0.3 * (walk.next() - 0.5)).clamp(-1.2, 1.2),
+                // The base count.
+                4 => base *= 0.9 + 0.25 * walk.next(),
+                // A jump elsewhere.
+                _ => {
+                    azimuth = 6.3 * walk.next();
+                    distance = 0.1 + 3.0 * walk.next();
+                }
+            }
+            let dir = DVec3::new(azimuth.cos(), height.sin(), azimuth.sin());
+            let eye = DVec3::new(0.0, 0.0, 0.0) + dir * (1.0 + distance);
+            let target = dir * 0.8 * walk.next();
+            let v = if frame % 3 == 0 {
+                view_at(eye, target, 1e3)
+            } else if frame % 5 == 1 {
+                // Close above the top: bins split.
+                ViewLod {
+                    max: 1e5,
+                    ..close_view(&s, 0.03 + 0.3 * walk.next())
+                }
+            } else {
+                ViewLod {
+                    max: 1e4,
+                    ..culled_view(eye, target)
+                }
+            };
+            let budget = if frame % 7 == 6 {
+                Budget::new(base, Some((2_000.0 + 20_000.0 * walk.next()) as u32))
+            } else {
+                Budget::Base(base)
+            };
+            for (fused, reference) in &mut pools {
+                let update = fused.update(&s, &v, budget).expect("the pool's sampler");
+                let expected = reference
+                    .update(&s, &v, budget)
+                    .expect("the pool's sampler");
+                assert_eq!(update, expected, "frame {frame}");
+                assert_eq!(fused.ranks(), reference.ranks(), "frame {frame}");
+                assert_eq!(fused.sites(), reference.sites(), "frame {frame}");
+                assert_eq!(fused.bins(), reference.bins(), "frame {frame}");
+                let reach = |p: &LodPool| (0..p.bins()).map(|b| p.reach(b)).collect::<Vec<_>>();
+                assert_eq!(reach(fused), reach(reference), "frame {frame}");
+                split |= fused.bins() > fused.roots();
+                changes[match update.change {
+                    PoolChange::Unchanged => 0,
+                    PoolChange::Appended(_) => 1,
+                    PoolChange::Rebuilt => 2,
+                }] += 1;
+            }
+        }
+        // The path took every kind of update, and split bins.
+        assert!(changes.iter().all(|&n| n > 0), "{changes:?}");
+        assert!(split);
+    }
+}
