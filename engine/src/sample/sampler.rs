@@ -346,9 +346,14 @@ impl Sampler {
             return;
         }
         let req = self.request(seed, n, linked);
-        out.par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(chunk, dst)| self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst));
+        // One scratch per rayon task, not per chunk (it is a few kilobytes to
+        // initialise); the samples do not depend on what it holds (`LeafScratch`).
+        out.par_chunks_mut(CHUNK).enumerate().for_each_init(
+            LeafScratch::default,
+            |scratch, (chunk, dst)| {
+                self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst, scratch);
+            },
+        );
     }
 
     /// What every chunk of an `n`-sample request for `seed` shares.
@@ -368,26 +373,38 @@ impl Sampler {
     /// (three-operand encodings, fewer register moves). Never inlined: one symbol to
     /// profile the sampling loop by (`valgrind --toggle-collect`), whichever path runs.
     #[inline(never)]
-    fn fill_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn fill_chunk<'s, T: Record>(
+        &'s self,
+        req: &Request<'_>,
+        start: u64,
+        dst: &mut [T],
+        scratch: &mut LeafScratch<'s>,
+    ) {
         #[cfg(target_arch = "x86_64")]
         if Level::detected() >= Level::V3 {
             // SAFETY: the CPU has every feature of `Level::V3`, which is what
             // `fill_chunk_v3` enables.
             #[allow(unsafe_code)]
             unsafe {
-                self.fill_chunk_v3(req, start, dst);
+                self.fill_chunk_v3(req, start, dst, scratch);
             }
             return;
         }
-        self.fill_chunk_body(req, start, dst);
+        self.fill_chunk_body(req, start, dst, scratch);
     }
 
     /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features
     /// (exactly `Level::V3`'s, see `crate::cpu`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn fill_chunk_v3<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
-        self.fill_chunk_body(req, start, dst);
+    fn fill_chunk_v3<'s, T: Record>(
+        &'s self,
+        req: &Request<'_>,
+        start: u64,
+        dst: &mut [T],
+        scratch: &mut LeafScratch<'s>,
+    ) {
+        self.fill_chunk_body(req, start, dst, scratch);
     }
 
     /// The records of `dst` in two passes: the per-sample loop
@@ -396,8 +413,14 @@ impl Sampler {
     /// samples, in a second loop over the chunk while it is in cache). Always inlined,
     /// so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
-        self.place_chunk(req, start, T::placed(dst));
+    fn fill_chunk_body<'s, T: Record>(
+        &'s self,
+        req: &Request<'_>,
+        start: u64,
+        dst: &mut [T],
+        scratch: &mut LeafScratch<'s>,
+    ) {
+        self.place_chunk(req, start, T::placed(dst), scratch);
         T::finish(self, dst, start, req.scale);
     }
 
@@ -406,7 +429,13 @@ impl Sampler {
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn place_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn place_chunk<'s, T: Record>(
+        &'s self,
+        req: &Request<'_>,
+        start: u64,
+        dst: &mut [T],
+        scratch: &mut LeafScratch<'s>,
+    ) {
         let Request {
             groups,
             seed,
@@ -416,9 +445,6 @@ impl Sampler {
         // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
-        // One scratch for the chunk, shared by its segments: its leaf cache knows which
-        // curve it was filled for (see `LeafScratch`).
-        let mut scratch = LeafScratch::default();
         for (i, count) in Allocation::new(n, groups.measures.iter().copied()) {
             let (grp_lo, grp_hi) = (first, first + count);
             first = grp_hi;
@@ -493,8 +519,7 @@ impl Sampler {
                     }
                 } else {
                     let levels = boundary_levels((w1 - w0) * per_sample);
-                    let p =
-                        curve.point_in_leaf_with(leaf, (ml - w0) / (w1 - w0), levels, &mut scratch);
+                    let p = curve.point_in_leaf_with(leaf, (ml - w0) / (w1 - w0), levels, scratch);
                     dst[(g - start) as usize] = T::make(self, seg, &p, g as u32, scale);
                     g += 1;
                     if g >= hi {
@@ -511,8 +536,9 @@ impl Sampler {
     #[cfg(test)]
     fn sample_into_portable(&self, seed: u64, out: &mut [Sample]) {
         let req = self.request(seed, out.len() as u64, self.uses_chains(out.len()));
+        let mut scratch = LeafScratch::default();
         for (chunk, dst) in out.chunks_mut(CHUNK).enumerate() {
-            self.fill_chunk_body(&req, (chunk * CHUNK) as u64, dst);
+            self.fill_chunk_body(&req, (chunk * CHUNK) as u64, dst, &mut scratch);
         }
     }
 
