@@ -81,8 +81,8 @@ pub struct Sampler {
     pub(super) chain_slot: Vec<u32>,
 }
 
-/// One sampling request as every chunk of it sees it.
-#[derive(Clone, Copy)]
+/// One sampling request as every chunk of it sees it, with one rayon task's scratch.
+#[derive(Clone)]
 struct Request<'a> {
     /// Segments one by one, or chains.
     groups: &'a Groups,
@@ -91,6 +91,9 @@ struct Request<'a> {
     n: u64,
     /// `sqrt(M / n)`: the spacing scale written into samples.
     scale: f64,
+    /// Made once per task, not per chunk (a few kilobytes to initialise); the samples
+    /// do not depend on what it holds (see `LeafScratch`).
+    scratch: LeafScratch<'a>,
 }
 
 /// Groups of segments sampled with one stratified sequence each, in CSR form.
@@ -346,12 +349,10 @@ impl Sampler {
             return;
         }
         let req = self.request(seed, n, linked);
-        // One scratch per rayon task, not per chunk (it is a few kilobytes to
-        // initialise); the samples do not depend on what it holds (`LeafScratch`).
         out.par_chunks_mut(CHUNK).enumerate().for_each_init(
-            LeafScratch::default,
-            |scratch, (chunk, dst)| {
-                self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst, scratch);
+            || req.clone(),
+            |req, (chunk, dst)| {
+                self.fill_chunk(req, start + (chunk * CHUNK) as u64, dst);
             },
         );
     }
@@ -363,6 +364,7 @@ impl Sampler {
             seed,
             n,
             scale: (self.total_measure / n as f64).sqrt(),
+            scratch: LeafScratch::default(),
         }
     }
 
@@ -373,38 +375,26 @@ impl Sampler {
     /// (three-operand encodings, fewer register moves). Never inlined: one symbol to
     /// profile the sampling loop by (`valgrind --toggle-collect`), whichever path runs.
     #[inline(never)]
-    fn fill_chunk<'s, T: Record>(
-        &'s self,
-        req: &Request<'_>,
-        start: u64,
-        dst: &mut [T],
-        scratch: &mut LeafScratch<'s>,
-    ) {
+    fn fill_chunk<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
         #[cfg(target_arch = "x86_64")]
         if Level::detected() >= Level::V3 {
             // SAFETY: the CPU has every feature of `Level::V3`, which is what
             // `fill_chunk_v3` enables.
             #[allow(unsafe_code)]
             unsafe {
-                self.fill_chunk_v3(req, start, dst, scratch);
+                self.fill_chunk_v3(req, start, dst);
             }
             return;
         }
-        self.fill_chunk_body(req, start, dst, scratch);
+        self.fill_chunk_body(req, start, dst);
     }
 
     /// [`fill_chunk_body`](Self::fill_chunk_body) compiled with the x86-64-v3 features
     /// (exactly `Level::V3`'s, see `crate::cpu`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn fill_chunk_v3<'s, T: Record>(
-        &'s self,
-        req: &Request<'_>,
-        start: u64,
-        dst: &mut [T],
-        scratch: &mut LeafScratch<'s>,
-    ) {
-        self.fill_chunk_body(req, start, dst, scratch);
+    fn fill_chunk_v3<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
+        self.fill_chunk_body(req, start, dst);
     }
 
     /// The records of `dst` in two passes: the per-sample loop
@@ -413,14 +403,8 @@ impl Sampler {
     /// samples, in a second loop over the chunk while it is in cache). Always inlined,
     /// so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body<'s, T: Record>(
-        &'s self,
-        req: &Request<'_>,
-        start: u64,
-        dst: &mut [T],
-        scratch: &mut LeafScratch<'s>,
-    ) {
-        self.place_chunk(req, start, T::placed(dst), scratch);
+    fn fill_chunk_body<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
+        self.place_chunk(req, start, T::placed(dst));
         T::finish(self, dst, start, req.scale);
     }
 
@@ -429,19 +413,9 @@ impl Sampler {
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn place_chunk<'s, T: Record>(
-        &'s self,
-        req: &Request<'_>,
-        start: u64,
-        dst: &mut [T],
-        scratch: &mut LeafScratch<'s>,
-    ) {
-        let Request {
-            groups,
-            seed,
-            n,
-            scale,
-        } = *req;
+    fn place_chunk<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
+        let (groups, seed, n, scale) = (req.groups, req.seed, req.n, req.scale);
+        let scratch = &mut req.scratch;
         // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
@@ -535,10 +509,9 @@ impl Sampler {
     /// code), to test that both paths give the same bits.
     #[cfg(test)]
     fn sample_into_portable(&self, seed: u64, out: &mut [Sample]) {
-        let req = self.request(seed, out.len() as u64, self.uses_chains(out.len()));
-        let mut scratch = LeafScratch::default();
+        let mut req = self.request(seed, out.len() as u64, self.uses_chains(out.len()));
         for (chunk, dst) in out.chunks_mut(CHUNK).enumerate() {
-            self.fill_chunk_body(&req, (chunk * CHUNK) as u64, dst, &mut scratch);
+            self.fill_chunk_body(&mut req, (chunk * CHUNK) as u64, dst);
         }
     }
 
