@@ -197,9 +197,11 @@ impl SegmentCurve {
         lo: DVec2,
         size: f64,
     ) -> DomainPoint {
+        // A piece's area is not always its polygon's bits (the part above a split
+        // keeps the rest of its parent's): `point_at` recomputes it.
         let pieces = node.pieces[..node.len]
             .iter()
-            .map(|p| (p.tri, p.poly, p.measure));
+            .map(|p| (p.tri, p.poly, p.measure, None));
         if let Some(p) = self.place_in_pieces(pieces, target) {
             return p;
         }
@@ -209,45 +211,55 @@ impl SegmentCurve {
     }
 
     /// Triangles `cands` clipped to the square `[lo, lo + size]^2`, lazily, as
-    /// `(triangle, piece, measure of the piece)` for
+    /// `(triangle, piece, measure of the piece, area of the piece)` for
     /// [`place_in_pieces`](Self::place_in_pieces).
     fn clipped_pieces<'a>(
         &'a self,
         cands: &'a [u32],
         lo: DVec2,
         size: f64,
-    ) -> impl Iterator<Item = (u32, Poly, f64)> + 'a {
+    ) -> impl Iterator<Item = (u32, Poly, f64, Option<f64>)> + 'a {
         cands.iter().map(move |&tri| {
             let poly = clip_triangle(&self.triangle_corners(tri as usize), lo, size);
             let (area, moment) = poly.area_moment();
-            (tri, poly, self.part_measure(tri, area, moment))
+            (
+                tri,
+                poly,
+                self.part_measure(tri, area, moment),
+                Some(area.abs()),
+            )
         })
     }
 
     /// The point at `target` (in `[0, total)`) of a boundary sub-cell given as its
-    /// pieces `(triangle, part of the triangle in the sub-cell, measure of the part)`
-    /// in curve-independent but fixed order: the piece holding the target, then the
-    /// point at the rest of the target as a fraction of that piece's area
-    /// ([`Poly::point_at`]). Inside a piece the density is taken as uniform, as in a
-    /// full leaf. `None` when no piece has measure.
+    /// pieces `(triangle, part of the triangle in the sub-cell, measure of the part,
+    /// area of the part)` in curve-independent but fixed order (the area where the
+    /// caller has it as `Poly::area_moment` gives it, made non-negative; `None`: it is
+    /// computed here): the piece holding the target, then the point at the rest of the
+    /// target as a fraction of that piece's area ([`Poly::point_at`]). Inside a piece
+    /// the density is taken as uniform, as in a full leaf. `None` when no piece has
+    /// measure.
     fn place_in_pieces(
         &self,
-        pieces: impl Iterator<Item = (u32, Poly, f64)>,
+        pieces: impl Iterator<Item = (u32, Poly, f64, Option<f64>)>,
         mut target: f64,
     ) -> Option<DomainPoint> {
         let mut chosen = None;
-        for (tri, poly, m) in pieces {
+        for (tri, poly, m, area) in pieces {
             if !(m > 0.0) {
                 continue;
             }
-            chosen = Some((tri, poly, m, target));
+            chosen = Some((tri, poly, m, area, target));
             if target < m {
                 break;
             }
             target -= m;
         }
-        let (tri, poly, m, rest) = chosen?;
-        let uv = poly.point_at(rest / m)?;
+        let (tri, poly, m, area, rest) = chosen?;
+        let uv = match area {
+            Some(area) => poly.point_at_with_area(rest / m, area)?,
+            None => poly.point_at(rest / m)?,
+        };
         // The point is in the piece, so in the triangle up to round-off: clamp it on.
         let b = barycentric(&self.triangle_corners(tri as usize), uv);
         Some(self.clamped_onto(tri, b))

@@ -61,12 +61,18 @@ impl Poly {
     /// descents that cut the same piece in different ways place a sample at the same
     /// point up to round-off. `None` for a polygon without area.
     pub(crate) fn point_at(&self, f: f64) -> Option<DVec2> {
+        self.point_at_with_area(f, self.area_moment().0.abs())
+    }
+
+    /// [`point_at`](Self::point_at) with the polygon's area given (`area_moment`'s,
+    /// made non-negative), for a caller that has computed it already.
+    #[inline]
+    pub(crate) fn point_at_with_area(&self, f: f64, total: f64) -> Option<DVec2> {
         let p = self.points();
         let n = p.len();
         if n < 3 {
             return None;
         }
-        let total = self.area_moment().0.abs();
         if !(total > 0.0) {
             return None;
         }

@@ -210,7 +210,15 @@ pub fn cell_in_node(state: State, t: f64, levels: u32) -> (u64, u64) {
     let d = ((t * pow2(bits)) as i64).min((1i64 << bits) - 1) as u64;
     let chunks = levels.div_ceil(4);
     let pad = 4 * chunks - levels;
-    let d = d << (2 * pad);
+    let (x, y) = walk_chunks(state, d << (2 * pad), chunks);
+    (x >> pad, y >> pad)
+}
+
+/// The walk of [`cell_in_node`] from index `d`, `chunks` groups of four levels (the
+/// first in the highest of its `8 * chunks` bits): the sub-cell at `4 * chunks`
+/// levels, before the padding levels are dropped.
+#[inline(always)]
+pub(crate) fn walk_chunks(state: State, d: u64, chunks: u32) -> (u64, u64) {
     let mut s = state.0 as usize;
     let (mut x, mut y) = (0u64, 0u64);
     for c in (0..chunks).rev() {
@@ -220,7 +228,7 @@ pub fn cell_in_node(state: State, t: f64, levels: u32) -> (u64, u64) {
         y = (y << 4) | ((e >> 4) & 15) as u64;
         s = (e >> 8) as usize;
     }
-    (x >> pad, y >> pad)
+    (x, y)
 }
 
 /// `2^k` for `k <= 1023`, built from its exponent bits (no conversion, no division).

@@ -91,10 +91,17 @@ impl SegmentCurve {
         debug_assert!(key.full());
         let off = &self.candidate_offsets[leaf..leaf + 2];
         let levels = levels.min(self.options.leaf_levels as u32);
+        // The walk reads `8 chunks` bits of `t`: those of the padding levels of the
+        // last chunk only pick among sub-cells that are dropped. At most 48 bits
+        // (`leaf_levels` is at most 24).
+        let chunks = levels.div_ceil(4);
+        debug_assert!(chunks <= 6);
         FullLeaf {
             cands: &self.candidates[off[0] as usize..off[1] as usize],
             state: key.state(),
-            levels,
+            chunks,
+            pad: 4 * chunks - levels,
+            scale: super::hilbert::pow2(8 * chunks),
             gx: (key.x() as u64) << levels,
             gy: (key.y() as u64) << levels,
             inv: super::hilbert::pow2_neg(key.level() as u32 + levels),
@@ -172,7 +179,11 @@ impl SegmentCurve {
 pub(crate) struct FullLeaf<'a> {
     cands: &'a [u32],
     state: super::hilbert::State,
-    levels: u32,
+    /// Groups of four levels the walk takes, and the padding levels of the last one.
+    chunks: u32,
+    pad: u32,
+    /// `2^(8 chunks)`: `t` scaled to the walk's index.
+    scale: f64,
     /// The leaf's corner on the grid of level `level + levels`.
     gx: u64,
     gy: u64,
@@ -186,7 +197,15 @@ impl FullLeaf<'_> {
     #[inline(always)]
     pub(crate) fn point(&self, curve: &SegmentCurve, t: f64) -> DomainPoint {
         let t = t.clamp(0.0, 1.0 - f64::EPSILON);
-        let (x, y) = super::hilbert::cell_in_node(self.state, t, self.levels);
+        // The index `floor(t 2^(8 chunks))`, below 2^48 (t < 1, the scaling exact):
+        // plus 2^52 it is the mantissa (a rounding, an add and an integer subtract,
+        // where a float-to-integer conversion also checks for overflow and NaN). Its
+        // leading `2 levels` bits are `cell_in_node`'s index; the bits below only pick
+        // among the padding levels' sub-cells, which are dropped.
+        let two52 = super::hilbert::pow2(52);
+        let d = ((t * self.scale).floor() + two52).to_bits() - two52.to_bits();
+        let (x, y) = super::hilbert::walk_chunks(self.state, d, self.chunks);
+        let (x, y) = (x >> self.pad, y >> self.pad);
         // The sub-cell's centre on the grid of level `level + levels`: the same value
         // as `origin + (x + 0.5) 2^-levels size`, both exact before rounding.
         let gx = (self.gx | x) as f64 + 0.5;

@@ -205,7 +205,10 @@ impl Sampler {
     }
 
     /// Writes the record of rank `rank_of(i)` into `out[i]`, with the spacings of a
-    /// `count`-sample request, in parallel over fixed chunks.
+    /// `count`-sample request, in parallel over fixed chunks: in two passes per chunk
+    /// as [`Sampler::sample_into`] (the places, then the records in place), the second
+    /// numbering a chunk's records from its first rank on, so a caller that writes full
+    /// records gives consecutive ranks (sites carry no index).
     fn fill_ranks<T: Record>(
         &self,
         seed: u64,
@@ -218,17 +221,19 @@ impl Sampler {
         }
         let scramble = Scramble::new(seed);
         let scale = (self.total_measure / count.max(1) as f64).sqrt();
-        out.par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(chunk, dst)| {
-                let mut scratch = LeafScratch::default();
-                for (i, slot) in dst.iter_mut().enumerate() {
+        // One scratch per rayon task: the samples do not depend on what it holds.
+        out.par_chunks_mut(CHUNK).enumerate().for_each_init(
+            LeafScratch::default,
+            |scratch, (chunk, dst)| {
+                for (i, slot) in T::placed(dst).iter_mut().enumerate() {
                     let rank = rank_of(chunk * CHUNK + i);
                     let m = scramble.value(rank) * self.total_measure;
-                    let (seg, p) = self.progressive_point(m, &mut scratch);
-                    *slot = T::make(self, seg, &p, rank, scale);
+                    let (seg, p) = self.progressive_point(m, scratch);
+                    *slot = Record::make(self, seg, &p, rank, scale);
                 }
-            });
+                T::finish(self, dst, u64::from(rank_of(chunk * CHUNK)), scale);
+            },
+        );
     }
 
     /// Appends to `out`, in increasing order, the progressive ranks in `from..to` whose

@@ -81,8 +81,8 @@ pub struct Sampler {
     pub(super) chain_slot: Vec<u32>,
 }
 
-/// One sampling request as every chunk of it sees it.
-#[derive(Clone, Copy)]
+/// One sampling request as every chunk of it sees it, with one rayon task's scratch.
+#[derive(Clone)]
 struct Request<'a> {
     /// Segments one by one, or chains.
     groups: &'a Groups,
@@ -91,6 +91,9 @@ struct Request<'a> {
     n: u64,
     /// `sqrt(M / n)`: the spacing scale written into samples.
     scale: f64,
+    /// Made once per task, not per chunk (a few kilobytes to initialise); the samples
+    /// do not depend on what it holds (see `LeafScratch`).
+    scratch: LeafScratch<'a>,
 }
 
 /// Groups of segments sampled with one stratified sequence each, in CSR form.
@@ -346,9 +349,12 @@ impl Sampler {
             return;
         }
         let req = self.request(seed, n, linked);
-        out.par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(chunk, dst)| self.fill_chunk(&req, start + (chunk * CHUNK) as u64, dst));
+        out.par_chunks_mut(CHUNK).enumerate().for_each_init(
+            || req.clone(),
+            |req, (chunk, dst)| {
+                self.fill_chunk(req, start + (chunk * CHUNK) as u64, dst);
+            },
+        );
     }
 
     /// What every chunk of an `n`-sample request for `seed` shares.
@@ -358,6 +364,7 @@ impl Sampler {
             seed,
             n,
             scale: (self.total_measure / n as f64).sqrt(),
+            scratch: LeafScratch::default(),
         }
     }
 
@@ -368,7 +375,7 @@ impl Sampler {
     /// (three-operand encodings, fewer register moves). Never inlined: one symbol to
     /// profile the sampling loop by (`valgrind --toggle-collect`), whichever path runs.
     #[inline(never)]
-    fn fill_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn fill_chunk<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
         #[cfg(target_arch = "x86_64")]
         if Level::detected() >= Level::V3 {
             // SAFETY: the CPU has every feature of `Level::V3`, which is what
@@ -386,7 +393,7 @@ impl Sampler {
     /// (exactly `Level::V3`'s, see `crate::cpu`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    fn fill_chunk_v3<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn fill_chunk_v3<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
         self.fill_chunk_body(req, start, dst);
     }
 
@@ -396,7 +403,7 @@ impl Sampler {
     /// samples, in a second loop over the chunk while it is in cache). Always inlined,
     /// so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn fill_chunk_body<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
+    fn fill_chunk_body<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
         self.place_chunk(req, start, T::placed(dst));
         T::finish(self, dst, start, req.scale);
     }
@@ -406,19 +413,12 @@ impl Sampler {
     /// of neighbouring segments are sampled, each with one stratified sequence.
     /// Always inlined, so that each caller's target features apply to all of it.
     #[inline(always)]
-    fn place_chunk<T: Record>(&self, req: &Request<'_>, start: u64, dst: &mut [T]) {
-        let Request {
-            groups,
-            seed,
-            n,
-            scale,
-        } = *req;
+    fn place_chunk<'s, T: Record>(&'s self, req: &mut Request<'s>, start: u64, dst: &mut [T]) {
+        let (groups, seed, n, scale) = (req.groups, req.seed, req.n, req.scale);
+        let scratch = &mut req.scratch;
         // Recompute the allocation up to this chunk (O(groups), no allocation).
         let mut first = 0u64;
         let end = start + dst.len() as u64;
-        // One scratch for the chunk, shared by its segments: its leaf cache knows which
-        // curve it was filled for (see `LeafScratch`).
-        let mut scratch = LeafScratch::default();
         for (i, count) in Allocation::new(n, groups.measures.iter().copied()) {
             let (grp_lo, grp_hi) = (first, first + count);
             first = grp_hi;
@@ -493,8 +493,7 @@ impl Sampler {
                     }
                 } else {
                     let levels = boundary_levels((w1 - w0) * per_sample);
-                    let p =
-                        curve.point_in_leaf_with(leaf, (ml - w0) / (w1 - w0), levels, &mut scratch);
+                    let p = curve.point_in_leaf_with(leaf, (ml - w0) / (w1 - w0), levels, scratch);
                     dst[(g - start) as usize] = T::make(self, seg, &p, g as u32, scale);
                     g += 1;
                     if g >= hi {
@@ -510,9 +509,9 @@ impl Sampler {
     /// code), to test that both paths give the same bits.
     #[cfg(test)]
     fn sample_into_portable(&self, seed: u64, out: &mut [Sample]) {
-        let req = self.request(seed, out.len() as u64, self.uses_chains(out.len()));
+        let mut req = self.request(seed, out.len() as u64, self.uses_chains(out.len()));
         for (chunk, dst) in out.chunks_mut(CHUNK).enumerate() {
-            self.fill_chunk_body(&req, (chunk * CHUNK) as u64, dst);
+            self.fill_chunk_body(&mut req, (chunk * CHUNK) as u64, dst);
         }
     }
 
