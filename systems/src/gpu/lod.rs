@@ -652,7 +652,7 @@ mod gpu_tests {
         };
         let (lo, hi) = s.mesh().bounds();
         let diagonal = (hi - lo).length();
-        let mut appended = 0;
+        let (mut appended, mut reused) = (0, 0);
         let path = [(6.0, 0.3), (4.5, 0.3), (3.5, 0.3), (3.5, 0.6), (3.5, 0.9)];
         for (frame, &(distance, yaw)) in path.iter().enumerate() {
             let camera = OrbitCamera {
@@ -672,9 +672,17 @@ mod gpu_tests {
             assert_eq!(listed.ranks(), pool.ranks(), "{name}, frame {frame}");
             let change = change.change;
             let held = gpu_pool.len();
+            let kept = gpu_pool.placing.as_ref().map(|(_, group)| group.clone());
             let bytes = gpu_pool
                 .sync_placed(device, queue, (&listed, &change), &gpu, &mut samples)
                 .expect("sync");
+            // The kept bind groups bind the pool's buffers as they are now.
+            let (bound, group) = gpu_pool.placing.as_ref().expect("placed");
+            assert!(bound[2] == gpu_pool.ranks && bound[3] == gpu_pool.sites);
+            let (bound, _) = gpu_pool.expanding.as_ref().expect("expanded");
+            assert!(bound[1] == gpu_pool.sites && bound[3] == *samples.buffer());
+            assert!(gpu_pool.checked, "{name}, frame {frame}");
+            reused += usize::from(kept.as_ref() == Some(group));
             let sent = if frame == 0 {
                 pool.len()
             } else {
@@ -717,5 +725,7 @@ mod gpu_tests {
             appended > 1000,
             "{name}: the path appended {appended} entries"
         );
+        // Some frame placed its entries with the bind group of the frame before.
+        assert!(reused > 0, "{name}: every frame made its bind groups");
     }
 }
