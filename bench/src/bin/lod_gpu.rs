@@ -17,7 +17,7 @@
 //! GPU copy's sites differ from the placing pool's at the end of the path (faces,
 //! largest deviation over the bounding-box diagonal, samples beyond 1e-5); it fails
 //! when the two pools list other ranks. It also counts the heap allocations each
-//! pool's update makes per frame (mean over the timed frames). On the software
+//! pool's update and the sync make per frame (mean over the timed frames). On the software
 //! adapter the GPU's own time is not representative, and the device is waited for
 //! after every frame so frames do not pile up. `LOD_GPU_SHOWN=n` sets the samples the
 //! first frame shows (default 10^6; the software adapter's 128 MiB binding limit holds
@@ -150,9 +150,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ctx.adapter_summary(),
     );
     println!(
-        "| path | update, CPU placement, ms | update, ranks only, ms | sync (GPU placement) ms | CPU per frame with GPU placement, ms | upload KB per frame, mean | allocations per update, placing / ranks only, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
+        "| path | update, CPU placement, ms | update, ranks only, ms | sync (GPU placement) ms | CPU per frame with GPU placement, ms | upload KB per frame, mean | allocations per update, placing / ranks only, mean | allocations per sync, mean | entries at end | differ in face | largest deviation | beyond 1e-5 |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let paths = paths(&camera, base);
     let (lo, hi) = s.mesh().bounds();
     let diagonal = (hi - lo).length();
@@ -161,7 +161,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut gpu_pool = GpuLodPool::new(device, base)?;
         let mut samples = GpuSampleBuffer::new(device)?;
         let mut times: [Vec<f64>; 4] = Default::default();
-        let (mut bytes, mut allocated) = (vec![], [0; 2]);
+        let (mut bytes, mut allocated) = (vec![], [0; 3]);
         for t in -WARM_UP..=frames as i32 {
             let (v, b) = path(t);
             let (clock, before) = (Instant::now(), allocations());
@@ -174,7 +174,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 allocated[0] += between - before;
                 allocated[1] += allocations() - between;
             }
-            let clock = Instant::now();
+            let (clock, before) = (Instant::now(), allocations());
             let sent = gpu_pool.sync_placed(
                 device,
                 queue,
@@ -183,6 +183,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 &mut samples,
             )?;
             let synced = clock.elapsed().as_secs_f64();
+            if t > 0 {
+                allocated[2] += allocations() - before;
+            }
             ctx.wait_idle("placing the pool's entries")?;
             if pool.ranks() != ranks_only.ranks() {
                 return Err(format!("{name}, frame {t}: the pools list other ranks").into());
@@ -208,10 +211,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let [placed, listed, synced, total] = times.map(median);
         println!(
-            "| {name} | {placed:.3} | {listed:.3} | {synced:.3} | {total:.3} | {:.1} | {:.1} / {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
+            "| {name} | {placed:.3} | {listed:.3} | {synced:.3} | {total:.3} | {:.1} | {:.1} / {:.1} | {:.1} | {} | {faces} | {worst:.2e} | {beyond} |",
             bytes.iter().sum::<f64>() / bytes.len() as f64,
             allocated[0] as f64 / frames as f64,
             allocated[1] as f64 / frames as f64,
+            allocated[2] as f64 / frames as f64,
             pool.len(),
         );
     }

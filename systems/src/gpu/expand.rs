@@ -450,21 +450,22 @@ impl SiteExpander {
     /// them) into the same entries of `samples`, with the spacings of `base` samples
     /// over the surface and each sample's index its rank. Every buffer must hold at
     /// least `range.end` entries. The parameters go through one uniform buffer written
-    /// with `queue`: submit `encoder` before the next call.
+    /// with `queue`: submit `encoder` before the next call. The pass's bind group is
+    /// taken from `group` where it binds the same buffers, else made (in error scopes)
+    /// and kept there. Whether it was made.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn expand_ranked(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
-        sites: &wgpu::Buffer,
-        ranks: &wgpu::Buffer,
-        samples: &wgpu::Buffer,
+        (sites, ranks, samples): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
         range: std::ops::Range<u32>,
         base: f64,
-    ) {
+        group: &mut Bound<5>,
+    ) -> Result<bool, GpuError> {
         if range.is_empty() {
-            return;
+            return Ok(false);
         }
         let groups = (range.end - range.start).div_ceil(WORKGROUP);
         let max = device.limits().max_compute_workgroups_per_dimension.max(1);
@@ -477,32 +478,54 @@ impl SiteExpander {
             ..self.offsets
         };
         queue.write_buffer(&self.ranked_params, 0, bytemuck::bytes_of(&params));
-        let params = &self.ranked_params;
-        fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
-        }
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("strata expand ranked"),
-            layout: &self.ranked_layout,
-            entries: &[
-                entry(0, params),
-                entry(1, sites),
-                entry(2, &self.mesh),
-                entry(3, samples),
-                entry(4, ranks),
-            ],
-        });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("strata expand ranked"),
-            timestamp_writes: None,
-        });
+        let (bind_group, made) = bind_cached(
+            device,
+            (&self.ranked_layout, "strata expand ranked"),
+            group,
+            [&self.ranked_params, sites, &self.mesh, samples, ranks],
+        )?;
+        let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&self.ranked_pipeline);
-        pass.set_bind_group(1, &bind_group, &[]);
+        pass.set_bind_group(1, bind_group, &[]);
         pass.dispatch_workgroups(gx, gy, 1);
+        Ok(made)
     }
+}
+
+/// A bind group with the buffers it binds (binding `i` the whole of buffer `i`):
+/// [`bind_cached`] makes it again only when one of them is another buffer.
+pub(crate) type Bound<const N: usize> = Option<([wgpu::Buffer; N], wgpu::BindGroup)>;
+
+/// The bind group in `layout` of `buffers` (binding `i` the whole of buffer `i`): the
+/// one `cache` holds where it binds the same buffers (no allocation), else one made in
+/// error scopes and kept in `cache`. Whether it was made.
+pub(crate) fn bind_cached<'a, const N: usize>(
+    device: &wgpu::Device,
+    (layout, label): (&wgpu::BindGroupLayout, &'static str),
+    cache: &'a mut Bound<N>,
+    buffers: [&wgpu::Buffer; N],
+) -> Result<(&'a wgpu::BindGroup, bool), GpuError> {
+    let same = cache
+        .as_ref()
+        .is_some_and(|(bound, _)| bound.iter().zip(buffers).all(|(a, b)| a == b));
+    let kept = match cache.take() {
+        Some(kept) if same => kept,
+        _ => {
+            let group = scoped(device, "binding a pass", || {
+                let entries = std::array::from_fn::<_, N, _>(|i| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: buffers[i].as_entire_binding(),
+                });
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(label),
+                    layout,
+                    entries: &entries,
+                })
+            })?;
+            (buffers.map(Clone::clone), group)
+        }
+    };
+    Ok((&cache.insert(kept).1, !same))
 }
 
 #[cfg(test)]

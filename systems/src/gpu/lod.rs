@@ -25,7 +25,7 @@ use strata_engine::sample::{Budget, FrameUpdate, LodPool, PoolChange, SampleSite
 use super::buffers::{GpuSampleBuffer, next_capacity, read_buffer};
 use super::camera::OrbitCamera;
 use super::context::{GpuError, scoped};
-use super::expand::SiteExpander;
+use super::expand::{Bound, SiteExpander};
 use super::pipeline::{ComputePipelineDesc, buffer_entry, pipeline_layout, shader_module};
 use super::sample::{GpuSampler, Ranks};
 use super::shaders;
@@ -50,6 +50,15 @@ pub struct GpuLodPool {
     capacity: usize,
     len: usize,
     base: f64,
+    /// The progressive pass's bind group and the buffers it binds.
+    placing: Bound<4>,
+    /// The expansion's bind group and the buffers it binds.
+    expanding: Bound<5>,
+    /// Whether the last submission was checked in error scopes and no bind group was
+    /// made since: a sync binding the same buffers is submitted without scopes (popping
+    /// them allocates); an error then (out of memory) reaches the device's
+    /// uncaptured-error handler.
+    checked: bool,
 }
 
 impl GpuLodPool {
@@ -64,6 +73,9 @@ impl GpuLodPool {
             capacity,
             len: 0,
             base,
+            placing: None,
+            expanding: None,
+            checked: false,
         })
     }
 
@@ -201,9 +213,7 @@ impl GpuLodPool {
             requested: n as u64,
             limit: u64::from(u32::MAX),
         })?;
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("strata pool sync"),
-        });
+        let mut encoder = device.create_command_encoder(&Default::default());
         if n > self.capacity {
             // Grow on the GPU: the entries held are copied, not sent again.
             let capacity = next_capacity(self.capacity, n);
@@ -218,7 +228,7 @@ impl GpuLodPool {
             from as u64 * 4,
             bytemuck::cast_slice(&pool.ranks()[from..]),
         );
-        let (expander, site_bytes) = match placement {
+        let (expander, site_bytes, placed) = match placement {
             SiteSource::Upload(expander) => {
                 let new = &pool.sites()[from..];
                 queue.write_buffer(
@@ -226,19 +236,19 @@ impl GpuLodPool {
                     from as u64 * SITE_BYTES,
                     bytemuck::cast_slice(new),
                 );
-                (expander, SITE_BYTES)
+                (expander, SITE_BYTES, false)
             }
             SiteSource::Gpu(sampler) => {
                 let ranks = Ranks::Listed(&self.ranks, from as u32);
-                sampler.encode_progressive(
+                let made = sampler.encode_progressive(
                     device,
                     queue,
                     &mut encoder,
                     (ranks, count - from as u32, pool.seed()),
                     (&self.sites, from as u32),
-                    None,
+                    (None, &mut self.placing),
                 )?;
-                (sampler.expander(), 0)
+                (sampler.expander(), 0, made)
             }
         };
         let reallocations = samples.reallocations();
@@ -249,19 +259,24 @@ impl GpuLodPool {
         } else {
             from as u32
         };
-        scoped(device, "expanding the progressive pool", || {
-            expander.expand_ranked(
-                device,
-                queue,
-                &mut encoder,
-                &self.sites,
-                &self.ranks,
-                samples.buffer(),
-                first..count,
-                self.base,
-            );
+        let expanded = expander.expand_ranked(
+            device,
+            queue,
+            &mut encoder,
+            (&self.sites, &self.ranks, samples.buffer()),
+            first..count,
+            self.base,
+            &mut self.expanding,
+        )?;
+        if self.checked && !placed && !expanded {
             queue.submit([encoder.finish()]);
-        })?;
+        } else {
+            self.checked = false;
+            scoped(device, "expanding the progressive pool", || {
+                queue.submit([encoder.finish()]);
+            })?;
+            self.checked = true;
+        }
         self.len = n;
         Ok((n - from) as u64 * (site_bytes + 4))
     }
@@ -281,14 +296,14 @@ impl GpuLodPool {
                 device,
                 queue,
                 &mut encoder,
-                &self.sites,
-                &self.ranks,
-                samples.buffer(),
+                (&self.sites, &self.ranks, samples.buffer()),
                 0..self.len as u32,
                 self.base,
-            );
+                &mut None,
+            )?;
             queue.submit([encoder.finish()]);
-        })
+            Ok(())
+        })?
     }
 }
 
@@ -637,7 +652,7 @@ mod gpu_tests {
         };
         let (lo, hi) = s.mesh().bounds();
         let diagonal = (hi - lo).length();
-        let mut appended = 0;
+        let (mut appended, mut reused) = (0, 0);
         let path = [(6.0, 0.3), (4.5, 0.3), (3.5, 0.3), (3.5, 0.6), (3.5, 0.9)];
         for (frame, &(distance, yaw)) in path.iter().enumerate() {
             let camera = OrbitCamera {
@@ -657,9 +672,17 @@ mod gpu_tests {
             assert_eq!(listed.ranks(), pool.ranks(), "{name}, frame {frame}");
             let change = change.change;
             let held = gpu_pool.len();
+            let kept = gpu_pool.placing.as_ref().map(|(_, group)| group.clone());
             let bytes = gpu_pool
                 .sync_placed(device, queue, (&listed, &change), &gpu, &mut samples)
                 .expect("sync");
+            // The kept bind groups bind the pool's buffers as they are now.
+            let (bound, group) = gpu_pool.placing.as_ref().expect("placed");
+            assert!(bound[2] == gpu_pool.ranks && bound[3] == gpu_pool.sites);
+            let (bound, _) = gpu_pool.expanding.as_ref().expect("expanded");
+            assert!(bound[1] == gpu_pool.sites && bound[3] == *samples.buffer());
+            assert!(gpu_pool.checked, "{name}, frame {frame}");
+            reused += usize::from(kept.as_ref() == Some(group));
             let sent = if frame == 0 {
                 pool.len()
             } else {
@@ -702,5 +725,7 @@ mod gpu_tests {
             appended > 1000,
             "{name}: the path appended {appended} entries"
         );
+        // Some frame placed its entries with the bind group of the frame before.
+        assert!(reused > 0, "{name}: every frame made its bind groups");
     }
 }

@@ -11,6 +11,7 @@ use strata_engine::sample::flat::{FlatError, progressive_scramble};
 
 use super::{GpuSampler, SITE_BYTES, SampleParams, WORKGROUP};
 use crate::gpu::context::{GpuError, scoped};
+use crate::gpu::expand::{Bound, bind_cached};
 
 /// Where a progressive pass takes its ranks ([`GpuSampler::encode_progressive`]).
 #[derive(Clone, Copy, Debug)]
@@ -61,7 +62,7 @@ impl GpuSampler {
             &mut encoder,
             (Ranks::From(first_rank), count, seed),
             (&sites, 0),
-            stamps,
+            (stamps, &mut None),
         )?;
         scoped(device, "sampling progressively on the GPU", || {
             queue.submit([encoder.finish()]);
@@ -80,7 +81,9 @@ impl GpuSampler {
 
     /// Records the progressive pass: the sites of `count` ranks (`ranks`) for `seed`,
     /// written into `sites` from entry `out_at` on (the buffer must hold them). Its
-    /// uniforms are written with `queue`: submit before the next progressive pass.
+    /// uniforms are written with `queue`: submit before the next progressive pass. Its
+    /// bind group is taken from `group` where it binds the same buffers, else made (in
+    /// error scopes) and kept there. Whether it was made.
     pub(crate) fn encode_progressive(
         &self,
         device: &wgpu::Device,
@@ -88,10 +91,10 @@ impl GpuSampler {
         encoder: &mut wgpu::CommandEncoder,
         (ranks, count, seed): (Ranks<'_>, u32, u64),
         (sites, out_at): (&wgpu::Buffer, u32),
-        stamps: Option<wgpu::ComputePassTimestampWrites<'_>>,
-    ) -> Result<(), GpuError> {
+        (stamps, group): (Option<wgpu::ComputePassTimestampWrites<'_>>, &mut Bound<4>),
+    ) -> Result<bool, GpuError> {
         if count == 0 {
-            return Ok(());
+            return Ok(false);
         }
         let groups = count.div_ceil(WORKGROUP);
         let max = device.limits().max_compute_workgroups_per_dimension.max(1);
@@ -110,30 +113,20 @@ impl GpuSampler {
             ..self.offsets
         };
         queue.write_buffer(&self.prog_params, 0, bytemuck::bytes_of(&params));
-        let bind_group = scoped(device, "binding the progressive pass", || {
-            let entries = [&self.prog_params, &self.table, list, sites];
-            let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
-                .iter()
-                .enumerate()
-                .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                    binding: binding as u32,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("strata progressive sample"),
-                layout: &self.layout,
-                entries: &entries,
-            })
-        })?;
+        let (bind_group, made) = bind_cached(
+            device,
+            (&self.layout, "strata progressive sample"),
+            group,
+            [&self.prog_params, &self.table, list, sites],
+        )?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("strata progressive sample"),
+            label: None,
             timestamp_writes: stamps,
         });
         pass.set_pipeline(&self.progressive);
-        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(gx, gy, 1);
-        Ok(())
+        Ok(made)
     }
 }
 
