@@ -39,7 +39,7 @@ use wgpu::util::DeviceExt;
 
 use super::buffers::{GpuSampleBuffer, read_buffer};
 use super::context::{GpuError, scoped};
-use super::expand::SiteExpander;
+use super::expand::{Bound, SiteExpander, bind_cached};
 use super::pipeline::{
     ComputePipelineDesc, compute_storage, compute_uniform, pipeline_layout, shader_module,
     uniform_buffer,
@@ -194,7 +194,7 @@ struct Growable {
     label: &'static str,
     usage: wgpu::BufferUsages,
     buffer: Option<wgpu::Buffer>,
-    /// Counts the buffers made: a bind group made with generation `g` holds the
+    /// Counts the buffers made: a submission checked with generation `g` bound the
     /// current buffer while this is `g`.
     generation: u64,
 }
@@ -273,9 +273,9 @@ pub struct GpuSampler {
     /// The `(count, seed)` whose request table and uniforms the GPU holds, with the
     /// table generation they were computed for: a repeated request uploads nothing.
     uploaded: Option<(u32, u64, u64)>,
-    /// The sites pass's bind group and the generations (table, request, sites) of the
-    /// buffers it binds: made again only when one of them was reallocated.
-    bind_group: Option<(wgpu::BindGroup, [u64; 3])>,
+    /// The sites pass's bind group and the buffers it binds: made again only when one
+    /// of them was reallocated.
+    bind_group: Bound<4>,
     /// What the last submission checked in error scopes bound: the sites pass's
     /// buffer generations, the count and the records buffer. A resample binding the
     /// same is submitted without scopes ([`sample`](Self::sample)).
@@ -496,7 +496,7 @@ impl GpuSampler {
 
     /// Records the sites pass's dispatch (`gx` by `gy` workgroups) into `pass`.
     fn record_sites(&self, pass: &mut wgpu::ComputePass<'_>, gx: u32, gy: u32) {
-        if let Some((bind_group, _)) = &self.bind_group {
+        if let Some((_, bind_group)) = &self.bind_group {
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, bind_group, &[]);
             pass.dispatch_workgroups(gx, gy, 1);
@@ -533,45 +533,15 @@ impl GpuSampler {
             .sites
             .at_least(device, u64::from(count) * SITE_BYTES)?
             .clone();
-        let generations = [
-            self.table_generation,
-            self.request.generation,
-            self.sites.generation,
-        ];
-        if self
-            .bind_group
-            .as_ref()
-            .is_none_or(|(_, made)| *made != generations)
-        {
-            let request = self.request.buffer.as_ref().unwrap_or(&self.table);
-            let bind_group = scoped(device, "binding the sampling pass", || {
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("strata sample"),
-                    layout: &self.layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: self.params.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: self.table.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: request.as_entire_binding(),
-                        },
-                        // The whole buffer: the pass writes the first `count` entries
-                        // (its uniform), so one bind group serves every count it holds.
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: sites.as_entire_binding(),
-                        },
-                    ],
-                })
-            })?;
-            self.bind_group = Some((bind_group, generations));
-        }
+        // The whole sites buffer is bound: the pass writes the first `count` entries
+        // (its uniform), so one bind group serves every count the buffer holds.
+        let request = self.request.buffer.as_ref().unwrap_or(&self.table);
+        bind_cached(
+            device,
+            (&self.layout, "strata sample"),
+            &mut self.bind_group,
+            [&self.params, &self.table, request, &sites],
+        )?;
         Ok(Some((gx, gy)))
     }
 
