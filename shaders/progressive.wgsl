@@ -472,28 +472,13 @@ fn progressive_tree_point(root: u32, q0: vec2<u32>, levels: u32) -> Located {
     var node = root;
     var q = q0;
     var depth = 0u;
-    let ones = vec2<u32>(0xffffffffu, 0xffffffffu);
     for (var step = 0u; step < 2u * levels; step = step + 1u) {
-        let w = nodes_at + 13u * node;
-        let a = t64(w + 5u);
-        let b = t64(w + 7u);
-        let a_empty = a.x == 0u && a.y == 0u;
-        let b_empty = b.x == 0u && b.y == 0u;
-        var child: u32;
-        if !a_empty && (lt64(q, a) || b_empty) {
-            child = table[w + 9u];
-            q = select(ones, fraction64(q, a), lt64(q, a));
-        } else if !b_empty {
-            child = table[w + 10u];
-            let r = sub64(q, a);
-            q = select(ones, fraction64(r, b), lt64(r, b));
-        } else {
+        let s = tree_step(nodes_at, node, q);
+        q = s.q;
+        if s.child == 0xffffffffu {
             break;
         }
-        if child == 0xffffffffu {
-            break;
-        }
-        node = child;
+        node = s.child;
         let c = nodes_at + 13u * node;
         let kind = table[c];
         if (kind & 256u) != 0u {

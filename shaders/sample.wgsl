@@ -480,6 +480,32 @@ fn full_node_point(nodes_at: u32, pieces_at: u32, node: u32, q: vec2<u32>, level
     return point_location(pieces_at + 20u * table[w + 3u], table[w + 4u], 20u, uv);
 }
 
+// One step down a descent tree whose nodes start at word `nodes_at`: the child of
+// `node` holding the fraction `q` of its measure (a half, or a quarter), and `q` as a
+// fraction of that child's measure, with the sequential `pick`'s clamping; child
+// 0xffffffff where the node has none there (then `q` as it is after the step).
+struct TreeStep {
+    child: u32,
+    q: vec2<u32>,
+}
+
+fn tree_step(nodes_at: u32, node: u32, q: vec2<u32>) -> TreeStep {
+    let w = nodes_at + 13u * node;
+    let a = t64(w + 5u);
+    let b = t64(w + 7u);
+    let a_empty = a.x == 0u && a.y == 0u;
+    let b_empty = b.x == 0u && b.y == 0u;
+    let ones = vec2<u32>(0xffffffffu, 0xffffffffu);
+    if !a_empty && (lt64(q, a) || b_empty) {
+        return TreeStep(table[w + 9u], select(ones, fraction64(q, a), lt64(q, a)));
+    }
+    if !b_empty {
+        let r = sub64(q, a);
+        return TreeStep(table[w + 10u], select(ones, fraction64(r, b), lt64(r, b)));
+    }
+    return TreeStep(0xffffffffu, q);
+}
+
 // A boundary leaf: the sequential descent (curve/boundary.rs `descend_pieces`)
 // replayed over the leaf's tree from node `root` for `levels` levels of quarters.
 // `q` is carried as a 64-bit fraction of the current node's measure; each node holds
@@ -489,29 +515,14 @@ fn boundary_leaf_point(root: u32, q0: vec2<u32>, levels: u32) -> Located {
     var node = root;
     var q = q0;
     var depth = 0u;
-    let ones = vec2<u32>(0xffffffffu, 0xffffffffu);
     // Two steps (a half, then a quarter) per level.
     for (var step = 0u; step < 2u * levels; step = step + 1u) {
-        let w = params.nodes_at + 13u * node;
-        let a = t64(w + 5u);
-        let b = t64(w + 7u);
-        let a_empty = a.x == 0u && a.y == 0u;
-        let b_empty = b.x == 0u && b.y == 0u;
-        var child: u32;
-        if !a_empty && (lt64(q, a) || b_empty) {
-            child = table[w + 9u];
-            q = select(ones, fraction64(q, a), lt64(q, a));
-        } else if !b_empty {
-            child = table[w + 10u];
-            let r = sub64(q, a);
-            q = select(ones, fraction64(r, b), lt64(r, b));
-        } else {
+        let s = tree_step(params.nodes_at, node, q);
+        q = s.q;
+        if s.child == 0xffffffffu {
             break;
         }
-        if child == 0xffffffffu {
-            break;
-        }
-        node = child;
+        node = s.child;
         let kind = table[params.nodes_at + 13u * node];
         if (kind & 256u) != 0u {
             depth = depth + 1u;
